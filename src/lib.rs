@@ -1,0 +1,4 @@
+//! eopnp (work in progress)
+#![warn(missing_docs)]
+
+pub mod kernels;
