@@ -1,4 +1,83 @@
-//! eopnp (work in progress)
+//! # eopnp
+//!
+//! Camera pose from 2D-3D point correspondences (the Perspective-n-Point problem) with EOPnP
+//! (Lipu Zhou and Michael Kaess, "An Efficient and Accurate Algorithm for the
+//! Perspective-n-Point Problem", IROS 2019), followed by default by a Levenberg-Marquardt
+//! refinement of the reprojection error, which makes the result the maximum-likelihood pose.
+//!
+//! - Any N >= 4, planar or not, any rotation (including 180 degrees), O(N) and allocation-free.
+//! - Every polynomial of the method (the quartic cost in the Cayley parameters, its gradient and
+//!   Hessian, the Sylvester resultants of the null-space cases) is generated at build time by
+//!   exact symbolic algebra ([`kernels`]) and verified numerically (the `eopnp-verify` crate).
+//! - Bad input gives a typed [`PnpError`], never a panic or a silent wrong pose.
+//!
+//! ```
+//! use eopnp::{solve, Solver, Refinement};
+//! use nalgebra::{Point2, Point3, Rotation3, Vector3};
+//!
+//! // A camera looking at six points.
+//! let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
+//! let t = Vector3::new(0.1, -0.2, 5.0);
+//! let world = [
+//!     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+//!     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+//! ];
+//! // Normalised image coordinates (x/z, y/z) of each point.
+//! let image: Vec<Point2<f64>> = world
+//!     .iter()
+//!     .map(|x| { let p = r * x.coords + t; Point2::new(p.x / p.z, p.y / p.z) })
+//!     .collect();
+//!
+//! let sol = solve(&world, &image)?;
+//! assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+//!
+//! // The paper's algorithm alone, without the reprojection refinement:
+//! let alg = Solver::default().refinement(Refinement::Algebraic).solve(&world, &image)?;
+//! assert!(alg.cheirality_ok);
+//! # Ok::<(), eopnp::PnpError>(())
+//! ```
+//!
+//! Image points are normalised coordinates; for pixels use [`Solver::solve_pixels`] with
+//! [`Intrinsics`]. The pose maps world to camera: `x_cam = R X + t`.
 #![warn(missing_docs)]
 
+mod accumulate;
+mod error;
+mod frame;
 pub mod kernels;
+mod nullspace;
+mod refine;
+mod reproj;
+pub mod roots;
+mod rotation;
+mod solver;
+
+pub use error::{DegenerateKind, InputKind, PnpError};
+pub use nullspace::CandidateSource;
+pub use solver::{
+    solve, Intrinsics, PlanarDetection, Refinement, Solution, Solutions, Solver,
+};
+
+/// Error metrics of ALGORITHM.md section 1 (the paper's).
+pub mod metrics {
+    pub use crate::rotation::{rotation_error_deg, translation_error_pct};
+}
+
+/// Internal intermediates exposed for tests against the reference prototype. Not a stable API.
+#[doc(hidden)]
+pub mod __internal {
+    use nalgebra::{Matrix3, Point2, Point3, SMatrix};
+
+    /// `(M, G, Rw, ratio)` of ALGORITHM.md S1-S2 in the working frame, or `None` on invalid
+    /// input.
+    #[must_use]
+    pub fn intermediates(
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+    ) -> Option<(SMatrix<f64, 9, 9>, SMatrix<f64, 3, 9>, Matrix3<f64>, f64)> {
+        let fr = crate::frame::working_frame(world, image, None, true).ok()?;
+        let acc = crate::accumulate::accumulate(world, image, None, &fr);
+        let sys = acc.system(false)?;
+        Some((sys.m, sys.g, fr.rw, fr.ratio))
+    }
+}

@@ -1,0 +1,637 @@
+//! S2 of ALGORITHM.md: O(N) accumulation of the sums that give `M` (9 x 9) and `G` (3 x 9);
+//! `W`, `V` and `K` are never formed.
+//!
+//! | symbol | meaning (sums over points with weight `w > 0`; `w = 1` without weights) |
+//! |---|---|
+//! | `P = (x, y, z)` | working-frame point `Rw (X - c) / d` |
+//! | `u, v, q` | image point, `q = u^2 + v^2` |
+//! | `sw` | `sum w` (N without weights) |
+//! | `su, sv, sq` | `sum w u`, `sum w v`, `sum w q` |
+//! | `a, a_u, a_v, a_q` | `sum w P`, `sum w u P`, `sum w v P`, `sum w q P` |
+//! | `S, S_u, S_v, S_q` | `sum w P P^T`, `sum w u P P^T`, `sum w v P P^T`, `sum w q P P^T` |
+//!
+//! Then (weighted rows `sqrt(w) W_i`, `sqrt(w) V_i`):
+//! `W^T W = [[sw, 0, -su], [0, sw, -sv], [-su, -sv, sq]]`,
+//! `W^T V = [[-a^T, 0, a_u^T], [0, -a^T, a_v^T], [a_u^T, a_v^T, -a_q^T]]`,
+//! `V^T V = [[S, 0, -S_u], [0, S, -S_v], [-S_u, -S_v, S_q]]`,
+//! `G = (W^T W)^-1 W^T V`, `M = V^T V - (W^T V)^T G`, symmetrised.
+//!
+//! Cost per point: 12 multiply-adds and 1 division for the transform to the working frame,
+//! then 48 multiply-adds for the sums (q: 2, w u / w v / w q: 3, su/sv/sq: 3, w P: 3, a: 3,
+//! a_u/a_v/a_q: 9, w P P^T: 6, S/S_u/S_v/S_q: 6 + 18): 60 in all, no allocation.
+
+use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector3};
+
+use crate::frame::WorkingFrame;
+
+/// The weighted sums of S2 (symmetric matrices stored in full).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Accumulator {
+    /// `sum w` (the N of the unweighted formulas).
+    pub sw: f64,
+    /// `sum w u`.
+    pub su: f64,
+    /// `sum w v`.
+    pub sv: f64,
+    /// `sum w (u^2 + v^2)`.
+    pub sq: f64,
+    /// `sum w P` (0 in exact arithmetic: the points are centred; kept).
+    pub a: Vector3<f64>,
+    /// `sum w u P`.
+    pub a_u: Vector3<f64>,
+    /// `sum w v P`.
+    pub a_v: Vector3<f64>,
+    /// `sum w q P`.
+    pub a_q: Vector3<f64>,
+    /// `sum w P P^T`.
+    pub s: Matrix3<f64>,
+    /// `sum w u P P^T`.
+    pub s_u: Matrix3<f64>,
+    /// `sum w v P P^T`.
+    pub s_v: Matrix3<f64>,
+    /// `sum w q P P^T`.
+    pub s_q: Matrix3<f64>,
+}
+
+/// `M` (9 x 9, symmetric PSD) and `G` (3 x 9) of S2, with `f(R) = r^T M r` and `t = G r`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct System {
+    /// `M = V^T V - (W^T V)^T G`, symmetrised.
+    pub m: SMatrix<f64, 9, 9>,
+    /// `G = (W^T W)^-1 W^T V`.
+    pub g: SMatrix<f64, 3, 9>,
+    /// `trace(M)`, the natural scale of the cost.
+    pub trace: f64,
+}
+
+/// Index pairs of the 6 unique entries of a symmetric 3 x 3 matrix.
+const SYM6: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+
+/// S2: accumulate the sums over the points with weight > 0, transforming each world point to
+/// the working frame on the fly ([`WorkingFrame::to_working`]). Weights must already be
+/// validated ([`crate::frame::working_frame`]); a point with weight 0 is skipped, so it gives
+/// bit-identical sums to removing it.
+pub(crate) fn accumulate(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    frame: &WorkingFrame,
+) -> Accumulator {
+    let mut sw = 0.0;
+    let mut su = 0.0;
+    let mut sv = 0.0;
+    let mut sq = 0.0;
+    let mut a = Vector3::zeros();
+    let mut a_u = Vector3::zeros();
+    let mut a_v = Vector3::zeros();
+    let mut a_q = Vector3::zeros();
+    let mut s = [0.0f64; 6];
+    let mut s_u = [0.0f64; 6];
+    let mut s_v = [0.0f64; 6];
+    let mut s_q = [0.0f64; 6];
+    let n = world.len().min(image.len());
+    for i in 0..n {
+        let w = match weights {
+            Some(ws) => ws[i],
+            None => 1.0,
+        };
+        if w <= 0.0 {
+            continue;
+        }
+        let p = frame.to_working(&world[i]);
+        let (u, v) = (image[i].x, image[i].y);
+        let q = u * u + v * v;
+        let (wu, wv, wq) = (w * u, w * v, w * q);
+        sw += w;
+        su += wu;
+        sv += wv;
+        sq += wq;
+        let wp = p * w;
+        a += wp;
+        a_u += p * wu;
+        a_v += p * wv;
+        a_q += p * wq;
+        for (k, &(r, c)) in SYM6.iter().enumerate() {
+            let pp = wp[r] * p[c];
+            s[k] += pp;
+            s_u[k] += u * pp;
+            s_v[k] += v * pp;
+            s_q[k] += q * pp;
+        }
+    }
+    let full = |x: &[f64; 6]| {
+        Matrix3::new(
+            x[0], x[1], x[2], //
+            x[1], x[3], x[4], //
+            x[2], x[4], x[5],
+        )
+    };
+    Accumulator {
+        sw,
+        su,
+        sv,
+        sq,
+        a,
+        a_u,
+        a_v,
+        a_q,
+        s: full(&s),
+        s_u: full(&s_u),
+        s_v: full(&s_v),
+        s_q: full(&s_q),
+    }
+}
+
+/// Zero the terms containing the working-frame z coordinate (S4' flattening).
+fn flat_vec(x: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(x.x, x.y, 0.0)
+}
+
+/// Zero row and column 2 of a symmetric matrix (terms containing z).
+fn flat_mat(x: &Matrix3<f64>) -> Matrix3<f64> {
+    let mut y = *x;
+    for k in 0..3 {
+        y[(2, k)] = 0.0;
+        y[(k, 2)] = 0.0;
+    }
+    y
+}
+
+impl Accumulator {
+    /// `M`, `G` and `trace(M)` from the sums (one 3 x 3 Cholesky solve with 9 right-hand sides).
+    ///
+    /// `flatten = true` gives the planar system of S4' (working-frame z set to 0): every
+    /// sum containing z is zeroed, which equals accumulating the flattened points.
+    ///
+    /// Returns `None` if `W^T W` is not positive definite (all image points coincide, which
+    /// S1 already rejects) or if a result is not finite (e.g. image coordinates so large that
+    /// `u^2 + v^2` overflows).
+    pub(crate) fn system(&self, flatten: bool) -> Option<System> {
+        let (a, a_u, a_v, a_q, s, s_u, s_v, s_q) = if flatten {
+            (
+                flat_vec(&self.a),
+                flat_vec(&self.a_u),
+                flat_vec(&self.a_v),
+                flat_vec(&self.a_q),
+                flat_mat(&self.s),
+                flat_mat(&self.s_u),
+                flat_mat(&self.s_v),
+                flat_mat(&self.s_q),
+            )
+        } else {
+            (
+                self.a, self.a_u, self.a_v, self.a_q, self.s, self.s_u, self.s_v, self.s_q,
+            )
+        };
+        #[rustfmt::skip]
+        let wtw = Matrix3::new(
+            self.sw, 0.0, -self.su,
+            0.0, self.sw, -self.sv,
+            -self.su, -self.sv, self.sq,
+        );
+        let mut wtv = SMatrix::<f64, 3, 9>::zeros();
+        for j in 0..3 {
+            wtv[(0, j)] = -a[j];
+            wtv[(0, 6 + j)] = a_u[j];
+            wtv[(1, 3 + j)] = -a[j];
+            wtv[(1, 6 + j)] = a_v[j];
+            wtv[(2, j)] = a_u[j];
+            wtv[(2, 3 + j)] = a_v[j];
+            wtv[(2, 6 + j)] = -a_q[j];
+        }
+        let mut vtv = SMatrix::<f64, 9, 9>::zeros();
+        vtv.fixed_view_mut::<3, 3>(0, 0).copy_from(&s);
+        vtv.fixed_view_mut::<3, 3>(3, 3).copy_from(&s);
+        vtv.fixed_view_mut::<3, 3>(6, 6).copy_from(&s_q);
+        vtv.fixed_view_mut::<3, 3>(0, 6).copy_from(&(-s_u));
+        vtv.fixed_view_mut::<3, 3>(6, 0).copy_from(&(-s_u));
+        vtv.fixed_view_mut::<3, 3>(3, 6).copy_from(&(-s_v));
+        vtv.fixed_view_mut::<3, 3>(6, 3).copy_from(&(-s_v));
+
+        let sums_finite = [self.sw, self.su, self.sv, self.sq]
+            .iter()
+            .all(|x| x.is_finite())
+            && [a, a_u, a_v, a_q]
+                .iter()
+                .all(|x| x.iter().all(|y| y.is_finite()))
+            && [s, s_u, s_v, s_q]
+                .iter()
+                .all(|x| x.iter().all(|y| y.is_finite()));
+        if !sums_finite {
+            return None;
+        }
+        let chol = wtw.cholesky()?;
+        let g = chol.solve(&wtv);
+        let m = vtv - wtv.transpose() * g;
+        let m = (m + m.transpose()) * 0.5;
+        if !(m.iter().all(|x| x.is_finite()) && g.iter().all(|x| x.is_finite())) {
+            return None;
+        }
+        Some(System {
+            m,
+            g,
+            trace: m.trace(),
+        })
+    }
+}
+
+/// Upper triangle of a symmetric 9 x 9 matrix, row by row: (0,0), (0,1), ..., (0,8), (1,1),
+/// ..., (8,8) (the input order of the generated kernels).
+pub(crate) fn m_upper(m: &SMatrix<f64, 9, 9>) -> [f64; 45] {
+    let mut out = [0.0; 45];
+    let mut k = 0;
+    for i in 0..9 {
+        for j in i..9 {
+            out[k] = m[(i, j)];
+            k += 1;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::working_frame;
+    use nalgebra::{DMatrix, Rotation3};
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64;
+
+    /// Explicit `M = K^T K`, `G` from the stacked, weighted W and V (tests only).
+    fn explicit(p: &[Vector3<f64>], uv: &[Point2<f64>], w: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
+        let n = p.len();
+        let mut wm = DMatrix::zeros(2 * n, 3);
+        let mut vm = DMatrix::zeros(2 * n, 9);
+        for i in 0..n {
+            let sq = w[i].sqrt();
+            let (u, v) = (uv[i].x, uv[i].y);
+            wm[(2 * i, 0)] = sq;
+            wm[(2 * i, 2)] = -u * sq;
+            wm[(2 * i + 1, 1)] = sq;
+            wm[(2 * i + 1, 2)] = -v * sq;
+            for j in 0..3 {
+                vm[(2 * i, j)] = -p[i][j] * sq;
+                vm[(2 * i, 6 + j)] = u * p[i][j] * sq;
+                vm[(2 * i + 1, 3 + j)] = -p[i][j] * sq;
+                vm[(2 * i + 1, 6 + j)] = v * p[i][j] * sq;
+            }
+        }
+        let wtw = wm.transpose() * &wm;
+        let g = wtw.lu().solve(&(wm.transpose() * &vm)).unwrap();
+        let k = &wm * &g - &vm;
+        (k.transpose() * &k, g)
+    }
+
+    fn rel_diff(a: &SMatrix<f64, 9, 9>, b: &DMatrix<f64>) -> f64 {
+        let mut num = 0.0f64;
+        for i in 0..9 {
+            for j in 0..9 {
+                num = num.max((a[(i, j)] - b[(i, j)]).abs());
+            }
+        }
+        num / a.amax()
+    }
+
+    struct Problem {
+        world: Vec<Point3<f64>>,
+        image: Vec<Point2<f64>>,
+        r: Matrix3<f64>,
+        t: Vector3<f64>,
+    }
+
+    fn problem(rng: &mut Pcg64, n: usize, noise: f64, planar: bool) -> Problem {
+        let r = Rotation3::from_scaled_axis(Vector3::new(
+            rng.random_range(-2.0..2.0),
+            rng.random_range(-2.0..2.0),
+            rng.random_range(-2.0..2.0),
+        ))
+        .into_inner();
+        // Points in a box of half-size 2 around `offset`, the camera 8 units from its centre:
+        // depths in [~4.5, ~11.5].
+        let offset = Vector3::new(10.0, -4.0, 1.5);
+        let t = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            8.0,
+        ) - r * offset;
+        let world: Vec<Point3<f64>> = (0..n)
+            .map(|_| {
+                Point3::from(
+                    Vector3::new(
+                        rng.random_range(-2.0..2.0),
+                        rng.random_range(-2.0..2.0),
+                        if planar {
+                            0.0
+                        } else {
+                            rng.random_range(-2.0..2.0)
+                        },
+                    ) + offset,
+                )
+            })
+            .collect();
+        let image = world
+            .iter()
+            .map(|x| {
+                let pc = r * x.coords + t;
+                Point2::new(
+                    pc.x / pc.z + noise * rng.random_range(-1.0..1.0),
+                    pc.y / pc.z + noise * rng.random_range(-1.0..1.0),
+                )
+            })
+            .collect();
+        Problem { world, image, r, t }
+    }
+
+    fn row_major(r: &Matrix3<f64>) -> SMatrix<f64, 9, 1> {
+        SMatrix::<f64, 9, 1>::from_iterator((0..9).map(|k| r[(k / 3, k % 3)]))
+    }
+
+    #[test]
+    fn matches_explicit_k_t_k() {
+        let mut rng = Pcg64::seed_from_u64(21);
+        for trial in 0..60 {
+            let n = 4 + trial % 30;
+            let pr = problem(&mut rng, n, 0.01, trial % 4 == 0);
+            let w: Vec<f64> = if trial % 2 == 0 {
+                vec![1.0; n]
+            } else {
+                (0..n).map(|_| rng.random_range(0.0..3.0)).collect()
+            };
+            let wopt = if trial % 2 == 0 { None } else { Some(&w[..]) };
+            let frame = working_frame(&pr.world, &pr.image, wopt, true).unwrap();
+            let acc = accumulate(&pr.world, &pr.image, wopt, &frame);
+            let p: Vec<Vector3<f64>> = pr.world.iter().map(|x| frame.to_working(x)).collect();
+            for flatten in [false, true] {
+                let sys = acc.system(flatten).unwrap();
+                let pf: Vec<Vector3<f64>> = if flatten {
+                    p.iter().map(|x| Vector3::new(x.x, x.y, 0.0)).collect()
+                } else {
+                    p.clone()
+                };
+                let (m, g) = explicit(&pf, &pr.image, &w);
+                // Cancellation in V^T V - (W^T V)^T G; measured ~1e-15 relative to max |M|
+                // (ALGORITHM.md S2 quotes 9e-16); 1e-13 leaves room for N up to 33.
+                assert!(
+                    rel_diff(&sys.m, &m) < 1e-13,
+                    "{trial} {flatten}: {:e}",
+                    rel_diff(&sys.m, &m)
+                );
+                let gd = (0..27)
+                    .map(|k| (sys.g[(k / 9, k % 9)] - g[(k / 9, k % 9)]).abs())
+                    .fold(0.0, f64::max);
+                assert!(gd < 1e-13 * sys.g.amax().max(1.0));
+                assert_eq!(sys.m, sys.m.transpose());
+                assert!((sys.trace - sys.m.trace()).abs() == 0.0);
+                if flatten {
+                    for k in [2usize, 5, 8] {
+                        assert!(sys.m.row(k).iter().all(|&x| x == 0.0));
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn zero_weight_bit_identical() {
+        let mut rng = Pcg64::seed_from_u64(22);
+        let pr = problem(&mut rng, 9, 0.01, false);
+        let w: Vec<f64> = (0..9).map(|_| rng.random_range(0.5..2.0)).collect();
+        let f = working_frame(&pr.world, &pr.image, Some(&w), true).unwrap();
+        let a = accumulate(&pr.world, &pr.image, Some(&w), &f);
+        let mut world = pr.world.clone();
+        let mut image = pr.image.clone();
+        let mut w2 = w.clone();
+        world.insert(4, Point3::new(3.0, 1e4, -2.0));
+        image.insert(4, Point2::new(-9.0, 0.3));
+        w2.insert(4, 0.0);
+        let f2 = working_frame(&world, &image, Some(&w2), true).unwrap();
+        let b = accumulate(&world, &image, Some(&w2), &f2);
+        assert_eq!(a, b);
+        assert_eq!(a.system(false), b.system(false));
+    }
+
+    #[test]
+    fn sign_check_at_noise_free_truth() {
+        let mut rng = Pcg64::seed_from_u64(23);
+        for trial in 0..40 {
+            let pr = problem(&mut rng, 6 + trial % 10, 0.0, trial % 3 == 0);
+            let frame = working_frame(&pr.world, &pr.image, None, true).unwrap();
+            let sys = accumulate(&pr.world, &pr.image, None, &frame)
+                .system(false)
+                .unwrap();
+            let (rw, tw) = frame.to_work_pose(&pr.r, &pr.t);
+            let r = row_major(&rw);
+            let t = sys.g * r;
+            // t = G r exactly at the truth: rounding of O(1) quantities, ~1e-16 (S2).
+            assert!((t - tw).amax() < 1e-14 * tw.norm(), "{:e}", (t - tw).amax());
+            // f(R_true) = 0 to rounding relative to trace(M).
+            let f = (r.transpose() * sys.m * r)[0];
+            assert!(f.abs() < 1e-14 * sys.trace);
+        }
+    }
+
+    #[test]
+    fn matches_python_reference() {
+        // general_N6_sigma2 of shared/reference/test_vectors.json (copied verbatim): inputs,
+        // the stored working-frame M, G and Rw.
+        let pw = [
+            [1.0868021275186281, -1.3378125690946359, -0.3716971277257549],
+            [
+                -0.08262245175874146,
+                2.1404394422295856,
+                0.09475780416357736,
+            ],
+            [0.9837802860864412, 0.6486714833868172, -1.163831730906571],
+            [
+                -0.16408937546260566,
+                -0.6368367668076029,
+                1.5540718637475532,
+            ],
+            [-1.281369717191685, -0.9806899121263071, 0.6735257094982209],
+            [-0.5425008691920372, 0.1662283224121397, -0.7868265187770254],
+        ];
+        let uv = [
+            [-0.0016570055124605432, -0.3422231017892266],
+            [0.15776340718902354, -0.02316152452382859],
+            [0.07176707780774506, -0.2872221288450443],
+            [0.12902243078389844, 0.1406703442626368],
+            [0.4194096267170485, 0.024480318873897174],
+            [0.296668343841841, -0.20472434279129387],
+        ];
+        #[rustfmt::skip]
+        let rw_ref = Matrix3::new(0.2536263214851283, 0.8370144007505782, -0.48485109259036724, -0.6427153944048016, 0.5204188954652214, 0.562210899074217, 0.7229042888550342, 0.16902977897077642, 0.6699539707891041);
+        let m_ref: [f64; 81] = [
+            3.131447257137925,
+            0.17493980649359878,
+            -0.12906999978062428,
+            -0.17670822747069947,
+            0.316660594951431,
+            0.05432590227628809,
+            -0.5557282179699204,
+            0.1326376295021205,
+            -0.06647172014396244,
+            0.17493980649359878,
+            1.746584070310325,
+            0.2112366683981881,
+            0.28920165269158954,
+            -0.5182484636570802,
+            -0.08891006914134439,
+            0.0027990054827931043,
+            -0.23694304676538847,
+            -0.021562000644224158,
+            -0.12906999978062428,
+            0.2112366683981881,
+            0.5729196632254417,
+            -0.21337200490630326,
+            0.38236197027562313,
+            0.06559754943474569,
+            -0.014698393034176575,
+            0.050483290840000576,
+            -0.15044208512413274,
+            -0.17670822747069947,
+            0.28920165269158954,
+            -0.21337200490630326,
+            2.946214002097601,
+            0.5234873025060064,
+            0.08980883789213118,
+            0.26828891785824366,
+            0.11199084878245566,
+            0.04514984786705785,
+            0.316660594951431,
+            -0.5182484636570802,
+            0.38236197027562313,
+            0.5234873025060064,
+            1.0948038948758025,
+            -0.16093715864777333,
+            -0.11861338773722166,
+            0.29911811535886484,
+            -0.14984828029708536,
+            0.05432590227628809,
+            -0.08891006914134439,
+            0.06559754943474569,
+            0.08980883789213118,
+            -0.16093715864777333,
+            0.7011591843837335,
+            -0.02487094896055815,
+            -0.09526653216461985,
+            0.0213866768031302,
+            -0.5557282179699204,
+            0.0027990054827931043,
+            -0.014698393034176575,
+            0.26828891785824366,
+            -0.11861338773722166,
+            -0.02487094896055815,
+            0.20561516217260914,
+            -0.03198712533541305,
+            0.012102608079827196,
+            0.1326376295021205,
+            -0.23694304676538847,
+            0.050483290840000576,
+            0.11199084878245566,
+            0.29911811535886484,
+            -0.09526653216461985,
+            -0.03198712533541305,
+            0.11072778905646555,
+            -0.041268612403274105,
+            -0.06647172014396244,
+            -0.021562000644224158,
+            -0.15044208512413274,
+            0.04514984786705785,
+            -0.14984828029708536,
+            0.0213866768031302,
+            0.012102608079827196,
+            -0.041268612403274105,
+            0.06021456714741906,
+        ];
+        let g_ref: [f64; 27] = [
+            -0.10651074517965531,
+            0.17431606878902467,
+            -0.12860980820384138,
+            -0.1760781845639941,
+            0.3155315600188875,
+            0.05413220643162109,
+            0.03200204594509552,
+            0.07700096832804529,
+            -0.012946837703409143,
+            0.06871057649032912,
+            -0.11245210572716521,
+            0.08296678470412704,
+            0.11358885479916381,
+            -0.2035508751086254,
+            -0.034920937829666446,
+            -0.08938884585396492,
+            0.07051723202772349,
+            0.0002544329076156343,
+            -0.5956011441632787,
+            0.9747640939105847,
+            -0.7191776640715793,
+            -0.9846177304610538,
+            1.7644319157647812,
+            0.30270376976871183,
+            0.34621638816097117,
+            0.15684079943377824,
+            0.129569230384967,
+        ];
+        let world: Vec<Point3<f64>> = pw.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
+        let image: Vec<Point2<f64>> = uv.iter().map(|p| Point2::new(p[0], p[1])).collect();
+        let frame = working_frame(&world, &image, None, true).unwrap();
+        let sys = accumulate(&world, &image, None, &frame)
+            .system(false)
+            .unwrap();
+        // Align the working frames: D = Rw Rw_ref^T is diagonal +-1 (section 8).
+        let dm = frame.rw * rw_ref.transpose();
+        // Off-diagonal of D: rounding of the SVDs, ~1e-15.
+        assert!((dm.abs() - Matrix3::identity()).amax() < 1e-13);
+        let mut bd = SMatrix::<f64, 9, 9>::zeros();
+        for b in 0..3 {
+            for k in 0..3 {
+                bd[(3 * b + k, 3 * b + k)] = dm[(k, k)].signum();
+            }
+        }
+        let m_ref = SMatrix::<f64, 9, 9>::from_row_slice(&m_ref);
+        let g_ref = SMatrix::<f64, 3, 9>::from_row_slice(&g_ref);
+        let m_al = bd * m_ref * bd.transpose();
+        let g_al = g_ref * bd.transpose();
+        // Section 8: M, G within 1e-12 relative.
+        assert!(
+            (sys.m - m_al).amax() < 1e-12 * m_al.amax(),
+            "{:e}",
+            (sys.m - m_al).amax()
+        );
+        assert!((sys.g - g_al).amax() < 1e-12 * g_al.amax());
+    }
+
+    #[test]
+    fn singular_wtw_gives_none() {
+        let acc = Accumulator {
+            sw: 4.0,
+            su: 4.0,
+            sv: -8.0,
+            sq: 4.0 * 5.0, // all four image points at (1, -2): W^T W singular
+            a: Vector3::zeros(),
+            a_u: Vector3::zeros(),
+            a_v: Vector3::zeros(),
+            a_q: Vector3::zeros(),
+            s: Matrix3::identity(),
+            s_u: Matrix3::identity(),
+            s_v: Matrix3::identity(),
+            s_q: Matrix3::identity(),
+        };
+        assert!(acc.system(false).is_none());
+        let mut bad = acc;
+        bad.sq = f64::INFINITY;
+        assert!(bad.system(false).is_none());
+    }
+
+    #[test]
+    fn m_upper_order() {
+        let m = SMatrix::<f64, 9, 9>::from_fn(|i, j| (i.min(j) * 10 + i.max(j)) as f64);
+        let u = m_upper(&m);
+        assert_eq!(u[0], 0.0);
+        assert_eq!(u[8], 8.0);
+        assert_eq!(u[9], 11.0);
+        assert_eq!(u[16], 18.0);
+        assert_eq!(u[17], 22.0);
+        assert_eq!(u[44], 88.0);
+    }
+}

@@ -1,0 +1,190 @@
+//! Errors returned by the solver.
+//!
+//! Every input problem the solver can detect is reported as a [`PnpError`] (the solver never
+//! panics on user input). Input checks run in a fixed order (ALGORITHM.md section 6): slice
+//! lengths, weights length, number of points, finiteness, weight signs, number of points with a
+//! positive weight, coincident world points, collinear world points, coincident image points.
+
+use core::fmt;
+
+/// Which input slice an index in [`PnpError::NonFinite`] refers to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum InputKind {
+    /// The world points (`world[index]` has a NaN or infinite coordinate).
+    World,
+    /// The image points (`image[index]` has a NaN or infinite coordinate).
+    Image,
+    /// The weights (`weights[index]` is NaN or infinite).
+    Weight,
+}
+
+impl fmt::Display for InputKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            InputKind::World => "world point",
+            InputKind::Image => "image point",
+            InputKind::Weight => "weight",
+        })
+    }
+}
+
+/// The kind of degenerate configuration in [`PnpError::Degenerate`].
+#[non_exhaustive]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DegenerateKind {
+    /// All (positively weighted) world points are the same point.
+    CoincidentWorldPoints,
+    /// The world points lie on a line (second singular value of the centred points
+    /// <= 1e-8 times the first): the rotation about that line is not observable.
+    CollinearWorldPoints,
+    /// All (positively weighted) image points are the same point (RMS spread
+    /// <= 1e-12 max(1, largest absolute image coordinate)).
+    CoincidentImagePoints,
+    /// The world coordinates cannot be normalised in `f64`: a coordinate is so large that
+    /// differences of coordinates overflow (above about 4e307), or the points' spread is
+    /// below the smallest normal `f64` (about 2.2e-308).
+    ScaleOutOfRange,
+}
+
+impl fmt::Display for DegenerateKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DegenerateKind::CoincidentWorldPoints => {
+                "all world points coincide; at least 4 distinct, non-collinear world points are needed"
+            }
+            DegenerateKind::CollinearWorldPoints => {
+                "the world points are (numerically) collinear; the rotation about their line \
+                 cannot be recovered, add points off that line"
+            }
+            DegenerateKind::CoincidentImagePoints => {
+                "all image points coincide; check that the image points are distinct \
+                 (and given in normalised or pixel coordinates as the API expects)"
+            }
+            DegenerateKind::ScaleOutOfRange => {
+                "the world coordinates are outside the range f64 can normalise (magnitude above \
+                 ~4e307 or spread below ~2.2e-308); rescale or re-centre the world points"
+            }
+        })
+    }
+}
+
+/// Error returned by the solver.
+#[non_exhaustive]
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PnpError {
+    /// Fewer correspondences than the solver needs (`need` = 4). With weights, only the
+    /// points with a weight > 0 count.
+    TooFewPoints {
+        /// Number of (positively weighted) correspondences given.
+        got: usize,
+        /// Number needed.
+        need: usize,
+    },
+    /// The world and image slices have different lengths.
+    LengthMismatch {
+        /// Length of the world-point slice.
+        world: usize,
+        /// Length of the image-point slice.
+        image: usize,
+    },
+    /// The weights slice does not have one weight per correspondence.
+    WeightsLength {
+        /// Length of the weights slice.
+        weights: usize,
+        /// Number of correspondences.
+        points: usize,
+    },
+    /// An input value is NaN or infinite; `index` is the first offending correspondence
+    /// (for one index, world is checked before image before weight).
+    NonFinite {
+        /// Index of the first offending correspondence.
+        index: usize,
+        /// Which input holds the offending value.
+        input: InputKind,
+    },
+    /// A weight is negative (weights must be >= 0; a weight of 0 ignores the point).
+    InvalidWeight {
+        /// Index of the first negative weight.
+        index: usize,
+    },
+    /// The input configuration is degenerate; see [`DegenerateKind`].
+    Degenerate(DegenerateKind),
+    /// Camera intrinsics with a non-finite value or a focal length that is not positive.
+    InvalidIntrinsics,
+    /// No candidate rotation survived (numerical failure); not observed on valid input.
+    NoSolution,
+}
+
+impl fmt::Display for PnpError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PnpError::TooFewPoints { got, need } => write!(
+                f,
+                "too few correspondences: got {got} (with weight > 0), need at least {need}"
+            ),
+            PnpError::LengthMismatch { world, image } => write!(
+                f,
+                "world and image point counts differ ({world} world points, {image} image \
+                 points); pass one image point per world point"
+            ),
+            PnpError::WeightsLength { weights, points } => write!(
+                f,
+                "got {weights} weights for {points} correspondences; pass one weight per point"
+            ),
+            PnpError::NonFinite { index, input } => write!(
+                f,
+                "{input} {index} is not finite (NaN or infinite); remove or fix that \
+                 correspondence"
+            ),
+            PnpError::InvalidWeight { index } => write!(
+                f,
+                "weight {index} is negative; weights must be >= 0 (use 0 to ignore a point)"
+            ),
+            PnpError::Degenerate(kind) => write!(f, "degenerate input: {kind}"),
+            PnpError::InvalidIntrinsics => f.write_str(
+                "invalid intrinsics: fx, fy, cx, cy and skew must be finite and fx, fy > 0",
+            ),
+            PnpError::NoSolution => f.write_str(
+                "no solution found (numerical failure on every candidate); the input may be \
+                 extremely ill-conditioned",
+            ),
+        }
+    }
+}
+
+impl std::error::Error for PnpError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_is_actionable() {
+        let cases = [
+            PnpError::TooFewPoints { got: 3, need: 4 },
+            PnpError::LengthMismatch { world: 5, image: 4 },
+            PnpError::WeightsLength {
+                weights: 3,
+                points: 5,
+            },
+            PnpError::NonFinite {
+                index: 7,
+                input: InputKind::Image,
+            },
+            PnpError::InvalidWeight { index: 2 },
+            PnpError::Degenerate(DegenerateKind::CollinearWorldPoints),
+            PnpError::Degenerate(DegenerateKind::CoincidentWorldPoints),
+            PnpError::Degenerate(DegenerateKind::CoincidentImagePoints),
+            PnpError::Degenerate(DegenerateKind::ScaleOutOfRange),
+            PnpError::NoSolution,
+        ];
+        for e in &cases {
+            let s = e.to_string();
+            assert!(s.len() > 20, "{s}");
+            let _: &dyn std::error::Error = e;
+        }
+        assert!(cases[3].to_string().contains("image point 7"));
+        assert!(cases[0].to_string().contains("got 3"));
+        assert_eq!(cases[0].clone(), cases[0]);
+    }
+}

@@ -1,0 +1,316 @@
+//! S4 and S4': candidate rotations from the (approximate) null space of M.
+//!
+//! Non-planar branch (ALGORITHM.md S4): `r` is sought in the span of the eigenvectors of the four
+//! smallest eigenvalues of `M`, with the orthonormality constraints of a rotation:
+//! case 1 (`r = v1`), case 2 (`r = x v1 + y v2`, quartic in `beta = y^2`), case 3
+//! (`r = v1 + k1 v2 + k2 v3`, degree-9 resultant), case 4 (`r = v1 + k1 v2 + k2 v3 + k3 v4`,
+//! three quadrics, degree-8 determinant). Planar branch (S4'): the same for the first two columns
+//! of `R` from the 6x6 planar system. The polynomial algebra is the generated code of
+//! [`crate::kernels`]; the roots come from [`crate::roots`].
+//!
+//! Every function appends to a fixed-capacity list: no allocation.
+
+use crate::kernels;
+use crate::roots::{self, Roots};
+use crate::rotation::svd3;
+use arrayvec::ArrayVec;
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+
+/// Which generator produced a candidate (reported in [`crate::Solution`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum CandidateSource {
+    /// S4.1: the eigenvector of the smallest eigenvalue.
+    Case1,
+    /// S4.2: two-dimensional null space (quartic in `beta`).
+    Case2,
+    /// S4.3: three-dimensional null space (degree-9 resultant).
+    Case3,
+    /// S4.4: four-dimensional null space (three quadrics, degree-8 determinant).
+    Case4,
+    /// S4' case p1: planar, one null vector.
+    Planar1,
+    /// S4' case p2: planar, two null vectors.
+    Planar2,
+    /// S4'': one of the four fixed extra starting rotations.
+    ExtraStart,
+}
+
+/// Upper bound on the number of candidates: 1 + 4 + 9 + 8 (S4) + 5 (S4') + 4 (S4'') = 31.
+pub const MAX_CANDIDATES: usize = 32;
+
+/// A candidate rotation before refinement.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Candidate {
+    pub r: Matrix3<f64>,
+    pub source: CandidateSource,
+}
+
+pub(crate) type Candidates = ArrayVec<Candidate, MAX_CANDIDATES>;
+
+/// The row pairs (j, k) of R whose dot products are the constraints f1..f6 (ALGORITHM.md S0).
+const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// Tolerance on the imaginary part of accepted near-real roots (ALGORITHM.md S0, T8).
+const IMAG_TOL: f64 = 1e-6;
+
+/// `Q^{jk}[a][b]` for basis vectors `v` (ALGORITHM.md S4): `row_j(r) . row_k(r) = alpha^T Q alpha`.
+/// `block(v, j)` returns the j-th 3-block (a row of R, or a column in the planar case).
+fn quad_form<const M: usize, const D: usize>(
+    v: &[SVector<f64, D>; M],
+    j: usize,
+    k: usize,
+    block: fn(&SVector<f64, D>, usize) -> Vector3<f64>,
+) -> SMatrix<f64, M, M> {
+    let bj: [Vector3<f64>; M] = std::array::from_fn(|a| block(&v[a], j));
+    let bk: [Vector3<f64>; M] = std::array::from_fn(|a| block(&v[a], k));
+    SMatrix::<f64, M, M>::from_fn(|a, b| 0.5 * (bj[a].dot(&bk[b]) + bj[b].dot(&bk[a])))
+}
+
+fn row_block(v: &SVector<f64, 9>, j: usize) -> Vector3<f64> {
+    Vector3::new(v[3 * j], v[3 * j + 1], v[3 * j + 2])
+}
+
+/// Columns of R in the planar 6-vector `[R11, R12, R21, R22, R31, R32]`.
+fn col_block(v: &SVector<f64, 6>, j: usize) -> Vector3<f64> {
+    Vector3::new(v[j], v[2 + j], v[4 + j])
+}
+
+fn sym3_upper(q: &Matrix3<f64>) -> [f64; 6] {
+    [q[(0, 0)], q[(0, 1)], q[(0, 2)], q[(1, 1)], q[(1, 2)], q[(2, 2)]]
+}
+
+/// Real roots of the cubic `c0 + c1 x + c2 x^2 + c3 x^3` for back-substitution.
+fn cubic(c: &[f64]) -> Roots {
+    roots::cubic_real_roots(&[c[0], c[1], c[2], c[3]])
+}
+
+/// The `x` minimising `cost(x)` among the real roots of the two gradient cubics.
+fn best_x(cubics: &[f64; 8], cost: impl Fn(f64) -> f64) -> Option<f64> {
+    let mut best: Option<(f64, f64)> = None;
+    for x in cubic(&cubics[..4]).iter().chain(cubic(&cubics[4..]).iter()) {
+        let c = cost(*x);
+        if c.is_finite() && best.is_none_or(|(bc, _)| c < bc) {
+            best = Some((c, *x));
+        }
+    }
+    best.map(|(_, x)| x)
+}
+
+/// S4.2 / S4' p2: stationary points of `C2(x, y) = |A a - b|^2`, `a = [x^2, x y, y^2]`, for the
+/// given constraint forms `qs` (rows of `A` are `[Q00, 2 Q01, Q11]`) and right-hand sides `b`.
+/// Calls `emit(x, y)` for each (at most 4, `y > 0`).
+fn case2_solutions<const P: usize>(
+    qs: &[SMatrix<f64, 2, 2>; P],
+    b: &[f64; P],
+    mut emit: impl FnMut(f64, f64),
+) {
+    let a = SMatrix::<f64, P, 3>::from_fn(|p, c| match c {
+        0 => qs[p][(0, 0)],
+        1 => 2.0 * qs[p][(0, 1)],
+        _ => qs[p][(1, 1)],
+    });
+    let bv = SVector::<f64, P>::from_column_slice(b);
+    let q = a.transpose() * a;
+    let p = a.transpose() * bv;
+    let q6 = sym3_upper(&q);
+    let p3 = [p[0], p[1], p[2]];
+    let quartic = kernels::case2_resultant(&q6, &p3);
+    let c2 = |x: f64, y: f64| {
+        let av = Vector3::new(x * x, x * y, y * y);
+        (a * av - bv).norm_squared()
+    };
+    for beta in roots::real_roots_near(&quartic, IMAG_TOL).iter() {
+        if !(*beta > 0.0) {
+            continue;
+        }
+        let y = beta.sqrt();
+        let cubics = kernels::case2_cubics(&q6, &p3, y);
+        if let Some(x) = best_x(&cubics, |x| c2(x, y)) {
+            emit(x, y);
+        }
+    }
+}
+
+/// S4 (non-planar branch): cases 1-4 from the eigenvectors `v[0..4]` of the four smallest
+/// eigenvalues of M (ascending). Appends the candidate rotations.
+pub(crate) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidates) {
+    let mut push = |r: SVector<f64, 9>, source: CandidateSource| {
+        let arr: [f64; 9] = r.into();
+        if let Some(rot) = crate::rotation::candidate_to_rotation(&arr) {
+            if !out.is_full() {
+                out.push(Candidate { r: rot, source });
+            }
+        }
+    };
+    // Case 1.
+    push(v[0], CandidateSource::Case1);
+
+    // Case 2.
+    let v2 = [v[0], v[1]];
+    let qs: [SMatrix<f64, 2, 2>; 6] =
+        std::array::from_fn(|p| quad_form(&v2, PAIRS[p].0, PAIRS[p].1, row_block));
+    case2_solutions(&qs, &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0], |x, y| {
+        push(v[0] * x + v[1] * y, CandidateSource::Case2)
+    });
+
+    // Case 3: five equations g1 = f1 - f2, g2 = f1 - f3, f4, f5, f6 over (v1, v2, v3).
+    let v3 = [v[0], v[1], v[2]];
+    let q3: [Matrix3<f64>; 6] =
+        std::array::from_fn(|p| quad_form(&v3, PAIRS[p].0, PAIRS[p].1, row_block));
+    let forms = [q3[0] - q3[1], q3[0] - q3[2], q3[3], q3[4], q3[5]];
+    // row = [F11, F22, 2 F12, 2 F01, 2 F02, F00] for k = [k1^2, k2^2, k1 k2, k1, k2, 1]
+    let bm = SMatrix::<f64, 5, 6>::from_fn(|e, c| {
+        let f = &forms[e];
+        match c {
+            0 => f[(1, 1)],
+            1 => f[(2, 2)],
+            2 => 2.0 * f[(1, 2)],
+            3 => 2.0 * f[(0, 1)],
+            4 => 2.0 * f[(0, 2)],
+            _ => f[(0, 0)],
+        }
+    });
+    let h = bm.transpose() * bm;
+    let mut h21 = [0.0; 21];
+    let mut n = 0;
+    for i in 0..6 {
+        for j in i..6 {
+            h21[n] = h[(i, j)];
+            n += 1;
+        }
+    }
+    let c15 = kernels::case3_quartic(&h21);
+    let res = kernels::case3_resultant(&c15);
+    let c3 = |x: f64, y: f64| {
+        let mut acc = 0.0;
+        for (c, e) in c15.iter().zip(kernels::CASE3_MONOMIALS.iter()) {
+            acc += c * x.powi(e[0] as i32) * y.powi(e[1] as i32);
+        }
+        acc
+    };
+    for y in roots::real_roots_near(&res, IMAG_TOL).iter() {
+        let cubics = kernels::case3_cubics(&c15, *y);
+        if let Some(x) = best_x(&cubics, |x| c3(x, *y)) {
+            push(v[0] + v[1] * x + v[2] * *y, CandidateSource::Case3);
+        }
+    }
+
+    // Case 4.
+    case4(v, |r| push(r, CandidateSource::Case4));
+}
+
+/// Reciprocal condition number of a 3x3 matrix (smallest / largest singular value; 0 for a
+/// zero or non-finite matrix). Uses `svd3`: nalgebra's 3x3 SVD squares the singular values.
+fn rcond3(m: &Matrix3<f64>) -> f64 {
+    match svd3(m) {
+        Some(s) if s.s[0] > 0.0 => s.s[2] / s.s[0],
+        _ => 0.0,
+    }
+}
+
+/// S4.4 with the hidden variable chosen at run time: each of k1, k2, k3 is tried as the hidden
+/// one and the choice whose constant matrix `Mm` is best conditioned is used (ALGORITHM.md S4.4,
+/// "Robustness"); skipped if even that one is numerically singular.
+fn case4(v: &[SVector<f64, 9>; 4], mut emit: impl FnMut(SVector<f64, 9>)) {
+    const RCOND_MIN: f64 = 1e-10;
+    let q4: [SMatrix<f64, 4, 4>; 3] =
+        std::array::from_fn(|p| quad_form(v, PAIRS[3 + p].0, PAIRS[3 + p].1, row_block));
+    // perm[h] = order of the basis (1, hidden, a, b) in terms of the original indices 0..3.
+    let perms = [[0usize, 1, 2, 3], [0, 2, 1, 3], [0, 3, 1, 2]];
+    let mm_of = |perm: &[usize; 4]| {
+        Matrix3::from_fn(|e, c| {
+            let f = &q4[e];
+            let (a, b) = (perm[2], perm[3]);
+            match c {
+                0 => f[(a, a)],
+                1 => f[(b, b)],
+                _ => 2.0 * f[(a, b)],
+            }
+        })
+    };
+    let mut best: Option<(f64, usize)> = None;
+    for (i, perm) in perms.iter().enumerate() {
+        let rc = rcond3(&mm_of(perm));
+        if best.is_none_or(|(b, _)| rc > b) {
+            best = Some((rc, i));
+        }
+    }
+    let Some((rc, pi)) = best else { return };
+    if !(rc >= RCOND_MIN) {
+        return;
+    }
+    let perm = perms[pi];
+    let mm = mm_of(&perm);
+    let Some(mm_inv) = mm.try_inverse() else { return };
+    // N(k1) per equation e: columns [deg 1, deg 1, deg 2] in the hidden variable (index perm[1]).
+    let (o, hv, a, b) = (perm[0], perm[1], perm[2], perm[3]);
+    let ncoef = |e: usize, j: usize, n: usize| -> f64 {
+        let f = &q4[e];
+        match (j, n) {
+            (0, 0) => 2.0 * f[(o, a)],
+            (0, 1) => 2.0 * f[(hv, a)],
+            (1, 0) => 2.0 * f[(o, b)],
+            (1, 1) => 2.0 * f[(hv, b)],
+            (2, 0) => f[(o, o)],
+            (2, 1) => 2.0 * f[(o, hv)],
+            (2, 2) => f[(hv, hv)],
+            _ => 0.0,
+        }
+    };
+    // T = -Mm^-1 N, laid out as kernels::CASE4_T_LAYOUT.
+    let mut t = [0.0; 21];
+    for (slot, lay) in kernels::CASE4_T_LAYOUT.iter().enumerate() {
+        let (i, j, n) = (lay[0] as usize, lay[1] as usize, lay[2] as usize);
+        t[slot] = -(0..3).map(|l| mm_inv[(i, l)] * ncoef(l, j, n)).sum::<f64>();
+    }
+    let det = kernels::case4_determinant(&t);
+    let mat = kernels::case4_matrix(&t);
+    for k in roots::real_roots_near(&det, IMAG_TOL).iter() {
+        let mk = Matrix3::from_fn(|i, j| {
+            let c = &mat[(3 * i + j) * 5..(3 * i + j) * 5 + 5];
+            c.iter().rev().fold(0.0, |acc, x| acc * k + x)
+        });
+        let Some(svd) = svd3(&mk) else { continue };
+        let y = svd.v.column(2).into_owned();
+        if !(y[2].abs() >= 1e-12 * y.norm()) {
+            continue;
+        }
+        let (ka, kb) = (y[0] / y[2], y[1] / y[2]);
+        let mut coef = [0.0; 4];
+        coef[o] = 1.0;
+        coef[hv] = *k;
+        coef[a] = ka;
+        coef[b] = kb;
+        emit(v[0] * coef[0] + v[1] * coef[1] + v[2] * coef[2] + v[3] * coef[3]);
+    }
+}
+
+/// S4' cases p1 and p2: candidate first-two-columns vectors `r6 = [R11, R12, R21, R22, R31, R32]`
+/// from the two smallest eigenvectors of the 6x6 planar `M_p`. Calls `emit(r6, source)`.
+pub(crate) fn planar_vectors(
+    v: &[SVector<f64, 6>; 2],
+    mut emit: impl FnMut(SVector<f64, 6>, CandidateSource),
+) {
+    emit(v[0], CandidateSource::Planar1);
+    let pairs = [(0, 0), (1, 1), (0, 1)];
+    let qs: [SMatrix<f64, 2, 2>; 3] =
+        std::array::from_fn(|p| quad_form(v, pairs[p].0, pairs[p].1, col_block));
+    case2_solutions(&qs, &[1.0, 1.0, 0.0], |x, y| {
+        emit(v[0] * x + v[1] * y, CandidateSource::Planar2)
+    });
+}
+
+/// The rotation of a planar candidate (ALGORITHM.md S4' step 5, without the depth test):
+/// `[c1 c2] = U V^T` of the 3x2 matrix of the two columns, `R = [c1, c2, c1 x c2]`.
+pub(crate) fn planar_rotation(r6: &SVector<f64, 6>) -> Option<Matrix3<f64>> {
+    if !r6.iter().all(|x| x.is_finite()) || r6.norm() == 0.0 {
+        return None;
+    }
+    let a = SMatrix::<f64, 3, 2>::new(r6[0], r6[1], r6[2], r6[3], r6[4], r6[5]);
+    let svd = a.svd(true, true);
+    let c = svd.u? * svd.v_t?;
+    let (c1, c2) = (c.column(0).into_owned(), c.column(1).into_owned());
+    let r = Matrix3::from_columns(&[c1, c2, c1.cross(&c2)]);
+    r.iter().all(|x| x.is_finite()).then_some(r)
+}

@@ -1,0 +1,900 @@
+//! Real roots of real polynomials of degree at most [`MAX_DEGREE`].
+//!
+//! Coefficients are always given in **ascending** order: `c[0] + c[1] x + ... + c[n] x^n`.
+//! Every function returns a [`Roots`] value (a fixed-capacity, allocation-free list of at most
+//! [`MAX_DEGREE`] real roots, sorted ascending, each distinct root reported once). No function
+//! panics, allocates, or loops without a hard iteration bound; non-finite input gives no roots.
+//!
+//! # Normalisation (ALGORITHM.md S0)
+//!
+//! The coefficients are divided by the largest `|c_i|`; leading coefficients whose normalised
+//! magnitude is below `1e-14` are dropped (a polynomial whose leading coefficient is that small
+//! relative to the others has a root beyond ~1e14 that the pose solver does not want). Any
+//! non-finite coefficient, an all-zero polynomial (every `x` is a root: no meaningful answer) and a
+//! nonzero constant give an empty result. Exact zero trailing coefficients are divided out
+//! exactly (`x = 0` is then reported once).
+//!
+//! # Method of [`real_roots`]
+//!
+//! Real roots are isolated with the *derivative sequence* `p, p', p'', ..., p^(n-1)` instead of a
+//! floating-point Sturm chain. Between two consecutive real roots of `p^(k+1)` the polynomial
+//! `p^(k)` is monotone, so it has a root there iff its sign changes, and that root is then
+//! bracketed; it is computed by safeguarded Newton (bisection whenever Newton leaves the bracket
+//! or converges slowly, geometric bisection across many binades). Working upward from the linear
+//! `p^(n-1)` yields the real roots of every level, the last one being `p`; the outermost intervals
+//! end at the Fujiwara root bound (by Gauss-Lucas it bounds the roots of every derivative too).
+//!
+//! Why not Sturm: both count *distinct* real roots exactly in exact arithmetic, but a Sturm chain
+//! is built by repeated polynomial division whose remainders suffer catastrophic cancellation in
+//! f64 (degree 8-9, roots spread over many magnitudes, or clustered roots), so its sign counts can
+//! be wrong even for well-separated roots, and deciding when a remainder "is zero" (to stop the
+//! chain at a non-constant gcd for multiple roots) needs an ad-hoc threshold. The derivative
+//! sequence only ever *evaluates* polynomials, whose rounding error is bounded a priori by Horner's
+//! bound `|fl(p(x)) - p(x)| <= gamma_2n sum |c_i| |x|^i` (`gamma_2n ~ n eps`); a misjudged sign
+//! can therefore only move a root within its backward-error zone, never lose a well-conditioned
+//! root. The same fixed `[[f64; 10]; 10]`-sized storage holds the sequence.
+//!
+//! Multiple roots: a multiple root of `p^(k)` is a simple root of some higher derivative, hence a
+//! critical point `x*` of `p^(k)` that the level above has already found to full precision. It is
+//! reported when `|p^(k)(x*)| <= 2 n eps sum |c_i| |x*|^i` (twice the Horner error bound: the value
+//! is indistinguishable from zero), and the two adjacent monotone intervals then contain no further
+//! root. Double roots thus come out with full relative precision, not the `sqrt(eps)` of a
+//! companion-matrix eigenvalue solver.
+//!
+//! Degrees 1-4 also go through this method in [`real_roots`]: it always ends with a sign change
+//! between adjacent floats (or an exact zero), i.e. a backward error of a few `n eps`, whereas
+//! the closed forms ([`cubic_real_roots`], [`quartic_real_roots`]) rely on Newton polishing to
+//! recover from cancellation (and fall back to this method when polishing fails).
+//!
+//! # Near-real roots (ALGORITHM.md T8)
+//!
+//! [`real_roots_near`] additionally reports the real part of complex pairs whose imaginary part is
+//! tiny (see its documentation), so that noise turning a double real root into a close complex
+//! pair does not lose it.
+
+/// Largest supported polynomial degree (the eopnp resultants have degree 8 and 9).
+pub const MAX_DEGREE: usize = 9;
+
+/// The imaginary-part tolerance of ALGORITHM.md S0 ("keep roots with |Im z| <= 1e-6 (1 + |z|)"),
+/// for use with [`real_roots_near`].
+pub const DEFAULT_IMAG_TOL: f64 = 1e-6;
+
+/// Number of coefficients of a polynomial of degree [`MAX_DEGREE`].
+const NC: usize = MAX_DEGREE + 1;
+/// S0: normalised leading coefficients below this are dropped.
+const DROP_TOL: f64 = 1e-14;
+const EPS: f64 = f64::EPSILON;
+/// Hard bound on safeguarded Newton/bisection iterations per root. Geometric bisection needs at
+/// most ~11 steps to get from the root bound (< 2^48) down to one binade anywhere in the f64 range,
+/// arithmetic bisection then at most 53: 160 is never reached in practice.
+const MAX_BRACKET_ITERS: usize = 160;
+/// Newton polishing steps for the closed forms (each accepted only if it reduces |p|).
+const POLISH_STEPS: usize = 4;
+
+/// A list of at most [`MAX_DEGREE`] real roots, sorted ascending, without duplicates.
+///
+/// Fixed capacity, no heap allocation; `Copy`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Roots {
+    vals: [f64; MAX_DEGREE],
+    len: usize,
+}
+
+impl Roots {
+    /// Number of roots.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// `true` if there are no roots.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The roots, ascending.
+    #[inline]
+    pub fn as_slice(&self) -> &[f64] {
+        // len <= MAX_DEGREE is an invariant kept by `push`.
+        &self.vals[..self.len.min(MAX_DEGREE)]
+    }
+
+    /// Iterator over the roots, ascending.
+    #[inline]
+    pub fn iter(&self) -> core::slice::Iter<'_, f64> {
+        self.as_slice().iter()
+    }
+
+    /// Appends a finite root if there is room (silently ignores the rest).
+    #[inline]
+    fn push(&mut self, x: f64) {
+        if self.len < MAX_DEGREE && x.is_finite() {
+            self.vals[self.len] = x;
+            self.len += 1;
+        }
+    }
+
+    /// Sorts ascending (insertion sort, n <= 9) and removes exact duplicates.
+    fn sort_dedup(&mut self) {
+        let n = self.len.min(MAX_DEGREE);
+        for i in 1..n {
+            let mut j = i;
+            while j > 0 && self.vals[j - 1] > self.vals[j] {
+                self.vals.swap(j - 1, j);
+                j -= 1;
+            }
+        }
+        let mut m = 0;
+        for i in 0..n {
+            if m == 0 || self.vals[i] != self.vals[m - 1] {
+                self.vals[m] = self.vals[i];
+                m += 1;
+            }
+        }
+        self.len = m;
+    }
+}
+
+impl<'a> IntoIterator for &'a Roots {
+    type Item = &'a f64;
+    type IntoIter = core::slice::Iter<'a, f64>;
+    #[inline]
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+/// A polynomial of degree `n` (1..=9) with ascending coefficients `c[0..=n]`, `c[n] != 0`.
+#[derive(Clone, Copy, Debug)]
+struct Poly {
+    c: [f64; NC],
+    n: usize,
+}
+
+impl Poly {
+    /// p(x) by Horner.
+    #[inline]
+    fn eval(&self, x: f64) -> f64 {
+        let mut p = self.c[self.n];
+        for i in (0..self.n).rev() {
+            p = p * x + self.c[i];
+        }
+        p
+    }
+
+    /// (p(x), p'(x)) by Horner.
+    #[inline]
+    fn eval_d(&self, x: f64) -> (f64, f64) {
+        let mut p = self.c[self.n];
+        let mut d = 0.0;
+        for i in (0..self.n).rev() {
+            d = d * x + p;
+            p = p * x + self.c[i];
+        }
+        (p, d)
+    }
+
+    /// (p(x), p'(x), p''(x)) by Horner.
+    #[inline]
+    fn eval_d2(&self, x: f64) -> (f64, f64, f64) {
+        let mut p = self.c[self.n];
+        let mut d = 0.0;
+        let mut h = 0.0;
+        for i in (0..self.n).rev() {
+            h = h * x + d;
+            d = d * x + p;
+            p = p * x + self.c[i];
+        }
+        (p, d, 2.0 * h)
+    }
+
+    /// sum |c_i| |x|^i: the scale of Horner's rounding error at x.
+    #[inline]
+    fn abs_sum(&self, x: f64) -> f64 {
+        let ax = x.abs();
+        let mut s = self.c[self.n].abs();
+        for i in (0..self.n).rev() {
+            s = s * ax + self.c[i].abs();
+        }
+        s
+    }
+
+    /// Whether the computed value `f = p(x)` is indistinguishable from zero: `|f|` at most twice
+    /// Horner's a-priori error bound `gamma_2n sum |c_i| |x|^i ~ n eps sum |c_i| |x|^i`.
+    #[inline]
+    fn negligible(&self, x: f64, f: f64) -> bool {
+        f.abs() <= 2.0 * self.n as f64 * EPS * self.abs_sum(x)
+    }
+
+    /// The derivative (degree n - 1; only called with n >= 2).
+    fn derivative(&self) -> Poly {
+        let mut c = [0.0; NC];
+        for i in 1..=self.n {
+            c[i - 1] = self.c[i] * i as f64;
+        }
+        Poly { c, n: self.n - 1 }
+    }
+
+    /// Fujiwara's bound on |z| over all complex roots, enlarged by 1 % against rounding.
+    fn root_bound(&self) -> f64 {
+        let n = self.n;
+        let lead = self.c[n].abs();
+        let mut b: f64 = 0.0;
+        for k in 1..=n {
+            let mut r = self.c[n - k].abs() / lead;
+            if k == n {
+                r *= 0.5;
+            }
+            let t = if k == 1 { r } else { r.powf(1.0 / k as f64) };
+            if t > b {
+                b = t;
+            }
+        }
+        let b = 2.0 * b * 1.01;
+        if b.is_finite() && b > 0.0 {
+            b
+        } else {
+            f64::MAX
+        }
+    }
+
+    /// Newton polishing: at most `POLISH_STEPS` steps, each accepted only if it reduces |p|.
+    fn polish(&self, x0: f64) -> f64 {
+        let mut x = x0;
+        let (mut f, mut d) = self.eval_d(x);
+        for _ in 0..POLISH_STEPS {
+            if f == 0.0 || d == 0.0 {
+                break;
+            }
+            let xn = x - f / d;
+            if !xn.is_finite() || xn == x {
+                break;
+            }
+            let (fn_, dn) = self.eval_d(xn);
+            if fn_.abs() >= f.abs() {
+                break;
+            }
+            x = xn;
+            f = fn_;
+            d = dn;
+        }
+        x
+    }
+}
+
+/// S0 normalisation. Returns the normalised polynomial with exact zero roots divided out, and
+/// whether x = 0 is a root; `None` if there is nothing to solve (see the module docs).
+fn prepare(c: &[f64]) -> Option<(Poly, bool)> {
+    let mut mx: f64 = 0.0;
+    for &v in c {
+        if !v.is_finite() {
+            return None;
+        }
+        mx = mx.max(v.abs());
+    }
+    if mx == 0.0 || c.is_empty() {
+        return None;
+    }
+    let mut n = c.len() - 1;
+    while n > 0 && (c[n] / mx).abs() < DROP_TOL {
+        n -= 1;
+    }
+    if n == 0 || n > MAX_DEGREE {
+        return None;
+    }
+    // Exact zero roots: c[0] = ... = c[k-1] = 0 (k < n because c[n] != 0).
+    let mut k = 0;
+    while k < n && c[k] == 0.0 {
+        k += 1;
+    }
+    let mut p = Poly { c: [0.0; NC], n: n - k };
+    for i in 0..=(n - k) {
+        p.c[i] = c[i + k] / mx;
+    }
+    if p.n == 0 {
+        // Only possible as c = a x^k: the single root 0.
+        return Some((p, true));
+    }
+    Some((p, k > 0))
+}
+
+/// Sign as +-1.0 (0 counts as +).
+#[inline]
+fn sgn(x: f64) -> f64 {
+    if x < 0.0 {
+        -1.0
+    } else {
+        1.0
+    }
+}
+
+/// The next trial point strictly inside (lo, hi): 0 if the bracket straddles it, the geometric
+/// mean if it spans more than a factor 2 on one side of 0, else the midpoint.
+#[inline]
+fn split(lo: f64, hi: f64) -> f64 {
+    if lo < 0.0 && hi > 0.0 {
+        return 0.0;
+    }
+    if lo >= 0.0 {
+        let l = lo.max(f64::MIN_POSITIVE);
+        if hi > 2.0 * l {
+            return (l.sqrt()) * (hi.sqrt());
+        }
+    } else {
+        let h = (-hi).max(f64::MIN_POSITIVE);
+        if -lo > 2.0 * h {
+            return -((h.sqrt()) * ((-lo).sqrt()));
+        }
+    }
+    lo + 0.5 * (hi - lo)
+}
+
+/// The root of `q` in the bracket (lo, hi), where q has (computed) sign `s_lo` at lo and the
+/// opposite sign at hi, by safeguarded Newton. Returns the iterate with the smallest |q|.
+fn bracket(q: &Poly, mut lo: f64, mut hi: f64, s_lo: f64) -> f64 {
+    let mut x = split(lo, hi);
+    let mut best_x = x;
+    let mut best_f = f64::INFINITY;
+    let mut step_old = f64::INFINITY;
+    let mut step = f64::INFINITY;
+    for _ in 0..MAX_BRACKET_ITERS {
+        let (f, d) = q.eval_d(x);
+        if f == 0.0 {
+            return x;
+        }
+        if f.abs() < best_f {
+            best_f = f.abs();
+            best_x = x;
+        }
+        if sgn(f) == s_lo {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let xn = x - f / d;
+        let newton_ok = xn.is_finite() && xn > lo && xn < hi && (xn - x).abs() < 0.5 * step_old;
+        step_old = step;
+        let next = if newton_ok {
+            xn
+        } else {
+            let m = split(lo, hi);
+            if !(m > lo && m < hi) {
+                break; // lo and hi are adjacent floats
+            }
+            m
+        };
+        step = (next - x).abs();
+        if next == x {
+            break;
+        }
+        // A Newton step below half an ulp of x: x is the correctly rounded root (up to the
+        // rounding of q), evaluate the neighbour once more via the loop and stop after.
+        if newton_ok && step <= 0.5 * EPS * x.abs() {
+            let (fnx, _) = q.eval_d(next);
+            if fnx.abs() < best_f {
+                best_x = next;
+            }
+            break;
+        }
+        x = next;
+    }
+    best_x
+}
+
+/// Real roots of `q` given the sorted real roots `crit` of `q'` (all inside +-bound).
+/// Returns the roots (ascending) and, for each critical point, nothing: callers that need to
+/// know whether a critical point is a root test it again.
+fn roots_between(q: &Poly, crit: &[f64], bound: f64) -> Roots {
+    let mut out = Roots::default();
+    let lead = sgn(q.c[q.n]);
+    let s_minf = if q.n % 2 == 0 { lead } else { -lead };
+    let s_pinf = lead;
+    let mut prev_x = -bound;
+    let mut prev_s = s_minf;
+    let mut prev_zero = false;
+    for &x in crit {
+        if !(x > prev_x && x < bound) {
+            continue;
+        }
+        let f = q.eval(x);
+        let z = q.negligible(x, f);
+        if !prev_zero && !z && sgn(f) != prev_s {
+            out.push(bracket(q, prev_x, x, prev_s));
+        }
+        if z {
+            out.push(x);
+        }
+        prev_x = x;
+        prev_s = sgn(f);
+        prev_zero = z;
+    }
+    if !prev_zero && s_pinf != prev_s {
+        out.push(bracket(q, prev_x, bound, prev_s));
+    }
+    out
+}
+
+/// The full solver on a prepared polynomial. `imag_tol > 0` adds near-real roots.
+fn solve_prepared(p: &Poly, zero_root: bool, imag_tol: f64) -> Roots {
+    let mut out = Roots::default();
+    if p.n == 0 {
+        if zero_root {
+            out.push(0.0);
+        }
+        return out;
+    }
+    let n = p.n;
+    // Derivative sequence d[k] = p^(k), k = 0..n-1 (d[n-1] is linear).
+    let mut d = [*p; MAX_DEGREE];
+    for k in 1..n {
+        d[k] = d[k - 1].derivative();
+    }
+    let bound = p.root_bound();
+    // Roots of the linear level.
+    let lin = &d[n - 1];
+    let mut cur = Roots::default();
+    cur.push(-lin.c[0] / lin.c[1]);
+    let mut crit = Roots::default(); // roots of p' once the loop is done
+    for k in (0..n - 1).rev() {
+        crit = cur;
+        cur = roots_between(&d[k], crit.as_slice(), bound);
+    }
+    out = cur;
+    if n == 1 {
+        crit = Roots::default();
+    }
+    // Near-real roots from the critical points of p (T8).
+    if imag_tol > 0.0 && n >= 2 {
+        let found = out;
+        for &x in &crit {
+            let tol = imag_tol * (1.0 + x.abs());
+            let (f, _, f2) = p.eval_d2(x);
+            if p.negligible(x, f) || found.iter().any(|&r| (r - x).abs() <= tol) {
+                continue; // already a root
+            }
+            if f2 == 0.0 {
+                continue;
+            }
+            let b = (2.0 * (f / f2).abs()).sqrt();
+            if b <= tol {
+                out.push(x);
+            }
+        }
+    }
+    if zero_root {
+        out.push(0.0);
+    }
+    out.sort_dedup();
+    out
+}
+
+/// All distinct real roots of the polynomial `c[0] + c[1] x + ... + c[n] x^n` (ascending
+/// coefficients), sorted ascending.
+///
+/// Implements the S0 normalisation exactly (divide by the largest `|c_i|`, drop leading
+/// coefficients below `1e-14` after that; non-finite input gives no roots). After dropping, the
+/// degree must be at most [`MAX_DEGREE`]: `c` may be longer than 10 only if the extra leading
+/// coefficients are negligible; a genuinely higher degree gives an empty result (documented
+/// refusal rather than a wrong answer). Roots are isolated with the derivative sequence and
+/// refined by safeguarded Newton to (nearly) the last bit; multiple roots are reported once, to
+/// full precision. See the module documentation for the method and why it is used for every degree.
+pub fn real_roots(c: &[f64]) -> Roots {
+    match prepare(c) {
+        Some((p, z)) => solve_prepared(&p, z, 0.0),
+        None => Roots::default(),
+    }
+}
+
+/// [`real_roots`] plus the real parts of *near-real* complex pairs (ALGORITHM.md T8), e.g.
+/// `real_roots_near(c, DEFAULT_IMAG_TOL)` reproduces the prototype's rule
+/// `|Im z| <= 1e-6 (1 + |z|)`.
+///
+/// A complex pair `x* +- i b` with small `b` sits next to a real critical point `x*` of `p`
+/// (`p'(x*) = 0`, since p is nearly `(x - x*)^2 + b^2` times a factor there). Expanding around
+/// `x*`, `p(x) ~ p(x*) + p''(x*) (x - x*)^2 / 2`, whose roots are `x* +- sqrt(-2 p(x*) / p''(x*))`:
+/// imaginary when `p(x*)` and `p''(x*)` have the same sign, with `b = sqrt(2 |p(x*) / p''(x*)|)`.
+/// Every real root `x*` of `p'` that is not already a root of `p` (value negligible, or a found
+/// root within `imag_tol (1 + |x*|)`) is therefore added when `b <= imag_tol (1 + |x*|)`.
+/// (If the signs differ the same `b` is the half-distance of a real pair, which is then already
+/// found.) `imag_tol <= 0` or NaN adds nothing. At most [`MAX_DEGREE`] roots, deduplicated.
+pub fn real_roots_near(c: &[f64], imag_tol: f64) -> Roots {
+    match prepare(c) {
+        Some((p, z)) => solve_prepared(&p, z, if imag_tol > 0.0 { imag_tol } else { 0.0 }),
+        None => Roots::default(),
+    }
+}
+
+/// Real roots of `a x^2 + b x + c` (a != 0) in closed form (Kahan's accurate discriminant, the
+/// cancellation-free pair `q/a`, `c/q`). A slightly negative discriminant whose vertex value is
+/// negligible gives the double root.
+fn quadratic_closed(p: &Poly, out: &mut Roots) {
+    let (c, b, a) = (p.c[0], p.c[1], p.c[2]);
+    let bb = b * b;
+    let bb_err = b.mul_add(b, -bb);
+    let ac4 = 4.0 * a * c;
+    let ac4_err = (4.0 * a).mul_add(c, -ac4);
+    let disc = (bb - ac4) + (bb_err - ac4_err);
+    if disc > 0.0 {
+        let q = -0.5 * (b + sgn(b) * disc.sqrt());
+        out.push(q / a);
+        if q != 0.0 {
+            out.push(c / q);
+        }
+    } else {
+        let v = -b / (2.0 * a);
+        if disc == 0.0 || p.negligible(v, p.eval(v)) {
+            out.push(v);
+        }
+    }
+}
+
+/// Candidate double root near `x0` (the real part of a close complex pair): polish `x0` as a root
+/// of p' (Newton, accepted only while |p'| decreases) and accept if p is negligible there.
+fn double_candidate(p: &Poly, x0: f64, out: &mut Roots) {
+    let mut x = x0;
+    let (_, mut d, mut h) = p.eval_d2(x);
+    for _ in 0..POLISH_STEPS {
+        if d == 0.0 || h == 0.0 {
+            break;
+        }
+        let xn = x - d / h;
+        if !xn.is_finite() || xn == x {
+            break;
+        }
+        let (_, dn, hn) = p.eval_d2(xn);
+        if dn.abs() >= d.abs() {
+            break;
+        }
+        x = xn;
+        d = dn;
+        h = hn;
+    }
+    if p.negligible(x, p.eval(x)) {
+        out.push(x);
+    }
+}
+
+/// Real roots of a monic-izable cubic (`p.n == 3`) in closed form, unpolished.
+fn cubic_closed(p: &Poly, out: &mut Roots) {
+    let l = p.c[3];
+    let (a, b, c) = (p.c[2] / l, p.c[1] / l, p.c[0] / l);
+    let a3 = a / 3.0;
+    let q = (a * a - 3.0 * b) / 9.0;
+    let r = (2.0 * a * a * a - 9.0 * a * b + 27.0 * c) / 54.0;
+    let r2 = r * r;
+    let q3 = q * q * q;
+    if r2 < q3 {
+        // Three real roots (q > 0 here).
+        let sq = q.sqrt();
+        let cs = (r / (sq * sq * sq)).clamp(-1.0, 1.0);
+        let th = cs.acos();
+        let tp = 2.0 * core::f64::consts::PI;
+        let mut x = [0.0; 3];
+        for (k, xk) in x.iter_mut().enumerate() {
+            *xk = -2.0 * sq * ((th + tp * k as f64) / 3.0).cos() - a3;
+        }
+        // The smallest-magnitude root suffers cancellation against a/3: recompute it from the
+        // product of the roots (x0 x1 x2 = -c) when that is better.
+        let mut im = 0;
+        for k in 1..3 {
+            if x[k].abs() < x[im].abs() {
+                im = k;
+            }
+        }
+        let prod = x[(im + 1) % 3] * x[(im + 2) % 3];
+        if prod != 0.0 {
+            let alt = -c / prod;
+            if alt.is_finite() && p.eval(alt).abs() < p.eval(x[im]).abs() {
+                x[im] = alt;
+            }
+        }
+        for xk in x {
+            out.push(xk);
+        }
+    } else {
+        let big = -sgn(r) * (r.abs() + (r2 - q3).max(0.0).sqrt()).cbrt();
+        let small = if big != 0.0 { q / big } else { 0.0 };
+        out.push(big + small - a3);
+        // The complex pair -(A+B)/2 - a/3 +- i sqrt(3)/2 (A - B): possibly a double root.
+        double_candidate(p, -0.5 * (big + small) - a3, out);
+    }
+}
+
+/// Real roots of a quartic (`p.n == 4`) by Ferrari's method, unpolished.
+fn quartic_closed(p: &Poly, out: &mut Roots) {
+    let l = p.c[4];
+    let (a, b, c, d) = (p.c[3] / l, p.c[2] / l, p.c[1] / l, p.c[0] / l);
+    let a4 = a / 4.0;
+    let aa = a * a;
+    // Depressed quartic y^4 + pp y^2 + qq y + rr, x = y - a/4.
+    let pp = b - 3.0 * aa / 8.0;
+    let qq = c - a * b / 2.0 + aa * a / 8.0;
+    let rr = d - a * c / 4.0 + aa * b / 16.0 - 3.0 * aa * aa / 256.0;
+    let scale = pp.abs().max(qq.abs().powf(2.0 / 3.0)).max(rr.abs().sqrt());
+    let push_quad = |s: f64, t: f64, out: &mut Roots| {
+        // y^2 + s y + t = 0, x = y - a/4
+        let mut qp = Poly { c: [0.0; NC], n: 2 };
+        qp.c[0] = t;
+        qp.c[1] = s;
+        qp.c[2] = 1.0;
+        let mut ys = Roots::default();
+        quadratic_closed(&qp, &mut ys);
+        let pushed = ys.len();
+        for &y in &ys {
+            out.push(y - a4);
+        }
+        if pushed == 0 {
+            double_candidate(p, -0.5 * s - a4, out);
+        }
+    };
+    if qq.abs() <= 16.0 * EPS * scale.max(f64::MIN_POSITIVE).powf(1.5) || scale == 0.0 {
+        // Biquadratic: z = y^2, z^2 + pp z + rr = 0.
+        let mut zp = Poly { c: [0.0; NC], n: 2 };
+        zp.c[0] = rr;
+        zp.c[1] = pp;
+        zp.c[2] = 1.0;
+        let mut zs = Roots::default();
+        quadratic_closed(&zp, &mut zs);
+        for &z in &zs {
+            if z >= 0.0 {
+                let y = z.sqrt();
+                out.push(y - a4);
+                out.push(-y - a4);
+            } else {
+                double_candidate(p, -a4, out);
+            }
+        }
+        if zs.is_empty() {
+            double_candidate(p, -a4, out);
+        }
+        return;
+    }
+    // Resolvent cubic 8 m^3 + 8 pp m^2 + (2 pp^2 - 8 rr) m - qq^2 = 0: take its largest root (> 0).
+    let mut rc = Poly { c: [0.0; NC], n: 3 };
+    rc.c[0] = -qq * qq;
+    rc.c[1] = 2.0 * pp * pp - 8.0 * rr;
+    rc.c[2] = 8.0 * pp;
+    rc.c[3] = 8.0;
+    let mut ms = Roots::default();
+    cubic_closed(&rc, &mut ms);
+    let mut m: f64 = 0.0;
+    for &mi in &ms {
+        let mi = rc.polish(mi);
+        if mi > m {
+            m = mi;
+        }
+    }
+    if !(m > 0.0) {
+        return;
+    }
+    let s = (2.0 * m).sqrt();
+    let h = qq / (2.0 * s);
+    push_quad(s, 0.5 * pp + m - h, out);
+    push_quad(-s, 0.5 * pp + m + h, out);
+}
+
+/// Number of distinct real roots of `q` by the sign pattern at the sorted real roots `crit` of
+/// `q'` (the counting half of `roots_between`, same negligibility rule).
+fn count_by_crit(q: &Poly, crit: &Roots) -> usize {
+    let lead = sgn(q.c[q.n]);
+    let mut prev_s = if q.n % 2 == 0 { lead } else { -lead };
+    let mut prev_zero = false;
+    let mut count = 0;
+    for &x in crit {
+        let f = q.eval(x);
+        let z = q.negligible(x, f);
+        if (!prev_zero && !z && sgn(f) != prev_s) || z {
+            count += 1;
+        }
+        prev_s = sgn(f);
+        prev_zero = z;
+    }
+    if !prev_zero && lead != prev_s {
+        count += 1;
+    }
+    count
+}
+
+/// Polishes the closed-form candidates and checks them: every polished root must be a root within
+/// the backward-error criterion, and for degrees 3 and 4 their number must equal the number of
+/// sign changes of p between its critical points (computed by the closed form of one degree
+/// less, itself checked the same way). The closed forms can lose a close real pair to
+/// cancellation (the discriminant comes out with the wrong sign); on any mismatch the whole
+/// polynomial is solved by the bracketing method instead.
+fn finish_closed(p: &Poly, zero_root: bool, cand: &Roots) -> Roots {
+    let mut out = Roots::default();
+    for &x in cand {
+        let x = p.polish(x);
+        if !p.negligible(x, p.eval(x)) {
+            return solve_prepared(p, zero_root, 0.0);
+        }
+        out.push(x);
+    }
+    out.sort_dedup();
+    if p.n >= 3 {
+        let crit = closed_prepared(&p.derivative(), false);
+        if count_by_crit(p, &crit) != out.len() {
+            return solve_prepared(p, zero_root, 0.0);
+        }
+    }
+    if zero_root {
+        out.push(0.0);
+        out.sort_dedup();
+    }
+    out
+}
+
+/// Closed-form solution for prepared polynomials of degree <= 4 (recursion depth <= 2: each
+/// check calls this on the derivative, one degree lower).
+fn closed_prepared(p: &Poly, zero_root: bool) -> Roots {
+    let mut cand = Roots::default();
+    match p.n {
+        0 => {}
+        1 => cand.push(-p.c[0] / p.c[1]),
+        2 => quadratic_closed(p, &mut cand),
+        3 => cubic_closed(p, &mut cand),
+        4 => quartic_closed(p, &mut cand),
+        _ => return solve_prepared(p, zero_root, 0.0),
+    }
+    finish_closed(p, zero_root, &cand)
+}
+
+/// Real roots of the cubic `c[0] + c[1] x + c[2] x^2 + c[3] x^3`, sorted ascending, in closed form
+/// (trigonometric form for three real roots, Cardano with the cancellation-free `A + Q/A`
+/// otherwise, the smallest root recomputed from the product of the roots), then Newton polishing
+/// (at most 4 steps, each accepted only if it reduces |p|).
+///
+/// Same S0 normalisation as [`real_roots`]: a (near-)zero leading coefficient degrades to the
+/// quadratic / linear case. A double root is reported once. If a polished root still has a
+/// residual above the rounding level the whole cubic is solved by [`real_roots`]'s method instead.
+pub fn cubic_real_roots(c: &[f64; 4]) -> Roots {
+    match prepare(c) {
+        Some((p, z)) => closed_prepared(&p, z),
+        None => Roots::default(),
+    }
+}
+
+/// Real roots of the quartic `c[0] + c[1] x + ... + c[4] x^4`, sorted ascending, by Ferrari's
+/// method (depressed quartic, largest root of the resolvent cubic, two quadratics solved without
+/// cancellation), then Newton polishing as in [`cubic_real_roots`], with the same degradation
+/// rules and the same fallback to [`real_roots`]'s method.
+pub fn quartic_real_roots(c: &[f64; 5]) -> Roots {
+    match prepare(c) {
+        Some((p, z)) => closed_prepared(&p, z),
+        None => Roots::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol * (1.0 + y.abs()))
+    }
+
+    /// Ascending coefficients of prod (x - r_i).
+    fn from_roots(r: &[f64]) -> Vec<f64> {
+        let mut c = vec![1.0];
+        for &ri in r {
+            let mut n = vec![0.0; c.len() + 1];
+            for (i, &ci) in c.iter().enumerate() {
+                n[i + 1] += ci;
+                n[i] -= ri * ci;
+            }
+            c = n;
+        }
+        c
+    }
+
+    #[test]
+    fn known_simple_roots() {
+        let r = [-3.0, -1.0, 0.5, 2.0, 7.0];
+        let c = from_roots(&r);
+        assert!(close(real_roots(&c).as_slice(), &r, 1e-14));
+        let c4 = from_roots(&r[..4]);
+        let q = quartic_real_roots(&[c4[0], c4[1], c4[2], c4[3], c4[4]]);
+        assert!(close(q.as_slice(), &r[..4], 1e-14), "{q:?}");
+        let c3 = from_roots(&r[1..4]);
+        let q = cubic_real_roots(&[c3[0], c3[1], c3[2], c3[3]]);
+        assert!(close(q.as_slice(), &r[1..4], 1e-14), "{q:?}");
+        // degree 9
+        let r9 = [-4.0, -3.0, -2.0, -1.0, 0.25, 1.0, 2.0, 3.0, 4.0];
+        assert!(close(real_roots(&from_roots(&r9)).as_slice(), &r9, 1e-12));
+    }
+
+    #[test]
+    fn double_and_triple_roots() {
+        let c = from_roots(&[1.0, 1.0, 3.0]);
+        let r = real_roots(&c);
+        assert!(close(r.as_slice(), &[1.0, 3.0], 1e-14), "{r:?}");
+        let r = cubic_real_roots(&[c[0], c[1], c[2], c[3]]);
+        assert!(close(r.as_slice(), &[1.0, 3.0], 1e-14), "{r:?}");
+        let c = from_roots(&[2.0, 2.0, 2.0, -1.0]);
+        let r = real_roots(&c);
+        assert!(close(r.as_slice(), &[-1.0, 2.0], 1e-14), "{r:?}");
+        let c = from_roots(&[0.3, 0.3, -0.7, -0.7]);
+        let r = quartic_real_roots(&[c[0], c[1], c[2], c[3], c[4]]);
+        assert!(close(r.as_slice(), &[-0.7, 0.3], 1e-14), "{r:?}");
+        assert!(close(real_roots(&c).as_slice(), &[-0.7, 0.3], 1e-14));
+        // (x^2 + 1)^2 has no real roots
+        assert!(real_roots(&[1.0, 0.0, 2.0, 0.0, 1.0]).is_empty());
+        assert!(quartic_real_roots(&[1.0, 0.0, 2.0, 0.0, 1.0]).is_empty());
+    }
+
+    #[test]
+    fn zero_roots_and_degree_0() {
+        assert!(close(real_roots(&[0.0, 0.0, 1.0]).as_slice(), &[0.0], 0.0));
+        assert!(close(real_roots(&[0.0, -4.0, 0.0, 1.0]).as_slice(), &[-2.0, 0.0, 2.0], 1e-15));
+        assert!(real_roots(&[5.0]).is_empty());
+        assert!(real_roots(&[]).is_empty());
+        assert!(real_roots(&[0.0, 0.0]).is_empty());
+        assert!(cubic_real_roots(&[0.0; 4]).is_empty());
+        assert!(close(cubic_real_roots(&[0.0, 0.0, 0.0, 2.0]).as_slice(), &[0.0], 0.0));
+    }
+
+    #[test]
+    fn leading_zeros_degrade() {
+        // 1e-20 x^3 + x^2 - 1: leading coefficient dropped.
+        let r = real_roots(&[-1.0, 0.0, 1.0, 1e-20]);
+        assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15), "{r:?}");
+        let r = cubic_real_roots(&[-1.0, 0.0, 1.0, 1e-20]);
+        assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15), "{r:?}");
+        let r = quartic_real_roots(&[-2.0, 1.0, 0.0, 0.0, 0.0]);
+        assert!(close(r.as_slice(), &[2.0], 0.0), "{r:?}");
+        // 1e-12 is kept: a far root near -1e12.
+        let r = real_roots(&[-1.0, 0.0, 1.0, 1e-12]);
+        assert_eq!(r.len(), 3);
+        assert!((r.as_slice()[0] + 1e12).abs() < 1e-3 * 1e12);
+    }
+
+    #[test]
+    fn non_finite_and_extreme() {
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert!(real_roots(&[1.0, bad, 1.0]).is_empty());
+            assert!(cubic_real_roots(&[1.0, bad, 1.0, 1.0]).is_empty());
+            assert!(quartic_real_roots(&[bad, 0.0, 1.0, 1.0, 1.0]).is_empty());
+            assert!(real_roots_near(&[1.0, 0.0, bad], 1e-6).is_empty());
+        }
+        let r = real_roots(&[-1e300, 0.0, 1e300]);
+        assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15));
+        let r = real_roots(&[-5e-324, 0.0, 5e-324]);
+        assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15));
+        let r = real_roots(&[-f64::MAX, f64::MAX]);
+        assert!(close(r.as_slice(), &[1.0], 1e-15));
+        // Too long but negligible high part: fine; genuinely degree 10: empty.
+        let mut c = [0.0; 12];
+        c[0] = -1.0;
+        c[1] = 1.0;
+        c[11] = 1e-20;
+        assert!(close(real_roots(&c).as_slice(), &[1.0], 1e-15));
+        c[11] = 1.0;
+        assert!(real_roots(&c).is_empty());
+    }
+
+    #[test]
+    fn near_real_pairs() {
+        // (x - 1)^2 + 1e-14: complex pair 1 +- 1e-7 i.
+        let c = [1.0 + 1e-14, -2.0, 1.0];
+        assert!(real_roots(&c).is_empty());
+        let r = real_roots_near(&c, DEFAULT_IMAG_TOL);
+        assert!(close(r.as_slice(), &[1.0], 1e-15), "{r:?}");
+        // (x - 1)^2 + 1e-4: Im = 1e-2: not near-real.
+        assert!(real_roots_near(&[1.0 + 1e-4, -2.0, 1.0], DEFAULT_IMAG_TOL).is_empty());
+        // Real roots unaffected, no duplicates.
+        let c = from_roots(&[1.0, 1.0 + 1e-9, 3.0]);
+        let r = real_roots_near(&c, DEFAULT_IMAG_TOL);
+        assert!(!r.is_empty() && r.len() <= 3);
+        assert!((r.as_slice()[r.len() - 1] - 3.0).abs() < 1e-14);
+        assert!(real_roots_near(&c, f64::NAN).len() == real_roots(&c).len());
+    }
+
+    #[test]
+    fn iterators() {
+        let r = real_roots(&[-1.0, 0.0, 1.0]);
+        let v: Vec<f64> = (&r).into_iter().copied().collect();
+        assert_eq!(v, r.iter().copied().collect::<Vec<_>>());
+        assert_eq!(Roots::default().len(), 0);
+    }
+}

@@ -1,0 +1,607 @@
+//! The EOPnP pipeline (ALGORITHM.md S1-S9) and its public entry points.
+
+use crate::accumulate::{self, System};
+use crate::error::PnpError;
+use crate::frame::{self, WorkingFrame};
+use crate::nullspace::{self, Candidate, CandidateSource, Candidates, MAX_CANDIDATES};
+use crate::refine::{self, NewtonOptions};
+use crate::reproj::{self, ReprojOptions};
+use arrayvec::ArrayVec;
+use nalgebra::{
+    Isometry3, Matrix3, Point2, Point3, SMatrix, SVector, Translation3, Vector3,
+};
+
+/// Which cost the returned pose minimises.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Refinement {
+    /// EOPnP (S0-S8) followed by Levenberg-Marquardt on the reprojection error (S9): the
+    /// maximum-likelihood pose for isotropic Gaussian image noise. Default.
+    #[default]
+    Reprojection,
+    /// EOPnP alone (S0-S8): the minimiser of the paper's depth-weighted algebraic cost.
+    Algebraic,
+}
+
+/// How the planar branch (S4') is chosen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum PlanarDetection {
+    /// From the planarity ratio `sv2 / sv0` of the centred world points (ALGORITHM.md S3):
+    /// non-planar branch if `ratio >= 1e-6`, planar branch if `ratio < 1e-3`, both in between.
+    /// Default.
+    #[default]
+    Auto,
+    /// Planar branch only (the world points are treated as lying on their best-fit plane).
+    Planar,
+    /// Non-planar branch only.
+    NonPlanar,
+}
+
+/// Pinhole intrinsics: `px = fx x + skew y + cx`, `py = fy y + cy` for normalised `(x, y)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    /// Focal length in x, pixels.
+    pub fx: f64,
+    /// Focal length in y, pixels.
+    pub fy: f64,
+    /// Principal point x, pixels.
+    pub cx: f64,
+    /// Principal point y, pixels.
+    pub cy: f64,
+    /// Skew, pixels (0 for almost every camera).
+    pub skew: f64,
+}
+
+impl Intrinsics {
+    /// Normalised image coordinates of a pixel.
+    #[must_use]
+    pub fn normalize(&self, px: &Point2<f64>) -> Point2<f64> {
+        let y = (px.y - self.cy) / self.fy;
+        let x = (px.x - self.cx - self.skew * y) / self.fx;
+        Point2::new(x, y)
+    }
+
+    /// Pixel of a normalised image point.
+    #[must_use]
+    pub fn project(&self, p: &Point2<f64>) -> Point2<f64> {
+        Point2::new(self.fx * p.x + self.skew * p.y + self.cx, self.fy * p.y + self.cy)
+    }
+}
+
+/// A camera pose and how it was found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Solution {
+    /// World-to-camera pose: `x_cam = R X + t`.
+    pub pose: Isometry3<f64>,
+    /// The rotation `R` as a matrix (the same rotation as `pose.rotation`, without the
+    /// quaternion round trip).
+    pub rotation: Matrix3<f64>,
+    /// The minimised cost: the (weighted) sum of squared normalised reprojection residuals in
+    /// [`Refinement::Reprojection`] mode, `f / trace(M)` in [`Refinement::Algebraic`] mode.
+    pub cost: f64,
+    /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (ALGORITHM.md S7).
+    pub algebraic_cost: f64,
+    /// Root-mean-square normalised reprojection residual (weighted), in units of the focal
+    /// length: multiply by `f` for pixels.
+    pub reprojection_rmse: f64,
+    /// More than half of the points (with non-zero weight) are in front of the camera.
+    pub cheirality_ok: bool,
+    /// More than four eigenvalues of `M` are below `1e-10 trace(M)`: the configuration is close
+    /// to degenerate and the pose may be ambiguous (ALGORITHM.md S7, section 6).
+    pub degenerate: bool,
+    /// Whether the planar branch produced this pose's starting candidate.
+    pub planar: bool,
+    /// The candidate generator of the winning start.
+    pub source: CandidateSource,
+    /// Damped-Newton iterations (S6) of the winning candidate.
+    pub newton_iterations: u32,
+    /// Levenberg-Marquardt iterations of the reprojection refinement (S9; 0 in algebraic mode).
+    pub reprojection_iterations: u32,
+}
+
+/// Every distinct local minimum found, best first (see [`Solver::solve_all`]).
+pub type Solutions = ArrayVec<Solution, MAX_CANDIDATES>;
+
+/// Solver options. `Solver::default()` is the recommended configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Solver {
+    refinement: Refinement,
+    newton: NewtonOptions,
+    reproj: ReprojOptions,
+    planar: PlanarDetection,
+    align_world_axes: bool,
+}
+
+impl Default for Solver {
+    fn default() -> Self {
+        Solver {
+            refinement: Refinement::Reprojection,
+            newton: NewtonOptions::default(),
+            reproj: ReprojOptions::default(),
+            planar: PlanarDetection::Auto,
+            align_world_axes: true,
+        }
+    }
+}
+
+/// Relative eigenvalue level below which an eigenvalue of `M` counts as zero for the
+/// `degenerate` diagnostic (ALGORITHM.md S0).
+const DEGENERATE_EIG: f64 = 1e-10;
+/// Planarity thresholds (ALGORITHM.md S3).
+const NONPLANAR_MIN_RATIO: f64 = 1e-6;
+const PLANAR_MAX_RATIO: f64 = 1e-3;
+/// Two refined rotations closer than this (Frobenius norm of the difference, ~ radians) are the
+/// same local minimum.
+const SAME_MINIMUM: f64 = 1e-8;
+/// Hard bound on the symmetric eigen-decomposition sweeps.
+const EIGEN_MAX_ITER: usize = 1000;
+
+/// The four fixed extra starting rotations of S4'' (working frame).
+const EXTRA_STARTS: [[f64; 3]; 4] = [
+    [1.0, 1.0, 1.0],
+    [1.0, -1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+];
+
+impl Solver {
+    /// Which cost to minimise. Default: [`Refinement::Reprojection`].
+    #[must_use]
+    pub fn refinement(mut self, r: Refinement) -> Self {
+        self.refinement = r;
+        self
+    }
+
+    /// Maximum damped-Newton iterations per candidate in S6. Default: `50`.
+    #[must_use]
+    pub fn newton_iterations(mut self, n: u32) -> Self {
+        self.newton.max_iterations = n;
+        self
+    }
+
+    /// S6 stops when the step norm (radians, roughly) falls to this. Default: `1e-12`.
+    #[must_use]
+    pub fn newton_step_tolerance(mut self, tol: f64) -> Self {
+        self.newton.step_tolerance = tol;
+        self
+    }
+
+    /// Maximum Levenberg-Marquardt iterations of the reprojection refinement (S9). Default: `50`.
+    #[must_use]
+    pub fn reprojection_iterations(mut self, n: u32) -> Self {
+        self.reproj.max_iterations = n;
+        self
+    }
+
+    /// Planar branch selection. Default: [`PlanarDetection::Auto`].
+    #[must_use]
+    pub fn planar_detection(mut self, p: PlanarDetection) -> Self {
+        self.planar = p;
+        self
+    }
+
+    /// Test hook: `false` keeps the user's world axes instead of the principal axes in the
+    /// working frame (only valid for non-planar scenes). Default: `true`.
+    #[doc(hidden)]
+    #[must_use]
+    pub fn align_world_axes(mut self, align: bool) -> Self {
+        self.align_world_axes = align;
+        self
+    }
+
+    /// The pose from `world` points and their normalised image points `(x/z, y/z)`.
+    ///
+    /// # Errors
+    /// [`PnpError`] for too few points, mismatched lengths, non-finite values and degenerate
+    /// configurations; see its variants.
+    pub fn solve(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+    ) -> Result<Solution, PnpError> {
+        self.run(world, image, None, self.reproj, None)
+    }
+
+    /// As [`Solver::solve`] with a non-negative weight per point (a point of weight 0 is
+    /// ignored; weights scale each point's squared residuals).
+    ///
+    /// # Errors
+    /// As [`Solver::solve`], plus [`PnpError::WeightsLength`], [`PnpError::InvalidWeight`] and
+    /// [`PnpError::NonFinite`] for the weights.
+    pub fn solve_weighted(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: &[f64],
+    ) -> Result<Solution, PnpError> {
+        self.run(world, image, Some(weights), self.reproj, None)
+    }
+
+    /// Every distinct local minimum of the cost, best first: cheirality-valid poses before the
+    /// others, then by increasing reprojection error. For N <= 6 and for planar scenes several
+    /// poses can explain the data about equally well; this lists them. Bounded (at most 32), no
+    /// allocation.
+    ///
+    /// # Errors
+    /// As [`Solver::solve`].
+    pub fn solve_all(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+    ) -> Result<Solutions, PnpError> {
+        let mut all = Solutions::new();
+        self.run(world, image, None, self.reproj, Some(&mut all))?;
+        Ok(all)
+    }
+
+    /// The pose from pixel coordinates and pinhole intrinsics (no lens distortion). In the
+    /// default mode the reprojection error is measured in pixels (rows weighted by `fx^2` and
+    /// `fy^2`; the skew term is not weighted).
+    ///
+    /// # Errors
+    /// [`PnpError::InvalidIntrinsics`] for non-finite or non-positive focal lengths, and as
+    /// [`Solver::solve`].
+    pub fn solve_pixels(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        k: &Intrinsics,
+    ) -> Result<Solution, PnpError> {
+        let ok = [k.fx, k.fy, k.cx, k.cy, k.skew].iter().all(|x| x.is_finite())
+            && k.fx > 0.0
+            && k.fy > 0.0;
+        if !ok {
+            return Err(PnpError::InvalidIntrinsics);
+        }
+        if world.len() != pixels.len() {
+            return Err(PnpError::LengthMismatch {
+                world: world.len(),
+                image: pixels.len(),
+            });
+        }
+        // Normalise on the stack in chunks is not possible for arbitrary N without allocating;
+        // the normalised points are needed by every pass, so this entry point allocates once.
+        let image: Vec<Point2<f64>> = pixels.iter().map(|p| k.normalize(p)).collect();
+        let scale = k.fx.max(k.fy);
+        let mut opts = self.reproj;
+        opts.row_weights = ((k.fx / scale).powi(2), (k.fy / scale).powi(2));
+        self.run(world, &image, None, opts, None)
+    }
+
+    fn run(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: Option<&[f64]>,
+        reproj_opts: ReprojOptions,
+        all: Option<&mut Solutions>,
+    ) -> Result<Solution, PnpError> {
+        // S1.
+        let fr = frame::working_frame(world, image, weights, self.align_world_axes)?;
+        // S2.
+        let acc = accumulate::accumulate(world, image, weights, &fr);
+        let sys = acc.system(false).ok_or(PnpError::NoSolution)?;
+        let m45 = accumulate::m_upper(&sys.m);
+        let scale = sys.trace;
+        if !(scale > 0.0 && scale.is_finite()) {
+            return Err(PnpError::NoSolution);
+        }
+        // S3.
+        let (nonplanar, planar) = match self.planar {
+            PlanarDetection::Auto => (
+                fr.ratio >= NONPLANAR_MIN_RATIO,
+                fr.ratio < PLANAR_MAX_RATIO,
+            ),
+            PlanarDetection::Planar => (false, true),
+            PlanarDetection::NonPlanar => (true, false),
+        };
+        let eig = nalgebra::SymmetricEigen::try_new(sys.m, f64::EPSILON, EIGEN_MAX_ITER)
+            .ok_or(PnpError::NoSolution)?;
+        let mut order: [usize; 9] = std::array::from_fn(|i| i);
+        order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+        let small = eig
+            .eigenvalues
+            .iter()
+            .filter(|&&l| l <= DEGENERATE_EIG * scale)
+            .count();
+        let degenerate = small > 4;
+
+        let mut cands = Candidates::new();
+        // S4.
+        if nonplanar {
+            let v: [SVector<f64, 9>; 4] =
+                std::array::from_fn(|i| eig.eigenvectors.column(order[i]).into_owned());
+            nullspace::nonplanar_candidates(&v, &mut cands);
+        }
+        // S4'.
+        if planar {
+            if let Some(sys_p) = acc.system(true) {
+                planar_candidates(&sys_p, world, weights, &fr, &mut cands);
+            }
+        }
+        // S4''.
+        for d in EXTRA_STARTS {
+            if !cands.is_full() {
+                cands.push(Candidate {
+                    r: Matrix3::from_diagonal(&Vector3::from(d)),
+                    source: CandidateSource::ExtraStart,
+                });
+            }
+        }
+        let planar_sources = |s: CandidateSource| {
+            matches!(s, CandidateSource::Planar1 | CandidateSource::Planar2)
+        };
+
+        // S6: refine every candidate, in order of increasing initial cost.
+        let f_of = |r: &Matrix3<f64>| {
+            let v = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
+            (v.transpose() * sys.m * v)[(0, 0)]
+        };
+        let mut init: ArrayVec<(f64, usize), MAX_CANDIDATES> =
+            cands.iter().enumerate().map(|(i, c)| (f_of(&c.r), i)).collect();
+        init.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut minima: ArrayVec<Minimum, MAX_CANDIDATES> = ArrayVec::new();
+        for &(_, i) in &init {
+            let c = cands[i];
+            let refined = refine::refine_so3(&m45, scale, &c.r, &self.newton);
+            if !refined.f.is_finite() || !refined.r.iter().all(|x| x.is_finite()) {
+                continue;
+            }
+            if minima
+                .iter()
+                .any(|m| (m.r - refined.r).norm() <= SAME_MINIMUM)
+            {
+                continue;
+            }
+            let r = refined.r;
+            let t = translation(&sys, &r);
+            minima.push(Minimum {
+                r,
+                t,
+                f: refined.f,
+                source: c.source,
+                planar: planar_sources(c.source),
+                iterations: refined.iterations,
+                cheirality: None,
+            });
+        }
+        if minima.is_empty() {
+            return Err(PnpError::NoSolution);
+        }
+        let n_active = fr.n_active;
+        let ctx = Ctx {
+            world,
+            image,
+            weights,
+            fr: &fr,
+            sys: &sys,
+            degenerate,
+            scale,
+        };
+
+        if let Some(all) = all {
+            // Every distinct minimum, refined and ranked.
+            for m in minima.iter_mut() {
+                m.cheirality = Some(in_front(world, weights, &fr, &m.r, &m.t, n_active));
+            }
+            for m in &minima {
+                let s = ctx.finish(m, self.refinement, &reproj_opts);
+                if s.pose.rotation.coords.iter().all(|x| x.is_finite())
+                    && !all.iter().any(|o: &Solution| {
+                        (o.rotation - s.rotation).norm() <= 1e-6
+                            && (o.pose.translation.vector - s.pose.translation.vector).norm()
+                                <= 1e-6 * (1.0 + s.pose.translation.vector.norm())
+                    })
+                {
+                    all.push(s);
+                }
+            }
+            all.sort_by(|a, b| {
+                (!a.cheirality_ok)
+                    .cmp(&!b.cheirality_ok)
+                    .then(a.reprojection_rmse.total_cmp(&b.reprojection_rmse))
+            });
+            return all.first().copied().ok_or(PnpError::NoSolution);
+        }
+
+        // S7: the smallest f among the minima with more than half of the points in front;
+        // depths are counted lazily, in order of f, until one passes.
+        minima.sort_by(|a, b| a.f.total_cmp(&b.f));
+        let mut pick = 0;
+        for (i, m) in minima.iter_mut().enumerate() {
+            let ok = in_front(world, weights, &fr, &m.r, &m.t, n_active);
+            m.cheirality = Some(ok);
+            if ok {
+                pick = i;
+                break;
+            }
+        }
+        Ok(ctx.finish(&minima[pick], self.refinement, &reproj_opts))
+    }
+}
+
+/// A refined local minimum of f (working frame).
+#[derive(Clone, Copy, Debug)]
+struct Minimum {
+    r: Matrix3<f64>,
+    t: Vector3<f64>,
+    f: f64,
+    source: CandidateSource,
+    planar: bool,
+    iterations: u32,
+    cheirality: Option<bool>,
+}
+
+struct Ctx<'a> {
+    world: &'a [Point3<f64>],
+    image: &'a [Point2<f64>],
+    weights: Option<&'a [f64]>,
+    fr: &'a WorkingFrame,
+    sys: &'a System,
+    degenerate: bool,
+    scale: f64,
+}
+
+impl Ctx<'_> {
+    /// S9 (optional) and S8 for one minimum.
+    fn finish(&self, m: &Minimum, mode: Refinement, opts: &ReprojOptions) -> Solution {
+        let (mut r, mut t) = (m.r, m.t);
+        let mut iters = 0;
+        if mode == Refinement::Reprojection {
+            let out = reproj::refine_reprojection(
+                self.world,
+                self.image,
+                self.weights,
+                &self.fr.c,
+                self.fr.d,
+                &self.fr.rw,
+                &r,
+                &t,
+                opts,
+            );
+            if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
+                r = out.r;
+                t = out.t;
+            }
+            iters = out.iterations;
+        }
+        let rv = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
+        let f = (rv.transpose() * self.sys.m * rv)[(0, 0)];
+        let cheirality = if mode == Refinement::Algebraic {
+            m.cheirality.unwrap_or_else(|| {
+                in_front(self.world, self.weights, self.fr, &r, &t, self.fr.n_active)
+            })
+        } else {
+            in_front(self.world, self.weights, self.fr, &r, &t, self.fr.n_active)
+        };
+        let (rw, tw) = self.fr.to_world(&r, &t);
+        let (e, wsum) = reprojection_error(self.world, self.image, self.weights, &rw, &tw);
+        let rot = crate::rotation::to_unit_quaternion(&rw);
+        Solution {
+            pose: Isometry3::from_parts(Translation3::from(tw), rot),
+            rotation: rw,
+            cost: if mode == Refinement::Algebraic {
+                f / self.scale
+            } else {
+                e
+            },
+            algebraic_cost: f / self.scale,
+            reprojection_rmse: if wsum > 0.0 { (e / wsum).sqrt() } else { f64::NAN },
+            cheirality_ok: cheirality,
+            degenerate: self.degenerate,
+            planar: m.planar,
+            source: m.source,
+            newton_iterations: m.iterations,
+            reprojection_iterations: iters,
+        }
+    }
+}
+
+/// `t = G vec(R)` (working frame).
+fn translation(sys: &System, r: &Matrix3<f64>) -> Vector3<f64> {
+    let rv = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
+    sys.g * rv
+}
+
+/// Whether more than half of the active points have positive depth (working-frame pose),
+/// computed from the world points: `z_i = a . (X_i - c) + t_z`, `a = (R Rw)_3 / d`.
+fn in_front(
+    world: &[Point3<f64>],
+    weights: Option<&[f64]>,
+    fr: &WorkingFrame,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+    n_active: usize,
+) -> bool {
+    let a = (r * fr.rw).row(2).transpose() / fr.d;
+    let mut pos = 0usize;
+    for (i, x) in world.iter().enumerate() {
+        if weights.is_some_and(|w| w[i] == 0.0) {
+            continue;
+        }
+        if a.dot(&(x.coords - fr.c)) + t.z > 0.0 {
+            pos += 1;
+        }
+    }
+    2 * pos > n_active
+}
+
+/// Weighted sum of squared normalised reprojection residuals of a world-frame pose, and the
+/// weight sum. Points at or behind the camera plane contribute an infinite residual.
+fn reprojection_error(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> (f64, f64) {
+    let (mut e, mut wsum) = (0.0, 0.0);
+    for (i, (x, m)) in world.iter().zip(image).enumerate() {
+        let w = weights.map_or(1.0, |w| w[i]);
+        if w == 0.0 {
+            continue;
+        }
+        let p = r * x.coords + t;
+        let (du, dv) = (m.x - p.x / p.z, m.y - p.y / p.z);
+        e += w * (du * du + dv * dv);
+        wsum += w;
+    }
+    (e, wsum)
+}
+
+/// S4': planar candidates with the depth test of step 5 (sign majority of the flattened points).
+fn planar_candidates(
+    sys_p: &System,
+    world: &[Point3<f64>],
+    weights: Option<&[f64]>,
+    fr: &WorkingFrame,
+    out: &mut Candidates,
+) {
+    const IDX: [usize; 6] = [0, 1, 3, 4, 6, 7];
+    let mp = SMatrix::<f64, 6, 6>::from_fn(|i, j| sys_p.m[(IDX[i], IDX[j])]);
+    let Some(eig) = nalgebra::SymmetricEigen::try_new(mp, f64::EPSILON, EIGEN_MAX_ITER) else {
+        return;
+    };
+    let mut order: [usize; 6] = std::array::from_fn(|i| i);
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let v: [SVector<f64, 6>; 2] =
+        std::array::from_fn(|i| eig.eigenvectors.column(order[i]).into_owned());
+    nullspace::planar_vectors(&v, |r6, source| {
+        let Some(mut r) = nullspace::planar_rotation(&r6) else {
+            return;
+        };
+        let t = translation(sys_p, &r);
+        // Depths of the flattened working-frame points: z = R3 . (x, y, 0) + t_z.
+        let mut sum = 0i64;
+        for (i, x) in world.iter().enumerate() {
+            if weights.is_some_and(|w| w[i] == 0.0) {
+                continue;
+            }
+            let p = fr.to_working(x);
+            let z = r[(2, 0)] * p.x + r[(2, 1)] * p.y + t.z;
+            sum += if z > 0.0 {
+                1
+            } else if z < 0.0 {
+                -1
+            } else {
+                0
+            };
+        }
+        if sum < 0 {
+            r *= Matrix3::from_diagonal(&Vector3::new(-1.0, -1.0, 1.0));
+        }
+        if !out.is_full() {
+            out.push(Candidate { r, source });
+        }
+    });
+}
+
+/// The pose from world points and normalised image points with the default [`Solver`].
+///
+/// # Errors
+/// See [`Solver::solve`].
+pub fn solve(world: &[Point3<f64>], image: &[Point2<f64>]) -> Result<Solution, PnpError> {
+    Solver::default().solve(world, image)
+}

@@ -1,0 +1,259 @@
+//! The 18 reference problems of `shared/reference/test_vectors.json` (copied to
+//! `tests/data/`), checked as ALGORITHM.md section 8 prescribes.
+//!
+//! - Algebraic mode (S0-S8): noise-free vectors within 1e-9 deg / 1e-9 % of the ground truth;
+//!   noisy vectors within 1e-6 deg / 1e-6 % of the stored output (the same local minimum of the
+//!   same cost); `cheirality_ok` and `degenerate` equal to the stored flags.
+//! - Default mode (S0-S9): within 1e-6 deg of S9 run from the stored S0-S8 output (the
+//!   reference here is the independent LM of `common`, started at the stored pose).
+//! - Intermediates (M, G, Rw, ratio): needs the `eopnp::__internal::intermediates` hook.
+
+// `!(err <= tol)` is deliberate throughout: a NaN error must fail the check.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod common;
+
+use common::{lm_refine, rot_err_deg, trans_err_pct, NORMALISED};
+use eopnp::{Refinement, Solver};
+use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector3};
+use serde_json::Value;
+
+/// One test vector.
+struct Tv {
+    name: String,
+    world: Vec<Point3<f64>>,
+    image: Vec<Point2<f64>>,
+    r_gt: Matrix3<f64>,
+    t_gt: Vector3<f64>,
+    r_exp: Matrix3<f64>,
+    t_exp: Vector3<f64>,
+    cheirality_ok: bool,
+    degenerate: bool,
+    rw: Matrix3<f64>,
+    ratio: f64,
+    m: SMatrix<f64, 9, 9>,
+    g: SMatrix<f64, 3, 9>,
+}
+
+impl Tv {
+    fn noise_free(&self) -> bool {
+        self.name.ends_with("_sigma0")
+    }
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().expect("number")
+}
+
+fn mat<const R: usize, const C: usize>(v: &Value) -> SMatrix<f64, R, C> {
+    SMatrix::from_fn(|i, j| num(&v[i][j]))
+}
+
+fn vec3(v: &Value) -> Vector3<f64> {
+    Vector3::new(num(&v[0]), num(&v[1]), num(&v[2]))
+}
+
+fn load() -> Vec<Tv> {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/test_vectors.json");
+    let text = std::fs::read_to_string(path).expect("tests/data/test_vectors.json");
+    let all: Value = serde_json::from_str(&text).expect("valid JSON");
+    let tvs: Vec<Tv> = all
+        .as_array()
+        .expect("array")
+        .iter()
+        .map(|e| {
+            let ex = &e["expected"];
+            let it = &e["intermediate"];
+            Tv {
+                name: e["name"].as_str().expect("name").to_owned(),
+                world: e["P_world"]
+                    .as_array()
+                    .expect("P_world")
+                    .iter()
+                    .map(|p| Point3::from(vec3(p)))
+                    .collect(),
+                image: e["uv"]
+                    .as_array()
+                    .expect("uv")
+                    .iter()
+                    .map(|p| Point2::new(num(&p[0]), num(&p[1])))
+                    .collect(),
+                r_gt: mat(&e["R_gt"]),
+                t_gt: vec3(&e["t_gt"]),
+                r_exp: mat(&ex["R"]),
+                t_exp: vec3(&ex["t"]),
+                cheirality_ok: ex["cheirality_ok"].as_bool().expect("cheirality_ok"),
+                degenerate: ex["degenerate"].as_bool().expect("degenerate"),
+                rw: mat(&it["Rw"]),
+                ratio: num(&it["ratio"]),
+                m: mat(&it["M"]),
+                g: mat(&it["G"]),
+            }
+        })
+        .collect();
+    assert_eq!(tvs.len(), 18, "test_vectors.json holds 18 problems");
+    tvs
+}
+
+fn pose(s: &eopnp::Solution) -> (Matrix3<f64>, Vector3<f64>) {
+    common::pose_of(s)
+}
+
+#[test]
+fn algebraic_mode_matches_reference() {
+    let solver = Solver::default().refinement(Refinement::Algebraic);
+    let mut report = Vec::new();
+    let mut failures = Vec::new();
+    for tv in load() {
+        let sol = match solver.solve(&tv.world, &tv.image) {
+            Ok(s) => s,
+            Err(e) => {
+                failures.push(format!("{}: error {e:?}", tv.name));
+                continue;
+            }
+        };
+        let (r, t) = pose(&sol);
+        let (er, et, what) = if tv.noise_free() {
+            (
+                rot_err_deg(&r, &tv.r_gt),
+                trans_err_pct(&t, &tv.t_gt),
+                "truth",
+            )
+        } else {
+            (
+                rot_err_deg(&r, &tv.r_exp),
+                trans_err_pct(&t, &tv.t_exp),
+                "stored",
+            )
+        };
+        // Noise-free: the reference reaches the truth to <= 5.5e-10 deg (ALGORITHM.md section 7,
+        // planar N = 4; typically 1e-13), so 1e-9 deg / 1e-9 % is the section-8 tolerance.
+        // Noisy: the same local minimum of the same cost, located to ~1e-8 deg by S6's
+        // stopping rules; section 8 prescribes 1e-6 deg / 1e-6 %.
+        let (tol_r, tol_t) = if tv.noise_free() {
+            (1e-9, 1e-9)
+        } else {
+            (1e-6, 1e-6)
+        };
+        report.push(format!(
+            "{:22} vs {what:6}: {er:9.2e} deg {et:9.2e} %  cheirality {} degenerate {}",
+            tv.name, sol.cheirality_ok, sol.degenerate
+        ));
+        if !(er <= tol_r && et <= tol_t) {
+            failures.push(format!(
+                "{}: rotation {er:e} deg (tol {tol_r:e}), translation {et:e} % (tol {tol_t:e}) vs {what}",
+                tv.name
+            ));
+        }
+        if sol.cheirality_ok != tv.cheirality_ok || sol.degenerate != tv.degenerate {
+            failures.push(format!(
+                "{}: flags cheirality_ok {} degenerate {}, expected {} {}",
+                tv.name, sol.cheirality_ok, sol.degenerate, tv.cheirality_ok, tv.degenerate
+            ));
+        }
+    }
+    eprintln!("algebraic mode:\n{}", report.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn default_mode_matches_s9_from_expected() {
+    let solver = Solver::default();
+    let mut report = Vec::new();
+    let mut failures = Vec::new();
+    for tv in load() {
+        let sol = match solver.solve(&tv.world, &tv.image) {
+            Ok(s) => s,
+            Err(e) => {
+                failures.push(format!("{}: error {e:?}", tv.name));
+                continue;
+            }
+        };
+        let (r, t) = pose(&sol);
+        // Reference: minimise the same reprojection error (normalised coordinates, isotropic)
+        // from the stored S0-S8 output.
+        let lm = lm_refine(&tv.world, &tv.image, &tv.r_exp, &tv.t_exp, NORMALISED);
+        let er = rot_err_deg(&r, &lm.r);
+        let et = trans_err_pct(&t, &lm.t);
+        report.push(format!(
+            "{:22} vs S9-from-expected: {er:9.2e} deg {et:9.2e} %  (LM {} it)",
+            tv.name, lm.iterations
+        ));
+        // Two correct minimisers of E agree to ~1e-7 deg (E is flat to rounding there;
+        // ALGORITHM.md S9), hence section 8's 1e-6 deg. Measured on these 18 vectors: this
+        // reference vs reproj_refine.py's S9 from the same start, <= 1.6e-8 deg and
+        // <= 4.2e-9 % (so the 1e-6 % translation tolerance has a 200x margin).
+        if !(er <= 1e-6 && et <= 1e-6) {
+            failures.push(format!(
+                "{}: {er:e} deg, {et:e} % from S9-from-expected",
+                tv.name
+            ));
+        }
+        if tv.noise_free() {
+            let er = rot_err_deg(&r, &tv.r_gt);
+            let et = trans_err_pct(&t, &tv.t_gt);
+            // S9 does not move a noise-free exact pose (ALGORITHM.md S9: <= 1.6e-13 deg).
+            if !(er <= 1e-9 && et <= 1e-9) {
+                failures.push(format!("{}: {er:e} deg, {et:e} % from the truth", tv.name));
+            }
+        }
+        if sol.cheirality_ok != tv.cheirality_ok {
+            failures.push(format!("{}: cheirality_ok {}", tv.name, sol.cheirality_ok));
+        }
+        if !(sol.cost.is_finite() && sol.reprojection_rmse.is_finite()) {
+            failures.push(format!("{}: non-finite cost", tv.name));
+        }
+    }
+    eprintln!("default mode:\n{}", report.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// M, G, Rw and the planarity ratio of S1/S2 against the stored intermediates, after aligning
+/// the working frames (ALGORITHM.md section 8): D = Rw_port Rw_ref^T must be diagonal +-1 with
+/// det +1; compare M_port with Bd M_ref Bd^T and G_port with G_ref Bd^T, Bd = blockdiag(D, D, D).
+///
+/// NEEDS the internal hook `eopnp::__internal::intermediates(world, image) ->
+/// Option<(SMatrix<f64, 9, 9> /*M*/, SMatrix<f64, 3, 9> /*G*/, Matrix3<f64> /*Rw*/, f64 /*ratio*/)>`.
+#[test]
+fn intermediates_match_reference() {
+    let mut failures = Vec::new();
+    for tv in load() {
+        let Some((m, g, rw, ratio)) = eopnp::__internal::intermediates(&tv.world, &tv.image) else {
+            failures.push(format!("{}: intermediates returned None", tv.name));
+            continue;
+        };
+        let d = rw * tv.rw.transpose();
+        // The singular values of these scenes are distinct, so Rw is unique up to the sign of
+        // each row: D must be diagonal +-1 to rounding (1e-9 leaves room for the SVD's
+        // ~1e-15 / gap error).
+        let dd = Matrix3::from_diagonal(&Vector3::new(
+            d[(0, 0)].signum(),
+            d[(1, 1)].signum(),
+            d[(2, 2)].signum(),
+        ));
+        if (d - dd).amax() > 1e-9 || (dd.determinant() - 1.0).abs() > 0.5 {
+            failures.push(format!(
+                "{}: Rw not aligned with the reference: D = {d}",
+                tv.name
+            ));
+            continue;
+        }
+        let mut bd = SMatrix::<f64, 9, 9>::zeros();
+        for k in 0..3 {
+            bd.fixed_view_mut::<3, 3>(3 * k, 3 * k).copy_from(&dd);
+        }
+        let m_ref = bd * tv.m * bd.transpose();
+        let g_ref = tv.g * bd.transpose();
+        let em = (m - m_ref).amax() / m_ref.amax();
+        let eg = (g - g_ref).amax() / g_ref.amax();
+        // Section 8: M, G within 1e-12 relative (S2 is checked against explicit K^T K to 9e-16).
+        if !(em <= 1e-12 && eg <= 1e-12) {
+            failures.push(format!("{}: M rel {em:e}, G rel {eg:e}", tv.name));
+        }
+        // ratio = sv2 / sv0 in [0, 1]: rounding-level absolute agreement.
+        if !((ratio - tv.ratio).abs() <= 1e-12) {
+            failures.push(format!("{}: ratio {ratio:e} vs {:e}", tv.name, tv.ratio));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
