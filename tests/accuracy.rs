@@ -41,8 +41,12 @@ const NOISE_FREE_T_REL: f64 = 1e-8;
 const NOISE_FREE_TRIALS: u64 = 10_000;
 /// Trials per noise-free configuration in algebraic mode (an extra check; see its test).
 const NOISE_FREE_ALGEBRAIC_TRIALS: u64 = 1_000;
-/// Trials per noisy configuration.
-const NOISY_TRIALS: u64 = 1_000;
+/// Trials per noisy configuration (the issue asks for >= 1,000). At 1,000 trials the sampling
+/// noise of a *median* ratio is comparable to the gap between the algebraic mode's inherent
+/// bias (3-6 %, ALGORITHM.md S9) and the 8 % bound: measured, N = 13 sigma = 2 gave a median
+/// rotation ratio of 1.084 with 1,000 trials and 1.061 with 4,000 (all other ratios 1.025-1.056).
+/// More trials reduce the noise; the tolerance is unchanged.
+const NOISY_TRIALS: u64 = 4_000;
 /// Point counts of the noise-free suite.
 const NOISE_FREE_NS: [usize; 6] = [4, 5, 6, 10, 100, 1000];
 
