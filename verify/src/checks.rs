@@ -1,0 +1,1023 @@
+//! The checks: each samples seeded random inputs, compares one generated kernel with an
+//! independent numeric evaluation, and returns a [`Measurement`] (worst error in a stated norm,
+//! worst error / bound). The tests assert `passed()`; the report prints the same numbers.
+//!
+//! Norms and tolerances (see `reference` for the absolute-value scales):
+//!
+//! - `TOL_POLY = 1e-12` relative to the absolute-value scale of the compared quantity. Both sides
+//!   are straight-line polynomial evaluations of depth <= ~40, whose forward error is at most
+//!   `gamma_40 ~ 4.4e-15` times that scale (Higham 3.1); 1e-12 leaves a factor ~200 over this
+//!   worst-case first-order bound. It is the right scale, not `|C|`, because `C = |K rbar|^2`
+//!   can cancel to ~0 while the rounding of any evaluation stays at `u` times the scale; and it
+//!   is tighter than `|M|_F (1 + |s|^2)^2` (e.g. at `s = 0` only the 6 entries `M_ab`,
+//!   a, b in {0, 4, 8}, enter it). A wrong term shows up at its own size relative to the scale.
+//! - Finite differences: the bound is derived per sample (truncation from a bound on the next
+//!   derivative, rounding from the absolute-value scale, see `crate::fd`); the check asserts
+//!   `error <= bound` and reports the worst `error / bound`.
+//! - Determinants: `error <= kernel rounding + reference rounding`, derived per sample from the
+//!   permanent of the absolute-value Bezout / entry matrix and nalgebra's LU a-posteriori bound
+//!   (`reference::det_with_bound`); the error is reported relative to Hadamard's bound of the
+//!   absolute-value matrix.
+
+use crate::fd::{self, CHART_D1, CHART_D3, CHART_D4, EVAL_ROUNDING, H_COMPLEX, H_REL};
+use crate::reference::{self as rf, gamma, M9};
+use crate::report::{Measurement, Tracker};
+use crate::strategies as st;
+use eopnp::kernels as k;
+use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
+use num_complex::Complex64;
+
+/// 1e-12 relative to the absolute-value scale (module doc).
+pub const TOL_POLY: f64 = 1e-12;
+
+/// Rounding allowance for one generated kernel output in units of its absolute-value scale:
+/// `gamma_64` (depth <= 64 covers every kernel's straight-line code plus the evaluation of its
+/// coefficients at a point).
+#[must_use]
+pub fn g64() -> f64 {
+    gamma(64)
+}
+
+fn fmt3(s: &[f64; 3]) -> String {
+    format!("[{:e}, {:e}, {:e}]", s[0], s[1], s[2])
+}
+
+/// Cost variant: the full 9 x 9 `M` or the planar restriction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// `cost_coefficients` / `cost_gradient` / `cost_hessian`.
+    Full,
+    /// `planar_cost_coefficients` / `planar_cost_gradient` / `planar_cost_hessian`.
+    Planar,
+}
+
+impl Variant {
+    fn matrix(self, rng: &mut rand_pcg::Pcg64) -> M9 {
+        let m = st::cost_matrix(rng);
+        match self {
+            Variant::Full => m,
+            Variant::Planar => rf::planar_restrict(&m),
+        }
+    }
+    fn coefficients(self, m: &M9) -> [f64; 35] {
+        match self {
+            Variant::Full => k::cost_coefficients(&rf::m_upper45(m)),
+            Variant::Planar => k::planar_cost_coefficients(&rf::m_upper21(m)),
+        }
+    }
+    fn gradient(self, m: &M9, s: &[f64; 3]) -> Vector3<f64> {
+        let g = match self {
+            Variant::Full => k::cost_gradient(&k::cost_coefficients(&rf::m_upper45(m)), s),
+            Variant::Planar => k::planar_cost_gradient(&rf::m_upper21(m), s),
+        };
+        Vector3::from(g)
+    }
+    fn hessian(self, m: &M9, s: &[f64; 3]) -> Matrix3<f64> {
+        let h = match self {
+            Variant::Full => k::cost_hessian(&k::cost_coefficients(&rf::m_upper45(m)), s),
+            Variant::Planar => k::planar_cost_hessian(&rf::m_upper21(m), s),
+        };
+        sym3(&h)
+    }
+    fn name(self, full: &'static str, planar: &'static str) -> &'static str {
+        match self {
+            Variant::Full => full,
+            Variant::Planar => planar,
+        }
+    }
+}
+
+/// Symmetric 3 x 3 from `[H00, H01, H02, H11, H12, H22]`.
+#[must_use]
+pub fn sym3(h: &[f64; 6]) -> Matrix3<f64> {
+    Matrix3::new(h[0], h[1], h[2], h[1], h[3], h[4], h[2], h[4], h[5])
+}
+
+// ----------------------------------------------------------------------------------------------
+// Cost coefficients and value
+
+/// Check 1: `sum_i c[i] s^e_i` (my monomial enumeration) vs `rbar^T M rbar` (nalgebra).
+/// Norm: `|dC| / S_C`, `S_C = |rbar|_abs^T |M| |rbar|_abs`.
+#[must_use]
+pub fn cost_coefficients(variant: Variant, n: usize) -> Measurement {
+    let seed = 11 + variant as u64;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        variant.name("cost_coefficients", "planar_cost_coefficients"),
+        "sum c_i s^e_i vs rbar^T M rbar",
+        "|dC| / S_C",
+        format!("{TOL_POLY:.0e}"),
+    );
+    for i in 0..n {
+        let m = variant.matrix(&mut rng);
+        let s = st::cgr(&mut rng);
+        let c = variant.coefficients(&m);
+        let (v, _) = rf::eval_monomials(&c, &s);
+        let (sc, _, _) = rf::cost_scales(&m, &s);
+        let err = (v - rf::cost(&m, &s)).abs() / sc;
+        t.record(err, TOL_POLY, || {
+            format!("seed {seed} sample {i} s = {}", fmt3(&s))
+        });
+    }
+    t.finish()
+}
+
+/// `cost(c, s)` (generated, from `cost_coefficients`) vs `rbar^T M rbar`. Norm `|dC| / S_C`.
+#[must_use]
+pub fn cost_value(variant: Variant, n: usize) -> Measurement {
+    let seed = 21 + variant as u64;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "cost",
+        variant.name(
+            "cost(cost_coefficients) vs rbar^T M rbar",
+            "cost(planar_cost_coefficients) vs rbar^T M rbar",
+        ),
+        "|dC| / S_C",
+        format!("{TOL_POLY:.0e}"),
+    );
+    for i in 0..n {
+        let m = variant.matrix(&mut rng);
+        let s = st::cgr(&mut rng);
+        let v = k::cost(&variant.coefficients(&m), &s);
+        let (sc, _, _) = rf::cost_scales(&m, &s);
+        let err = (v - rf::cost(&m, &s)).abs() / sc;
+        t.record(err, TOL_POLY, || {
+            format!("seed {seed} sample {i} s = {}", fmt3(&s))
+        });
+    }
+    t.finish()
+}
+
+// ----------------------------------------------------------------------------------------------
+// Gradient
+
+/// Which independent gradient / Hessian to compare with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Against {
+    /// The direct formulas `2 J^T M rbar`, `2 J^T M J + 2 sum (M rbar)_a HR_a`.
+    Direct,
+    /// Central differences (of the reference `C` for the gradient; of the generated gradient
+    /// for the Hessian).
+    FiniteDifference,
+    /// Complex step of the reference `C` (gradient) or of the reference gradient (Hessian).
+    ComplexStep,
+}
+
+/// Check 2 (gradient). Norms: `|dg|_inf / |S_g|_inf` (direct, complex step, bound 1e-12);
+/// central differences: per component `|dg_k| <= bound_k` with
+/// `bound_k = h^2/6 T3 + 2 E / (hp + hm) + |hp - hm| / 2 D2 + gamma_64 S_g,k + 2 u S_g,k`,
+/// `h = u^(1/3) max(1, |s|)`, `T3`, `D2` bounds of the third and second derivative of `C` along
+/// `e_k` on the stencil (`fd::cost_d3_bound`, `fd::cost_d2_bound`), `E = 64 u S_C(|s| + h)` the
+/// rounding of one reference evaluation, `gamma_64 S_g,k` the kernel's own rounding.
+#[must_use]
+pub fn gradient(variant: Variant, against: Against, n: usize) -> Measurement {
+    let seed = 31 + variant as u64 * 3 + against as u64;
+    let mut rng = st::rng(seed);
+    let (check, bound) = match against {
+        Against::Direct => ("vs 2 J^T M rbar", format!("{TOL_POLY:.0e}")),
+        Against::FiniteDifference => (
+            "vs central differences of rbar^T M rbar",
+            "derived per sample".to_string(),
+        ),
+        Against::ComplexStep => (
+            "vs complex step of rbar^T M rbar",
+            format!("{TOL_POLY:.0e}"),
+        ),
+    };
+    let mut t = Tracker::new(
+        variant.name("cost_gradient", "planar_cost_gradient"),
+        check,
+        "|dg|_inf / |S_g|_inf",
+        bound,
+    );
+    for i in 0..n {
+        let m = variant.matrix(&mut rng);
+        let s = st::cgr(&mut rng);
+        let g = variant.gradient(&m, &s);
+        let (_, sg, _) = rf::cost_scales(&m, &s);
+        let sgmax = sg.amax();
+        let input = || format!("seed {seed} sample {i} s = {}", fmt3(&s));
+        match against {
+            Against::Direct => {
+                let err = (g - rf::grad(&m, &s)).amax() / sgmax;
+                t.record(err, TOL_POLY, input);
+            }
+            Against::ComplexStep => {
+                let mut gc = Vector3::zeros();
+                for kk in 0..3 {
+                    let mut sc = [
+                        Complex64::new(s[0], 0.0),
+                        Complex64::new(s[1], 0.0),
+                        Complex64::new(s[2], 0.0),
+                    ];
+                    sc[kk].im = H_COMPLEX;
+                    gc[kk] = rf::cost_g(&m, &sc).im / H_COMPLEX;
+                }
+                let err = (g - gc).amax() / sgmax;
+                t.record(err, TOL_POLY, input);
+            }
+            Against::FiniteDifference => {
+                let h = fd::cost_step(&s);
+                let (sc_big, sg_big, _) = rf::cost_scales(&m, &fd::s_big(&s, h));
+                let e = EVAL_ROUNDING * sc_big;
+                let mut worst_ratio = 0.0f64;
+                let mut worst_err = 0.0f64;
+                for kk in 0..3 {
+                    let (sp, sm, hp, hm) = fd::nodes(&s, kk, h);
+                    let fdk = (rf::cost(&m, &sp) - rf::cost(&m, &sm)) / (hp + hm);
+                    let hmax = hp.max(hm);
+                    let bound = hmax * hmax / 6.0 * fd::cost_d3_bound(&m, &s, kk, h)
+                        + 2.0 * e / (hp + hm)
+                        + (hp - hm).abs() / 2.0 * fd::cost_d2_bound(&m, &s, kk, h)
+                        + (g64() + 2.0 * rf::U) * sg_big[kk];
+                    let err = (g[kk] - fdk).abs();
+                    worst_ratio = worst_ratio.max(err / bound);
+                    worst_err = worst_err.max(err / sgmax);
+                }
+                t.record(
+                    worst_err,
+                    worst_err / worst_ratio.max(f64::MIN_POSITIVE),
+                    input,
+                );
+            }
+        }
+    }
+    t.finish()
+}
+
+/// Check 2 (Hessian). Norms: `|dH|_max / |S_H|_max` (direct, complex step of the reference
+/// gradient, bound 1e-12); central differences of the *generated* gradient: per entry
+/// `|dH_jk| <= h^2/6 T3_jk + 2 E_j / (hp + hm) + |hp - hm| / 2 D2_jk + (gamma_64 + 2u) S_H,jk`,
+/// `T3_jk = |d^3 g_j / ds_k^3|` (constant, `fd::grad_d3_bound`), `D2_jk` (`fd::grad_d2_bound`),
+/// `E_j = gamma_64 S_g,j(|s| + h)` the rounding of one generated gradient. Both `(j, k)` and
+/// `(k, j)` are compared, so this also checks the symmetry of the model.
+#[must_use]
+pub fn hessian(variant: Variant, against: Against, n: usize) -> Measurement {
+    let seed = 51 + variant as u64 * 3 + against as u64;
+    let mut rng = st::rng(seed);
+    let (check, bound) = match against {
+        Against::Direct => (
+            "vs 2 J^T M J + 2 sum (M rbar)_a HR_a",
+            format!("{TOL_POLY:.0e}"),
+        ),
+        Against::FiniteDifference => (
+            "vs central differences of the generated gradient",
+            "derived per sample".to_string(),
+        ),
+        Against::ComplexStep => ("vs complex step of 2 J^T M rbar", format!("{TOL_POLY:.0e}")),
+    };
+    let mut t = Tracker::new(
+        variant.name("cost_hessian", "planar_cost_hessian"),
+        check,
+        "|dH|_max / |S_H|_max",
+        bound,
+    );
+    for i in 0..n {
+        let m = variant.matrix(&mut rng);
+        let s = st::cgr(&mut rng);
+        let hk = variant.hessian(&m, &s);
+        let (_, _, sh) = rf::cost_scales(&m, &s);
+        let shmax = sh.amax();
+        let input = || format!("seed {seed} sample {i} s = {}", fmt3(&s));
+        match against {
+            Against::Direct => {
+                let err = (hk - rf::hess(&m, &s)).amax() / shmax;
+                t.record(err, TOL_POLY, input);
+            }
+            Against::ComplexStep => {
+                let mut hc = Matrix3::zeros();
+                for kk in 0..3 {
+                    let mut sc = [
+                        Complex64::new(s[0], 0.0),
+                        Complex64::new(s[1], 0.0),
+                        Complex64::new(s[2], 0.0),
+                    ];
+                    sc[kk].im = H_COMPLEX;
+                    let gcol = rf::grad_g(&m, &sc);
+                    for j in 0..3 {
+                        hc[(j, kk)] = gcol[j].im / H_COMPLEX;
+                    }
+                }
+                let err = (hk - hc).amax() / shmax;
+                t.record(err, TOL_POLY, input);
+            }
+            Against::FiniteDifference => {
+                let h = fd::cost_step(&s);
+                let (_, sg_big, sh_big) = rf::cost_scales(&m, &fd::s_big(&s, h));
+                let mut worst_ratio = 0.0f64;
+                let mut worst_err = 0.0f64;
+                for kk in 0..3 {
+                    let (sp, sm, hp, hm) = fd::nodes(&s, kk, h);
+                    let d = (variant.gradient(&m, &sp) - variant.gradient(&m, &sm)) / (hp + hm);
+                    let hmax = hp.max(hm);
+                    for j in 0..3 {
+                        let bound = hmax * hmax / 6.0 * fd::grad_d3_bound(&m, j, kk)
+                            + 2.0 * g64() * sg_big[j] / (hp + hm)
+                            + (hp - hm).abs() / 2.0 * fd::grad_d2_bound(&m, &s, j, kk, h)
+                            + (g64() + 2.0 * rf::U) * sh_big[(j, kk)];
+                        let err = (hk[(j, kk)] - d[j]).abs();
+                        worst_ratio = worst_ratio.max(err / bound);
+                        worst_err = worst_err.max(err / shmax);
+                    }
+                }
+                t.record(
+                    worst_err,
+                    worst_err / worst_ratio.max(f64::MIN_POSITIVE),
+                    input,
+                );
+            }
+        }
+    }
+    t.finish()
+}
+
+// ----------------------------------------------------------------------------------------------
+// S6 local model
+
+/// What the local model is compared with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LocalAgainst {
+    /// `f` vs `vec(R)^T M vec(R)`.
+    Value,
+    /// `f, g, H_C` vs the explicit formulas with `M_k = D^T M D`.
+    Explicit,
+    /// `g` vs central differences of `F(s) = f(R(s) R)`.
+    FdGradient,
+    /// `H_C - 4 f I` vs second differences of `F` along 6 directions.
+    FdHessian,
+    /// `g` vs the complex step of `F`.
+    CsGradient,
+    /// `H_C - 4 f I` vs central differences of the complex-step derivative of `F` along 6
+    /// directions.
+    CsHessian,
+}
+
+/// The 6 unit directions `e_k` and `(e_k + e_l) / sqrt 2`: `u^T H u` on them determines `H`.
+#[must_use]
+pub fn hessian_directions() -> [Vector3<f64>; 6] {
+    let r = std::f64::consts::FRAC_1_SQRT_2;
+    [
+        Vector3::new(1.0, 0.0, 0.0),
+        Vector3::new(0.0, 1.0, 0.0),
+        Vector3::new(0.0, 0.0, 1.0),
+        Vector3::new(r, r, 0.0),
+        Vector3::new(r, 0.0, r),
+        Vector3::new(0.0, r, r),
+    ]
+}
+
+/// Check 3: `so3_local_model`.
+///
+/// - Value / Explicit: `1e-12` relative to the absolute-value scales (`reference::local_model`),
+///   max over the 10 outputs of `|d out| / scale`.
+/// - FdGradient: `h = u^(1/3)`, `|dg_k| <= h^2/6 * 73 A + 64 u A / h + gamma_64 S_g,k`
+///   (`A = A_{e_k}`, `fd::CHART_D3`).
+/// - FdHessian: second differences, `h = 2e-4` (balances `h^2/12 * 386 A` against
+///   `4 * 64 u A / h^2`): `|u^T dH u| <= h^2/12 * 386 A_u + 4 * 64 u A_u / h^2 + gamma_64 (u^T S_H u + 4 S_f)`.
+/// - CsGradient: `1e-12` relative to `|S_g|_inf`.
+/// - CsHessian: `delta = u^(1/3)`, `|u^T dH u| <= delta^2/6 * 386 A_u + 64 u * 4 A_u / delta + gamma_64 (...)`.
+///
+/// Norm reported: error relative to the absolute-value scale (`S_f`, `|S_g|_inf`,
+/// `|S_H|_max + 4 S_f`).
+#[must_use]
+pub fn local_model(against: LocalAgainst, n: usize) -> Measurement {
+    let seed = 71 + against as u64;
+    let mut rng = st::rng(seed);
+    let (check, norm, bound) = match against {
+        LocalAgainst::Value => (
+            "f vs vec(R)^T M vec(R)",
+            "|df| / S_f",
+            format!("{TOL_POLY:.0e}"),
+        ),
+        LocalAgainst::Explicit => (
+            "f, g, H_C vs M_k = D^T M D formulas",
+            "max |d out| / scale",
+            format!("{TOL_POLY:.0e}"),
+        ),
+        LocalAgainst::FdGradient => (
+            "g vs central differences of f(R(s) R)",
+            "|dg|_inf / |S_g|_inf",
+            "derived per sample".into(),
+        ),
+        LocalAgainst::FdHessian => (
+            "H_C - 4 f I vs second differences of f(R(s) R)",
+            "|u^T dH u| / (|S_H| + 4 S_f)",
+            "derived per sample".into(),
+        ),
+        LocalAgainst::CsGradient => (
+            "g vs complex step of f(R(s) R)",
+            "|dg|_inf / |S_g|_inf",
+            format!("{TOL_POLY:.0e}"),
+        ),
+        LocalAgainst::CsHessian => (
+            "H_C - 4 f I vs central diff. of complex-step derivative",
+            "|u^T dH u| / (|S_H| + 4 S_f)",
+            "derived per sample".into(),
+        ),
+    };
+    let mut t = Tracker::new("so3_local_model", check, norm, bound);
+    for i in 0..n {
+        let m = st::cost_matrix(&mut rng);
+        let r = st::rotation(&mut rng);
+        let r9: [f64; 9] = std::array::from_fn(|a| r[(a / 3, a % 3)]);
+        let out = k::so3_local_model(&rf::m_upper45(&m), &r9);
+        let f = out[0];
+        let g = Vector3::new(out[1], out[2], out[3]);
+        let hc = sym3(&[out[4], out[5], out[6], out[7], out[8], out[9]]);
+        let lm = rf::local_model(&m, &r);
+        let h_exact = hc - 4.0 * f * Matrix3::identity();
+        let sh_tot = lm.sh.amax() + 4.0 * lm.sf;
+        let input = || format!("seed {seed} sample {i} R = {:?}", r9);
+        match against {
+            LocalAgainst::Value => {
+                let vr = rf::vec_r(&r);
+                let err = (f - vr.dot(&(m * vr))).abs() / lm.sf;
+                t.record(err, TOL_POLY, input);
+            }
+            LocalAgainst::Explicit => {
+                let mut err = (f - lm.f).abs() / lm.sf;
+                for a in 0..3 {
+                    err = err.max((g[a] - lm.g[a]).abs() / lm.sg[a]);
+                    for b in a..3 {
+                        err = err.max((hc[(a, b)] - lm.hc[(a, b)]).abs() / lm.sh[(a, b)]);
+                    }
+                }
+                t.record(err, TOL_POLY, input);
+            }
+            LocalAgainst::FdGradient => {
+                let h = H_REL;
+                let (mut wr, mut we) = (0.0f64, 0.0f64);
+                for a in 0..3 {
+                    let u = Vector3::ith(a, 1.0);
+                    let amp = rf::chart_amplitude(&m, &r, &u);
+                    let fdv = fd::chart_central(&m, &r, &u, h);
+                    let bound =
+                        h * h / 6.0 * CHART_D3 * amp + EVAL_ROUNDING * amp / h + g64() * lm.sg[a];
+                    let err = (g[a] - fdv).abs();
+                    wr = wr.max(err / bound);
+                    we = we.max(err / lm.sg.amax());
+                }
+                t.record(we, we / wr.max(f64::MIN_POSITIVE), input);
+            }
+            LocalAgainst::CsGradient => {
+                let mut err = 0.0f64;
+                for a in 0..3 {
+                    let u = Vector3::ith(a, 1.0);
+                    err = err.max((g[a] - fd::chart_complex_step(&m, &r, &u, 0.0)).abs());
+                }
+                t.record(err / lm.sg.amax(), TOL_POLY, input);
+            }
+            LocalAgainst::FdHessian | LocalAgainst::CsHessian => {
+                let (mut wr, mut we) = (0.0f64, 0.0f64);
+                for u in hessian_directions() {
+                    let amp = rf::chart_amplitude(&m, &r, &u);
+                    let model = u.dot(&(h_exact * u));
+                    let kernel_err = g64() * (u.dot(&(lm.sh * u)) + 4.0 * lm.sf * u.norm_squared());
+                    let (est, bound) = if against == LocalAgainst::FdHessian {
+                        let h = 2e-4;
+                        (
+                            fd::chart_second(&m, &r, &u, h),
+                            h * h / 12.0 * CHART_D4 * amp
+                                + 4.0 * EVAL_ROUNDING * amp / (h * h)
+                                + kernel_err,
+                        )
+                    } else {
+                        let d = H_REL;
+                        let est = (fd::chart_complex_step(&m, &r, &u, d)
+                            - fd::chart_complex_step(&m, &r, &u, -d))
+                            / (2.0 * d);
+                        (
+                            est,
+                            d * d / 6.0 * CHART_D4 * amp
+                                + EVAL_ROUNDING * CHART_D1 * amp / d
+                                + kernel_err,
+                        )
+                    };
+                    let err = (model - est).abs();
+                    wr = wr.max(err / bound);
+                    we = we.max(err / sh_tot);
+                }
+                t.record(we, we / wr.max(f64::MIN_POSITIVE), input);
+            }
+        }
+    }
+    t.finish()
+}
+
+// ----------------------------------------------------------------------------------------------
+// Resultants
+
+/// Random case-2 inputs: `A` 6 x 3 with entries `N(0,1) 10^U(-2, 2)`, `b` random (half the
+/// time the solver's `[1, 1, 1, 0, 0, 0]`).
+fn case2_random(rng: &mut rand_pcg::Pcg64) -> ([f64; 6], [f64; 3]) {
+    let a = SMatrix::<f64, 6, 3>::from_fn(|_, _| st::normal(rng) * st::log_uniform(rng, -2.0, 2.0));
+    let b = if rand::Rng::random_bool(rng, 0.5) {
+        SVector::<f64, 6>::from_column_slice(&[1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+    } else {
+        SVector::<f64, 6>::from_fn(|_, _| st::normal(rng))
+    };
+    rf::case2_inputs(&a, &b)
+}
+
+/// Random hidden variable: `+-10^U(-2, 2)`.
+fn hidden(rng: &mut rand_pcg::Pcg64) -> f64 {
+    let s = if rand::Rng::random_bool(rng, 0.5) {
+        1.0
+    } else {
+        -1.0
+    };
+    s * st::log_uniform(rng, -2.0, 2.0)
+}
+
+/// Random case-3 coefficients: `H = Bm^T Bm` from a random 5 x 6 `Bm` (entries `N(0,1) 10^U(-2,2)`),
+/// through `case3_quartic` (checked separately).
+fn case3_random(rng: &mut rand_pcg::Pcg64) -> [f64; 15] {
+    let b = SMatrix::<f64, 5, 6>::from_fn(|_, _| st::normal(rng) * st::log_uniform(rng, -2.0, 2.0));
+    let h = b.transpose() * b;
+    k::case3_quartic(&rf::h_upper21(&h))
+}
+
+/// Compare a resultant `sum_j res_j y^j` with `det` of the numeric Sylvester matrix of the
+/// cubics `(p, q)` (absolute-value scales `pa`, `qa`) at `y`. Returns `(error / Hadamard(|S|_abs),
+/// error / bound)`. The bound is the sum of the kernel rounding `gamma_64 per(|Bez|_abs)` (the
+/// kernel evaluates the Bezout determinant by cofactor expansion; the absolute-value evaluation
+/// of that route at `|y|` is bounded by the permanent of the Bezout matrix of the
+/// absolute-value coefficients), the rounding of my Sylvester entries (each `<= gamma_4` of its
+/// scale: `6 gamma_4 per(|S|_abs)` by Laplace expansion along every row) and nalgebra's LU
+/// error (`det_with_bound`).
+fn resultant_vs_sylvester(
+    res_at_y: f64,
+    p: &[f64; 4],
+    q: &[f64; 4],
+    pa: &[f64; 4],
+    qa: &[f64; 4],
+) -> (f64, f64) {
+    let s = rf::sylvester(p, q);
+    let sa = rf::sylvester(pa, qa);
+    let (det, lu_bound) = rf::det_with_bound(&s);
+    let bound =
+        g64() * rf::bezout_abs_permanent(pa, qa) + 6.0 * gamma(4) * rf::permanent(&sa) + lu_bound;
+    let err = (det - res_at_y).abs();
+    (err / rf::hadamard(&sa), err / bound)
+}
+
+/// Check 4, case 2: `case2_resultant` vs nalgebra's determinant of the Sylvester matrix of the
+/// S4.2 cubics at random `y`: `k1 y + k3 y^3 + ... + k9 y^9 = det Syl(g1, g2)(y)`.
+#[must_use]
+pub fn case2_resultant(n: usize) -> Measurement {
+    let seed = 101;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case2_resultant",
+        "vs det of numeric 6x6 Sylvester (eq. 22)",
+        "|dRes| / Hadamard(|Syl|)",
+        "derived per sample".into(),
+    );
+    for i in 0..n {
+        let (q, p) = case2_random(&mut rng);
+        let y = hidden(&mut rng);
+        let kk = k::case2_resultant(&q, &p);
+        let odd = [0.0, kk[0], 0.0, kk[1], 0.0, kk[2], 0.0, kk[3], 0.0, kk[4]];
+        let (r, _) = rf::poly_eval(&odd, y);
+        let (g1, g2, g1a, g2a) = rf::case2_cubics(&q, &p, y);
+        let (err, ratio) = resultant_vs_sylvester(r, &g1, &g2, &g1a, &g2a);
+        t.record(err, err / ratio.max(f64::MIN_POSITIVE), || {
+            format!("seed {seed} sample {i} q = {q:?} p = {p:?} y = {y:e}")
+        });
+    }
+    t.finish()
+}
+
+/// `case2_cubics` vs the S4.2 formulas: per coefficient `|d a_n| / |a_n|_abs <= 1e-12`.
+#[must_use]
+pub fn case2_cubics(n: usize) -> Measurement {
+    let seed = 102;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case2_cubics",
+        "vs g1, g2 of ALGORITHM.md S4.2",
+        "max_n |d a_n| / |a_n|_abs",
+        format!("{TOL_POLY:.0e}"),
+    );
+    for i in 0..n {
+        let (q, p) = case2_random(&mut rng);
+        let y = hidden(&mut rng);
+        let out = k::case2_cubics(&q, &p, y);
+        let (g1, g2, g1a, g2a) = rf::case2_cubics(&q, &p, y);
+        let mut err = 0.0f64;
+        for j in 0..4 {
+            err = err.max((out[j] - g1[j]).abs() / g1a[j]);
+            err = err.max((out[4 + j] - g2[j]).abs() / g2a[j]);
+        }
+        t.record(err, TOL_POLY, || {
+            format!("seed {seed} sample {i} q = {q:?} p = {p:?} y = {y:e}")
+        });
+    }
+    t.finish()
+}
+
+/// Known root, case 2: integer `A` (entries in [-4, 4]), dyadic `(x0, y0)`, `b = A a(x0, y0)`:
+/// every input is exact, `C2 = |A (a - a0)|^2` is stationary at `(x0, y0)`, so
+/// `Res(y0) = y0 q(y0^2) = 0` and `g1(x0) = g2(x0) = 0` at `y0` exactly. Bound: the kernel's
+/// own rounding only, `gamma_64 per(|Bez|_abs)` for the resultant, `gamma_64 sum |a_n|_abs |x0|^n`
+/// for the cubics. Reported norm: `|q(beta0)| / sum_j |k_j| beta0^j` (the coefficient scale).
+#[must_use]
+pub fn case2_known_root(n: usize) -> Measurement {
+    let seed = 103;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case2_resultant",
+        "known root beta0 = y0^2 (+ case2_cubics at x0)",
+        "|q(beta0)| / sum |k_j| beta0^j",
+        "derived per sample".into(),
+    );
+    for i in 0..n {
+        let a = SMatrix::<f64, 6, 3>::from_fn(|_, _| st::small_int(&mut rng, 4));
+        let (x0, y0) = (st::dyadic(&mut rng), st::dyadic(&mut rng));
+        let a0 = Vector3::new(x0 * x0, x0 * y0, y0 * y0);
+        let b = a * a0;
+        let (q, p) = rf::case2_inputs(&a, &b);
+        let kk = k::case2_resultant(&q, &p);
+        let beta = y0 * y0;
+        let (qv, qs) = rf::poly_eval(&kk, beta);
+        let (_, _, g1a, g2a) = rf::case2_cubics(&q, &p, y0);
+        let mut ratio = (qv * y0).abs() / (g64() * rf::bezout_abs_permanent(&g1a, &g2a));
+        let cub = k::case2_cubics(&q, &p, y0);
+        for (off, ga) in [(0usize, g1a), (4, g2a)] {
+            let (v, _) = rf::poly_eval(&cub[off..off + 4], x0);
+            let (_, sa) = rf::poly_eval(&ga, x0.abs());
+            ratio = ratio.max(v.abs() / (g64() * sa));
+        }
+        let err = qv.abs() / qs;
+        t.record(err, err / ratio.max(f64::MIN_POSITIVE), || {
+            format!(
+                "seed {seed} sample {i} x0 = {x0} y0 = {y0} A = {:?}",
+                a.as_slice()
+            )
+        });
+    }
+    t.finish()
+}
+
+/// `case3_quartic` vs `k^T H k` at random `(k1, k2)`: `|dC3| / (|k|^T |H| |k|) <= 1e-12`.
+#[must_use]
+pub fn case3_quartic(n: usize) -> Measurement {
+    let seed = 111;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case3_quartic",
+        "sum c_ij k1^i k2^j vs k^T H k",
+        "|dC3| / |k|^T|H||k|",
+        format!("{TOL_POLY:.0e}"),
+    );
+    let mons = rf::case3_monomials();
+    for i in 0..n {
+        let h = if rand::Rng::random_bool(&mut rng, 0.5) {
+            let b = SMatrix::<f64, 5, 6>::from_fn(|_, _| {
+                st::normal(&mut rng) * st::log_uniform(&mut rng, -2.0, 2.0)
+            });
+            b.transpose() * b
+        } else {
+            let x = SMatrix::<f64, 6, 6>::from_fn(|_, _| {
+                st::normal(&mut rng) * st::log_uniform(&mut rng, -2.0, 2.0)
+            });
+            x + x.transpose()
+        };
+        let (k1, k2) = (hidden(&mut rng), hidden(&mut rng));
+        let c = k::case3_quartic(&rf::h_upper21(&h));
+        let v: f64 = c
+            .iter()
+            .zip(&mons)
+            .map(|(ci, e)| ci * k1.powi(e[0] as i32) * k2.powi(e[1] as i32))
+            .sum();
+        let kv = rf::case3_k(k1, k2);
+        let direct = kv.dot(&(h * kv));
+        let scale = kv.abs().dot(&(h.abs() * kv.abs()));
+        let err = (v - direct).abs() / scale;
+        t.record(err, TOL_POLY, || {
+            format!("seed {seed} sample {i} k = ({k1:e}, {k2:e})")
+        });
+    }
+    t.finish()
+}
+
+/// `case3_cubics` vs the S4.3 gradient cubics: per coefficient `|d a_n| / |a_n|_abs <= 1e-12`.
+#[must_use]
+pub fn case3_cubics(n: usize) -> Measurement {
+    let seed = 112;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case3_cubics",
+        "vs dC3/dx, dC3/dy of ALGORITHM.md S4.3",
+        "max_n |d a_n| / |a_n|_abs",
+        format!("{TOL_POLY:.0e}"),
+    );
+    for i in 0..n {
+        let c = case3_random(&mut rng);
+        let y = hidden(&mut rng);
+        let out = k::case3_cubics(&c, y);
+        let (gx, gy, gxa, gya) = rf::case3_cubics(&c, y);
+        let mut err = 0.0f64;
+        for j in 0..4 {
+            err = err.max((out[j] - gx[j]).abs() / gxa[j]);
+            err = err.max((out[4 + j] - gy[j]).abs() / gya[j]);
+        }
+        t.record(err, TOL_POLY, || {
+            format!("seed {seed} sample {i} c = {c:?} y = {y:e}")
+        });
+    }
+    t.finish()
+}
+
+/// `case3_resultant` vs nalgebra's determinant of the Sylvester matrix of the S4.3 cubics.
+#[must_use]
+pub fn case3_resultant(n: usize) -> Measurement {
+    let seed = 113;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case3_resultant",
+        "vs det of numeric 6x6 Sylvester",
+        "|dRes| / Hadamard(|Syl|)",
+        "derived per sample".into(),
+    );
+    for i in 0..n {
+        let c = case3_random(&mut rng);
+        let y = hidden(&mut rng);
+        let res = k::case3_resultant(&c);
+        let (r, _) = rf::poly_eval(&res, y);
+        let (gx, gy, gxa, gya) = rf::case3_cubics(&c, y);
+        let (err, ratio) = resultant_vs_sylvester(r, &gx, &gy, &gxa, &gya);
+        t.record(err, err / ratio.max(f64::MIN_POSITIVE), || {
+            format!("seed {seed} sample {i} c = {c:?} y = {y:e}")
+        });
+    }
+    t.finish()
+}
+
+/// Known root, case 3: dyadic `(x0, y0)`, integer rows `w` of `Bm` (5 x 6, entries in [-4, 4])
+/// with the last entry set to `-(w . k0)` so that `Bm k(x0, y0) = 0` exactly; `H = Bm^T Bm`
+/// exact. `C3 = |Bm k|^2` is stationary at `(x0, y0)`: `Res(y0) = 0` and both cubics vanish at
+/// `x0`. Bound: kernel rounding only (`gamma_64` times the absolute-value scales, as for case 2).
+#[must_use]
+pub fn case3_known_root(n: usize) -> Measurement {
+    let seed = 114;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case3_resultant",
+        "known root y0 (+ case3_cubics at x0)",
+        "|Res(y0)| / sum |r_j| |y0|^j",
+        "derived per sample".into(),
+    );
+    for i in 0..n {
+        let (x0, y0) = (st::dyadic(&mut rng), st::dyadic(&mut rng));
+        let k0 = rf::case3_k(x0, y0);
+        let mut bm = SMatrix::<f64, 5, 6>::from_fn(|_, _| st::small_int(&mut rng, 4));
+        for row in 0..5 {
+            let dot: f64 = (0..5).map(|j| bm[(row, j)] * k0[j]).sum();
+            bm[(row, 5)] = -dot;
+        }
+        debug_assert!((bm * k0).amax() == 0.0);
+        let h = bm.transpose() * bm;
+        let c = k::case3_quartic(&rf::h_upper21(&h));
+        let res = k::case3_resultant(&c);
+        let (rv, rs) = rf::poly_eval(&res, y0);
+        let (_, _, gxa, gya) = rf::case3_cubics(&c, y0);
+        let mut ratio = rv.abs() / (g64() * rf::bezout_abs_permanent(&gxa, &gya));
+        let cub = k::case3_cubics(&c, y0);
+        for (off, ga) in [(0usize, gxa), (4, gya)] {
+            let (v, _) = rf::poly_eval(&cub[off..off + 4], x0);
+            let (_, sa) = rf::poly_eval(&ga, x0.abs());
+            ratio = ratio.max(v.abs() / (g64() * sa));
+        }
+        let err = rv.abs() / rs;
+        t.record(err, err / ratio.max(f64::MIN_POSITIVE), || {
+            format!(
+                "seed {seed} sample {i} x0 = {x0} y0 = {y0} Bm = {:?}",
+                bm.as_slice()
+            )
+        });
+    }
+    t.finish()
+}
+
+/// Random case-4 inputs `t` (21 numbers, entries `N(0,1) 10^U(-1, 1)`).
+fn case4_random(rng: &mut rand_pcg::Pcg64) -> [f64; 21] {
+    std::array::from_fn(|_| st::normal(rng) * st::log_uniform(rng, -1.0, 1.0))
+}
+
+/// `case4_matrix` evaluated at random `k1` vs `M(k1)` from the S4.4 row formulas with numeric
+/// `T(k1)`: per entry `|dM_ij| / |M|_abs,ij <= 1e-12`.
+#[must_use]
+pub fn case4_matrix(n: usize) -> Measurement {
+    let seed = 121;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case4_matrix",
+        "vs row_i, row_ii, row_iii of ALGORITHM.md S4.4",
+        "max_ij |dM_ij| / |M|_abs,ij",
+        format!("{TOL_POLY:.0e}"),
+    );
+    for i in 0..n {
+        let tt = case4_random(&mut rng);
+        let k1 = hidden(&mut rng);
+        let out = k::case4_matrix(&tt);
+        let mk = rf::case4_layout_at(&out, k1);
+        let (tv, ta) = rf::case4_t_at(&tt, k1);
+        let mf = rf::case4_m_from_t(&tv, false);
+        let ma = rf::case4_m_from_t(&ta, true);
+        let err = (mk - mf).component_div(&ma).amax();
+        t.record(err, TOL_POLY, || {
+            format!("seed {seed} sample {i} t = {tt:?} k1 = {k1:e}")
+        });
+    }
+    t.finish()
+}
+
+/// `case4_determinant` at random `k1` vs nalgebra's determinant of the numeric `M(k1)` (the
+/// 45-number layout of `case4_matrix` evaluated at `k1`). Bound: `(gamma_64 + 3 gamma_32)
+/// per(|M|_abs)` (kernel cofactor route, and the rounding of the numeric entries by Laplace
+/// expansion) + nalgebra's LU bound.
+#[must_use]
+pub fn case4_determinant(n: usize) -> Measurement {
+    let seed = 122;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case4_determinant",
+        "vs det of numeric M(k1)",
+        "|d det| / Hadamard(|M|_abs)",
+        "derived per sample".into(),
+    );
+    for i in 0..n {
+        let tt = case4_random(&mut rng);
+        let k1 = hidden(&mut rng);
+        let d = k::case4_determinant(&tt);
+        let (dv, _) = rf::poly_eval(&d, k1);
+        let mk = rf::case4_layout_at(&k::case4_matrix(&tt), k1);
+        let (_, ta) = rf::case4_t_at(&tt, k1);
+        let ma = DMatrix::from_iterator(3, 3, rf::case4_m_from_t(&ta, true).iter().copied());
+        let (det, lu_bound) = rf::det_with_bound(&DMatrix::from_iterator(3, 3, mk.iter().copied()));
+        let bound = (g64() + 3.0 * gamma(32)) * rf::permanent(&ma) + lu_bound;
+        let errabs = (dv - det).abs();
+        let err = errabs / rf::hadamard(&ma);
+        t.record(err, err * bound / errabs.max(f64::MIN_POSITIVE), || {
+            format!("seed {seed} sample {i} t = {tt:?} k1 = {k1:e}")
+        });
+    }
+    t.finish()
+}
+
+/// The known-root system of case 4 (see [`case4_known_root`]): returns `t` (21 inputs) and
+/// `(k1*, k2*, k3*)`.
+pub fn case4_known_system(rng: &mut rand_pcg::Pcg64) -> ([f64; 21], [f64; 3]) {
+    let ks = [st::dyadic(rng), st::dyadic(rng), st::dyadic(rng)];
+    let v = nalgebra::Vector4::new(1.0, ks[0], ks[1], ks[2]);
+    // Mm = L U, unit triangular integer factors: det Mm = 1, Mm^-1 = adj(Mm) exact.
+    let mut l = Matrix3::identity();
+    let mut u = Matrix3::identity();
+    for i in 0..3 {
+        for j in 0..i {
+            l[(i, j)] = st::small_int(rng, 2);
+            u[(j, i)] = st::small_int(rng, 2);
+        }
+    }
+    let mm = l * u;
+    let mut n0 = Matrix3::zeros();
+    let mut n1 = Matrix3::zeros();
+    let mut n2 = Matrix3::zeros();
+    for e in 0..3 {
+        // the symmetric 4 x 4 form of equation e over (1, k1, k2, k3)
+        let mut f = nalgebra::Matrix4::<f64>::zeros();
+        for a in 0..4 {
+            for b in a..4 {
+                let x = st::small_int(rng, 4);
+                f[(a, b)] = x;
+                f[(b, a)] = x;
+            }
+        }
+        f[(2, 2)] = mm[(e, 0)];
+        f[(3, 3)] = mm[(e, 1)];
+        f[(2, 3)] = mm[(e, 2)] / 2.0;
+        f[(3, 2)] = mm[(e, 2)] / 2.0;
+        f[(0, 0)] -= v.dot(&(f * v)); // exact: dyadic arithmetic
+        debug_assert_eq!(v.dot(&(f * v)), 0.0);
+        // [2 F02 + 2 F12 k1, 2 F03 + 2 F13 k1, F00 + 2 F01 k1 + F11 k1^2]
+        n0[(e, 0)] = 2.0 * f[(0, 2)];
+        n1[(e, 0)] = 2.0 * f[(1, 2)];
+        n0[(e, 1)] = 2.0 * f[(0, 3)];
+        n1[(e, 1)] = 2.0 * f[(1, 3)];
+        n0[(e, 2)] = f[(0, 0)];
+        n1[(e, 2)] = 2.0 * f[(0, 1)];
+        n2[(e, 2)] = f[(1, 1)];
+    }
+    let adj = Matrix3::from_fn(|i, j| {
+        // adj_ij = (-1)^(i+j) minor_ji
+        let rows: Vec<usize> = (0..3).filter(|&x| x != j).collect();
+        let cols: Vec<usize> = (0..3).filter(|&x| x != i).collect();
+        let minor = mm[(rows[0], cols[0])] * mm[(rows[1], cols[1])]
+            - mm[(rows[0], cols[1])] * mm[(rows[1], cols[0])];
+        if (i + j) % 2 == 0 {
+            minor
+        } else {
+            -minor
+        }
+    });
+    debug_assert_eq!(adj * mm, Matrix3::identity());
+    let tn = [-adj * n0, -adj * n1, -adj * n2];
+    let layout = rf::case4_layout();
+    let t: [f64; 21] = std::array::from_fn(|x| {
+        let e = layout[x];
+        tn[e[2] as usize][(e[0] as usize, e[1] as usize)]
+    });
+    (t, ks)
+}
+
+/// Known root, case 4: three symmetric integer 4 x 4 forms over `(1, k1, k2, k3)` with the
+/// `(k2, k3)` block an integer unimodular `Mm` and `F00` adjusted so that every form vanishes
+/// at a dyadic `(k1*, k2*, k3*)`; `T = -Mm^-1 N(k1)` exactly (adjugate). Then `det M(k1*) = 0`
+/// and `M(k1*) [k2*, k3*, 1] = 0` exactly; bounds: kernel rounding `gamma_64 per(|M|_abs)` and
+/// `gamma_64 (|M|_abs |y*|)_i`. Reported norm: `|det M(k1*)| / Hadamard(|M|_abs)`.
+#[must_use]
+pub fn case4_known_root(n: usize) -> Measurement {
+    let seed = 123;
+    let mut rng = st::rng(seed);
+    let mut t = Tracker::new(
+        "case4_determinant",
+        "known root k1* (+ case4_matrix: M(k1*) y* = 0)",
+        "|det M(k1*)| / Hadamard(|M|_abs)",
+        "derived per sample".into(),
+    );
+    for i in 0..n {
+        let (tt, ks) = case4_known_system(&mut rng);
+        let (_, ta) = rf::case4_t_at(&tt, ks[0]);
+        let ma = rf::case4_m_from_t(&ta, true);
+        let mad = DMatrix::from_iterator(3, 3, ma.iter().copied());
+        let (dv, _) = rf::poly_eval(&k::case4_determinant(&tt), ks[0]);
+        let mut ratio = dv.abs() / (g64() * rf::permanent(&mad));
+        let mk = rf::case4_layout_at(&k::case4_matrix(&tt), ks[0]);
+        let y = Vector3::new(ks[1], ks[2], 1.0);
+        let resid = mk * y;
+        let rscale = ma * y.abs();
+        for r in 0..3 {
+            ratio = ratio.max(resid[r].abs() / (g64() * rscale[r]));
+        }
+        let err = dv.abs() / rf::hadamard(&mad);
+        t.record(err, err / ratio.max(f64::MIN_POSITIVE), || {
+            format!("seed {seed} sample {i} k* = {ks:?} t = {tt:?}")
+        });
+    }
+    t.finish()
+}
+
+/// Number of samples for the cost / gradient / Hessian / local-model checks.
+pub const N_COST: usize = 10_000;
+/// Number of samples for the resultant checks.
+pub const N_RESULTANT: usize = 5_000;
+
+/// Every check, in report order.
+#[must_use]
+pub fn all() -> Vec<Measurement> {
+    let mut out = Vec::new();
+    for v in [Variant::Full, Variant::Planar] {
+        out.push(cost_coefficients(v, N_COST));
+    }
+    out.push(cost_value(Variant::Full, N_COST));
+    out.push(cost_value(Variant::Planar, N_COST));
+    for v in [Variant::Full, Variant::Planar] {
+        for a in [
+            Against::Direct,
+            Against::FiniteDifference,
+            Against::ComplexStep,
+        ] {
+            out.push(gradient(v, a, N_COST));
+        }
+        for a in [
+            Against::Direct,
+            Against::FiniteDifference,
+            Against::ComplexStep,
+        ] {
+            out.push(hessian(v, a, N_COST));
+        }
+    }
+    for a in [
+        LocalAgainst::Value,
+        LocalAgainst::Explicit,
+        LocalAgainst::FdGradient,
+        LocalAgainst::FdHessian,
+        LocalAgainst::CsGradient,
+        LocalAgainst::CsHessian,
+    ] {
+        out.push(local_model(a, N_COST));
+    }
+    out.push(case2_resultant(N_RESULTANT));
+    out.push(case2_known_root(N_RESULTANT));
+    out.push(case2_cubics(N_RESULTANT));
+    out.push(case3_quartic(N_RESULTANT));
+    out.push(case3_resultant(N_RESULTANT));
+    out.push(case3_known_root(N_RESULTANT));
+    out.push(case3_cubics(N_RESULTANT));
+    out.push(case4_matrix(N_RESULTANT));
+    out.push(case4_determinant(N_RESULTANT));
+    out.push(case4_known_root(N_RESULTANT));
+    out
+}
