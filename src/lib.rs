@@ -42,8 +42,10 @@
 #![warn(missing_docs)]
 
 mod accumulate;
+mod certify;
 mod error;
 mod frame;
+mod linalg;
 pub mod kernels;
 mod nullspace;
 mod refine;

@@ -68,6 +68,8 @@ pub(crate) struct Refined {
     /// True if the iteration cap stopped the refinement (neither the step tolerance nor the
     /// damping limit did).
     pub hit_limit: bool,
+    /// True if the caller's stop predicate ended the refinement.
+    pub stopped_early: bool,
 }
 
 /// Row-major `vec(R)`.
@@ -208,6 +210,19 @@ pub(crate) fn refine_so3(
     r0: &Matrix3<f64>,
     opts: &NewtonOptions,
 ) -> Refined {
+    refine_so3_until(m45, scale, r0, opts, &mut |_| false)
+}
+
+/// As [`refine_so3`], but stops early (with `stopped_early = true`) as soon as `stop` returns
+/// true for an accepted iterate. The solver uses it to abandon a trajectory once it has entered
+/// the neighbourhood of a local minimum that is already known.
+pub(crate) fn refine_so3_until(
+    m45: &[f64; 45],
+    scale: f64,
+    r0: &Matrix3<f64>,
+    opts: &NewtonOptions,
+    stop: &mut dyn FnMut(&Matrix3<f64>) -> bool,
+) -> Refined {
     let scale = if scale.is_finite() && scale > 1e-300 {
         scale
     } else {
@@ -219,6 +234,7 @@ pub(crate) fn refine_so3(
     let mut mu = opts.mu0;
     let mut iterations = 0u32;
     let mut hit_limit = true;
+    let mut stopped_early = false;
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         let shift = (-min_eigenvalue_sym3(&h)).max(0.0);
@@ -259,12 +275,18 @@ pub(crate) fn refine_so3(
             hit_limit = false;
             break;
         }
+        if stop(&r) {
+            hit_limit = false;
+            stopped_early = true;
+            break;
+        }
     }
     Refined {
         r,
         f,
         iterations,
         hit_limit,
+        stopped_early,
     }
 }
 

@@ -1,6 +1,8 @@
 //! The EOPnP pipeline (ALGORITHM.md S1-S9) and its public entry points.
 
 use crate::accumulate::{self, System};
+use crate::certify;
+use crate::linalg;
 use crate::error::PnpError;
 use crate::frame::{self, WorkingFrame};
 use crate::nullspace::{self, Candidate, CandidateSource, Candidates, MAX_CANDIDATES};
@@ -112,6 +114,7 @@ pub struct Solver {
     reproj: ReprojOptions,
     planar: PlanarDetection,
     align_world_axes: bool,
+    exhaustive: bool,
 }
 
 impl Default for Solver {
@@ -122,6 +125,7 @@ impl Default for Solver {
             reproj: ReprojOptions::default(),
             planar: PlanarDetection::Auto,
             align_world_axes: true,
+            exhaustive: false,
         }
     }
 }
@@ -135,6 +139,12 @@ const PLANAR_MAX_RATIO: f64 = 1e-3;
 /// Two refined rotations closer than this (Frobenius norm of the difference, ~ radians) are the
 /// same local minimum.
 const SAME_MINIMUM: f64 = 1e-8;
+/// Radius (Frobenius norm of the rotation difference; 0.05 is about 2 degrees) of the
+/// neighbourhood of a refined local minimum that is taken to lie in its basin: a start or a
+/// Newton iterate that comes this close to a known minimum converges to it (the cost is a
+/// quadratic form in the entries of R, whose distinct minima are tens of degrees apart), so its
+/// refinement is skipped or stopped.
+const IN_BASIN: f64 = 0.05;
 /// Hard bound on the symmetric eigen-decomposition sweeps.
 const EIGEN_MAX_ITER: usize = 1000;
 
@@ -179,6 +189,17 @@ impl Solver {
     #[must_use]
     pub fn planar_detection(mut self, p: PlanarDetection) -> Self {
         self.planar = p;
+        self
+    }
+
+    /// `true` runs every candidate generator and refines every start for every problem
+    /// (ALGORITHM.md S4-S6 literally). Default: `false`: the case-1 (planar: p1) start is refined
+    /// first, and accepted without the rest of the search when a Lagrangian dual certificate
+    /// proves it is the global minimum of the cost and more than half of the points are in
+    /// front of it; S7 would select the same minimum.
+    #[must_use]
+    pub fn exhaustive(mut self, exhaustive: bool) -> Self {
+        self.exhaustive = exhaustive;
         self
     }
 
@@ -270,6 +291,25 @@ impl Solver {
         self.run(world, &image, None, opts, None)
     }
 
+    /// As [`Solver::solve_weighted`] (weights optional) with the x and y residual rows of the
+    /// reprojection refinement weighted by `row_weights` (e.g. `(fx^2, fy^2)` normalised, as
+    /// in [`Solver::solve_pixels`]). Used by `colmap::register_image`. Non-finite or
+    /// non-positive row weights fall back to `(1, 1)`.
+    pub(crate) fn solve_with_row_weights(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: Option<&[f64]>,
+        row_weights: (f64, f64),
+    ) -> Result<Solution, PnpError> {
+        let mut opts = self.reproj;
+        let ok = |w: f64| w.is_finite() && w > 0.0;
+        if ok(row_weights.0) && ok(row_weights.1) {
+            opts.row_weights = row_weights;
+        }
+        self.run(world, image, weights, opts, None)
+    }
+
     fn run(
         &self,
         world: &[Point3<f64>],
@@ -297,79 +337,11 @@ impl Solver {
             PlanarDetection::Planar => (false, true),
             PlanarDetection::NonPlanar => (true, false),
         };
-        let eig = nalgebra::SymmetricEigen::try_new(sys.m, f64::EPSILON, EIGEN_MAX_ITER)
-            .ok_or(PnpError::NoSolution)?;
-        let mut order: [usize; 9] = std::array::from_fn(|i| i);
-        order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-        let small = eig
-            .eigenvalues
-            .iter()
-            .filter(|&&l| l <= DEGENERATE_EIG * scale)
-            .count();
-        let degenerate = small > 4;
+        // More than four eigenvalues of M at or below DEGENERATE_EIG trace(M).
+        let degenerate =
+            linalg::count_eigenvalues_below(&sys.m, DEGENERATE_EIG * scale * (1.0 + f64::EPSILON))
+                > 4;
 
-        let mut cands = Candidates::new();
-        // S4.
-        if nonplanar {
-            let v: [SVector<f64, 9>; 4] =
-                std::array::from_fn(|i| eig.eigenvectors.column(order[i]).into_owned());
-            nullspace::nonplanar_candidates(&v, &mut cands);
-        }
-        // S4'.
-        if planar {
-            if let Some(sys_p) = acc.system(true) {
-                planar_candidates(&sys_p, world, weights, &fr, &mut cands);
-            }
-        }
-        // S4''.
-        for d in EXTRA_STARTS {
-            if !cands.is_full() {
-                cands.push(Candidate {
-                    r: Matrix3::from_diagonal(&Vector3::from(d)),
-                    source: CandidateSource::ExtraStart,
-                });
-            }
-        }
-        let planar_sources = |s: CandidateSource| {
-            matches!(s, CandidateSource::Planar1 | CandidateSource::Planar2)
-        };
-
-        // S6: refine every candidate, in order of increasing initial cost.
-        let f_of = |r: &Matrix3<f64>| {
-            let v = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
-            (v.transpose() * sys.m * v)[(0, 0)]
-        };
-        let mut init: ArrayVec<(f64, usize), MAX_CANDIDATES> =
-            cands.iter().enumerate().map(|(i, c)| (f_of(&c.r), i)).collect();
-        init.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let mut minima: ArrayVec<Minimum, MAX_CANDIDATES> = ArrayVec::new();
-        for &(_, i) in &init {
-            let c = cands[i];
-            let refined = refine::refine_so3(&m45, scale, &c.r, &self.newton);
-            if !refined.f.is_finite() || !refined.r.iter().all(|x| x.is_finite()) {
-                continue;
-            }
-            if minima
-                .iter()
-                .any(|m| (m.r - refined.r).norm() <= SAME_MINIMUM)
-            {
-                continue;
-            }
-            let r = refined.r;
-            let t = translation(&sys, &r);
-            minima.push(Minimum {
-                r,
-                t,
-                f: refined.f,
-                source: c.source,
-                planar: planar_sources(c.source),
-                iterations: refined.iterations,
-                cheirality: None,
-            });
-        }
-        if minima.is_empty() {
-            return Err(PnpError::NoSolution);
-        }
         let n_active = fr.n_active;
         let ctx = Ctx {
             world,
@@ -380,7 +352,129 @@ impl Solver {
             degenerate,
             scale,
         };
+        let planar_sys = if planar { acc.system(true) } else { None };
+        let mut minima: ArrayVec<Minimum, MAX_CANDIDATES> = ArrayVec::new();
+        let refine_start = |r0: &Matrix3<f64>,
+                            source: CandidateSource,
+                            minima: &ArrayVec<Minimum, MAX_CANDIDATES>|
+         -> Option<Minimum> {
+            let known: ArrayVec<Matrix3<f64>, MAX_CANDIDATES> =
+                minima.iter().map(|m| m.r).collect();
+            let refined = refine::refine_so3_until(&m45, scale, r0, &self.newton, &mut |r| {
+                known.iter().any(|k| (k - r).norm() <= IN_BASIN)
+            });
+            if refined.stopped_early
+                || !refined.f.is_finite()
+                || !refined.r.iter().all(|x| x.is_finite())
+                || minima
+                    .iter()
+                    .any(|m| (m.r - refined.r).norm() <= SAME_MINIMUM)
+            {
+                return None;
+            }
+            Some(Minimum {
+                r: refined.r,
+                t: translation(&sys, &refined.r),
+                f: refined.f,
+                source,
+                planar: matches!(source, CandidateSource::Planar1 | CandidateSource::Planar2),
+                iterations: refined.iterations,
+                cheirality: None,
+            })
+        };
 
+        // Certified fast path (not in `solve_all` or exhaustive mode): refine the case-1 (or
+        // p1) start; if a Lagrangian dual certificate proves the minimum it reaches is the
+        // global minimum of f over O(3) (see `certify`) and more than half of the points are in
+        // front of it, no other candidate can be selected by S7, so the search stops here.
+        if !self.exhaustive && all.is_none() {
+            let start = if nonplanar && !planar {
+                linalg::smallest_eigenvector(&sys.m, scale).and_then(|v1| {
+                    crate::rotation::candidate_to_rotation(&v1.into())
+                        .map(|r| (r, CandidateSource::Case1))
+                })
+            } else if planar && !nonplanar {
+                planar_sys.as_ref().and_then(|sp| {
+                    let v1 = linalg::smallest_eigenvector(&planar_m(sp), scale)?;
+                    planar_start(&v1, sp, world, weights, &fr)
+                        .map(|r| (r, CandidateSource::Planar1))
+                })
+            } else {
+                None
+            };
+            if let Some((r0, source)) = start {
+                if let Some(mut m) = refine_start(&r0, source, &minima) {
+                    let certified = certify::global_minimum(&sys.m, &m.r, scale)
+                        || (planar
+                            && planar_sys.as_ref().is_some_and(|sp| {
+                                certify::global_minimum_planar(&sp.m, &m.r, scale)
+                            }));
+                    if certified && in_front(world, weights, &fr, &m.r, &m.t, n_active) {
+                        m.cheirality = Some(true);
+                        return Ok(ctx.finish(&m, self.refinement, &reproj_opts));
+                    }
+                    minima.push(m);
+                }
+            }
+        }
+
+        let mut cands = Candidates::new();
+        // S4.
+        if nonplanar {
+            let eig = nalgebra::SymmetricEigen::try_new(sys.m, f64::EPSILON, EIGEN_MAX_ITER)
+                .ok_or(PnpError::NoSolution)?;
+            let mut order: [usize; 9] = std::array::from_fn(|i| i);
+            order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+            let v: [SVector<f64, 9>; 4] =
+                std::array::from_fn(|i| eig.eigenvectors.column(order[i]).into_owned());
+            nullspace::nonplanar_candidates(&v, &mut cands);
+        }
+        // S4'.
+        if let Some((sp, vecs)) = planar_sys
+            .as_ref()
+            .and_then(|sp| planar_eigen(sp).map(|(_, v)| (sp, v)))
+        {
+            nullspace::planar_vectors(&vecs, |r6, source| {
+                if let Some(r) = planar_start(&r6, sp, world, weights, &fr) {
+                    if !cands.is_full() {
+                        cands.push(Candidate { r, source });
+                    }
+                }
+            });
+        }
+        // S4''.
+        for d in EXTRA_STARTS {
+            if !cands.is_full() {
+                cands.push(Candidate {
+                    r: Matrix3::from_diagonal(&Vector3::from(d)),
+                    source: CandidateSource::ExtraStart,
+                });
+            }
+        }
+
+        // S6: refine every candidate, in order of increasing initial cost.
+        let f_of = |r: &Matrix3<f64>| {
+            let v = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
+            (v.transpose() * sys.m * v)[(0, 0)]
+        };
+        let mut init: ArrayVec<(f64, usize), MAX_CANDIDATES> =
+            cands.iter().enumerate().map(|(i, c)| (f_of(&c.r), i)).collect();
+        init.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(_, i) in &init {
+            let c = cands[i];
+            // A start already inside the basin of a known minimum would only find it again.
+            if minima.iter().any(|m| (m.r - c.r).norm() <= IN_BASIN) {
+                continue;
+            }
+            if let Some(m) = refine_start(&c.r, c.source, &minima) {
+                if !minima.is_full() {
+                    minima.push(m);
+                }
+            }
+        }
+        if minima.is_empty() {
+            return Err(PnpError::NoSolution);
+        }
         if let Some(all) = all {
             // Every distinct minimum, refined and ranked.
             for m in minima.iter_mut() {
@@ -551,51 +645,51 @@ fn reprojection_error(
     (e, wsum)
 }
 
-/// S4': planar candidates with the depth test of step 5 (sign majority of the flattened points).
-fn planar_candidates(
+/// Eigen-decomposition of the 6x6 planar `M_p` (S4' steps 2-3): the two smallest eigenvalues
+/// (ascending) and their unit eigenvectors.
+fn planar_eigen(sys_p: &System) -> Option<([f64; 2], [SVector<f64, 6>; 2])> {
+    let mp = planar_m(sys_p);
+    let eig = nalgebra::SymmetricEigen::try_new(mp, f64::EPSILON, EIGEN_MAX_ITER)?;
+    let mut order: [usize; 6] = std::array::from_fn(|i| i);
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    Some((
+        [eig.eigenvalues[order[0]], eig.eigenvalues[order[1]]],
+        std::array::from_fn(|i| eig.eigenvectors.column(order[i]).into_owned()),
+    ))
+}
+
+/// The 6x6 planar `M_p`: `M` of the flattened system restricted to the entries of the first two
+/// columns of `R` (ALGORITHM.md S4' step 2).
+fn planar_m(sys_p: &System) -> SMatrix<f64, 6, 6> {
+    const IDX: [usize; 6] = [0, 1, 3, 4, 6, 7];
+    SMatrix::<f64, 6, 6>::from_fn(|i, j| sys_p.m[(IDX[i], IDX[j])])
+}
+
+/// S4' step 5: the rotation of a planar candidate `r6`, flipped by `diag(-1, -1, 1)` when the
+/// majority of the flattened points would lie behind the camera.
+fn planar_start(
+    r6: &SVector<f64, 6>,
     sys_p: &System,
     world: &[Point3<f64>],
     weights: Option<&[f64]>,
     fr: &WorkingFrame,
-    out: &mut Candidates,
-) {
-    const IDX: [usize; 6] = [0, 1, 3, 4, 6, 7];
-    let mp = SMatrix::<f64, 6, 6>::from_fn(|i, j| sys_p.m[(IDX[i], IDX[j])]);
-    let Some(eig) = nalgebra::SymmetricEigen::try_new(mp, f64::EPSILON, EIGEN_MAX_ITER) else {
-        return;
-    };
-    let mut order: [usize; 6] = std::array::from_fn(|i| i);
-    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let v: [SVector<f64, 6>; 2] =
-        std::array::from_fn(|i| eig.eigenvectors.column(order[i]).into_owned());
-    nullspace::planar_vectors(&v, |r6, source| {
-        let Some(mut r) = nullspace::planar_rotation(&r6) else {
-            return;
-        };
-        let t = translation(sys_p, &r);
-        // Depths of the flattened working-frame points: z = R3 . (x, y, 0) + t_z.
-        let mut sum = 0i64;
-        for (i, x) in world.iter().enumerate() {
-            if weights.is_some_and(|w| w[i] == 0.0) {
-                continue;
-            }
-            let p = fr.to_working(x);
-            let z = r[(2, 0)] * p.x + r[(2, 1)] * p.y + t.z;
-            sum += if z > 0.0 {
-                1
-            } else if z < 0.0 {
-                -1
-            } else {
-                0
-            };
+) -> Option<Matrix3<f64>> {
+    let mut r = nullspace::planar_rotation(r6)?;
+    let t = translation(sys_p, &r);
+    // Depths of the flattened working-frame points: z = R31 x + R32 y + t_z.
+    let mut sum = 0i64;
+    for (i, x) in world.iter().enumerate() {
+        if weights.is_some_and(|w| w[i] == 0.0) {
+            continue;
         }
-        if sum < 0 {
-            r *= Matrix3::from_diagonal(&Vector3::new(-1.0, -1.0, 1.0));
-        }
-        if !out.is_full() {
-            out.push(Candidate { r, source });
-        }
-    });
+        let p = fr.to_working(x);
+        let z = r[(2, 0)] * p.x + r[(2, 1)] * p.y + t.z;
+        sum += i64::from(z > 0.0) - i64::from(z < 0.0);
+    }
+    if sum < 0 {
+        r *= Matrix3::from_diagonal(&Vector3::new(-1.0, -1.0, 1.0));
+    }
+    Some(r)
 }
 
 /// The pose from world points and normalised image points with the default [`Solver`].

@@ -1,0 +1,106 @@
+//! Global-optimality certificates for a refined minimum of `f(R) = vec(R)^T M vec(R)`.
+//!
+//! At a stationary point `A` of `f` on O(3), `mat(M vec(A)) = Lambda A` for a symmetric
+//! `Lambda` (the gradient lies in the normal space `{S A : S symmetric}`). With row-major
+//! `vec`, `sum_jk Lambda_jk row_j(R) . row_k(R) = vec(R)^T (Lambda (x) I3) vec(R)`, so for every
+//! `R` in O(3) (rows orthonormal):
+//!
+//! ```text
+//! f(R) = vec(R)^T Q vec(R) + trace(Lambda),   Q = M - Lambda (x) I3,
+//! ```
+//!
+//! and `trace(Lambda) = f(A)` because `Q vec(A) = 0`. If `Q` is positive semidefinite, then
+//! `f(R) >= f(A)` for every rotation: `A` is a global minimum (the Lagrangian dual of the
+//! problem is tight and `Lambda` is its optimal multiplier). The check is one 9x9 Cholesky
+//! factorisation of `Q + eps I`; with `eps = CERT_EPS * trace(M)` the statement proven is
+//! `f(R) >= f(A) - 3 eps` for all `R`.
+//!
+//! For planar scenes (working-frame points with z = 0) `f` depends only on the first two
+//! columns `c1, c2` of `R`, through the 6x6 planar `M_p`; the analogous certificate uses the
+//! column constraints `c_j . c_k = delta_jk` (the Stiefel manifold):
+//! `Q_p = M_p - I3 (x) Gamma`, `Gamma` 2x2 symmetric, from `M_p r6(A) = (I3 (x) Gamma) r6(A)`.
+
+use nalgebra::{Matrix2, Matrix3, SMatrix, SVector};
+
+/// Relative slack of the positive-semidefiniteness test (above the rounding level of the zero
+/// eigenvalue of `Q` along `vec(A)`, ~1e-16 trace(M)).
+const CERT_EPS: f64 = 1e-11;
+
+/// Cholesky factorisation test of a small symmetric matrix (no allocation).
+fn positive_definite<const D: usize>(a: &SMatrix<f64, D, D>) -> bool {
+    let mut l = SMatrix::<f64, D, D>::zeros();
+    for j in 0..D {
+        let mut d = a[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if !(d > 0.0) {
+            return false;
+        }
+        let djj = d.sqrt();
+        l[(j, j)] = djj;
+        for i in j + 1..D {
+            let mut s = a[(i, j)];
+            for k in 0..j {
+                s -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = s / djj;
+        }
+    }
+    true
+}
+
+/// Whether the rotation `a` is certified as a global minimum of `vec(R)^T M vec(R)` over O(3).
+pub(crate) fn global_minimum(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, scale: f64) -> bool {
+    let r = SVector::<f64, 9>::from_row_slice(a.transpose().as_slice());
+    let u = m * r;
+    let um = Matrix3::new(u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7], u[8]);
+    let lam = um * a.transpose();
+    let lam = (lam + lam.transpose()) * 0.5;
+    let mut q = *m;
+    for j in 0..3 {
+        for k in 0..3 {
+            for i in 0..3 {
+                q[(3 * j + i, 3 * k + i)] -= lam[(j, k)];
+            }
+        }
+    }
+    let eps = CERT_EPS * scale;
+    for i in 0..9 {
+        q[(i, i)] += eps;
+    }
+    positive_definite(&q)
+}
+
+/// Planar certificate: `a`'s first two columns are a global minimum of the planar cost
+/// `r6^T M_p r6` over orthonormal 2-frames (`m9` is the flattened system's 9x9 M).
+pub(crate) fn global_minimum_planar(m9: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, scale: f64) -> bool {
+    const IDX: [usize; 6] = [0, 1, 3, 4, 6, 7];
+    let mp = SMatrix::<f64, 6, 6>::from_fn(|i, j| m9[(IDX[i], IDX[j])]);
+    // r6 = [R11, R12, R21, R22, R31, R32]: row i of R contributes (R_i1, R_i2).
+    let r6 = SVector::<f64, 6>::from_fn(|k, _| a[(k / 2, k % 2)]);
+    let u = mp * r6;
+    // Row i: (u_{2i}, u_{2i+1}) = Gamma (R_i1, R_i2)  =>  Gamma = U^T C (C^T C = I2), U, C 3x2.
+    let mut gamma = Matrix2::zeros();
+    for i in 0..3 {
+        for j in 0..2 {
+            for k in 0..2 {
+                gamma[(j, k)] += u[2 * i + j] * a[(i, k)];
+            }
+        }
+    }
+    let gamma = (gamma + gamma.transpose()) * 0.5;
+    let mut q = mp;
+    for i in 0..3 {
+        for j in 0..2 {
+            for k in 0..2 {
+                q[(2 * i + j, 2 * i + k)] -= gamma[(j, k)];
+            }
+        }
+    }
+    let eps = CERT_EPS * scale;
+    for i in 0..6 {
+        q[(i, i)] += eps;
+    }
+    positive_definite(&q)
+}
