@@ -387,7 +387,15 @@ impl Solver {
         // p1) start; if a Lagrangian dual certificate proves the minimum it reaches is the
         // global minimum of f over O(3) (see `certify`) and more than half of the points are in
         // front of it, no other candidate can be selected by S7, so the search stops here.
-        if !self.exhaustive && all.is_none() {
+        let early_exit = !self.exhaustive && all.is_none();
+        let is_certified = |r: &Matrix3<f64>| {
+            certify::global_minimum(&sys.m, r, scale)
+                || (planar
+                    && planar_sys
+                        .as_ref()
+                        .is_some_and(|sp| certify::global_minimum_planar(&sp.m, r, scale)))
+        };
+        if early_exit {
             let start = if nonplanar && !planar {
                 linalg::smallest_eigenvector(&sys.m, scale).and_then(|v1| {
                     crate::rotation::candidate_to_rotation(&v1.into())
@@ -404,12 +412,7 @@ impl Solver {
             };
             if let Some((r0, source)) = start {
                 if let Some(mut m) = refine_start(&r0, source, &minima) {
-                    let certified = certify::global_minimum(&sys.m, &m.r, scale)
-                        || (planar
-                            && planar_sys.as_ref().is_some_and(|sp| {
-                                certify::global_minimum_planar(&sp.m, &m.r, scale)
-                            }));
-                    if certified && in_front(world, weights, &fr, &m.r, &m.t, n_active) {
+                    if is_certified(&m.r) && in_front(world, weights, &fr, &m.r, &m.t, n_active) {
                         m.cheirality = Some(true);
                         return Ok(ctx.finish(&m, self.refinement, &reproj_opts));
                     }
@@ -466,7 +469,15 @@ impl Solver {
             if minima.iter().any(|m| (m.r - c.r).norm() <= IN_BASIN) {
                 continue;
             }
-            if let Some(m) = refine_start(&c.r, c.source, &minima) {
+            if let Some(mut m) = refine_start(&c.r, c.source, &minima) {
+                // A certified global minimum with most points in front is S7's pick.
+                if early_exit
+                    && is_certified(&m.r)
+                    && in_front(world, weights, &fr, &m.r, &m.t, n_active)
+                {
+                    m.cheirality = Some(true);
+                    return Ok(ctx.finish(&m, self.refinement, &reproj_opts));
+                }
                 if !minima.is_full() {
                     minima.push(m);
                 }
