@@ -75,6 +75,7 @@ impl WorkingFrame {
     }
 
     /// Inverse of [`WorkingFrame::to_world`]: `(R_world Rw^T, (t_world + R_world c) / d)`.
+    #[cfg(test)]
     pub(crate) fn to_work_pose(
         &self,
         r_world: &Matrix3<f64>,

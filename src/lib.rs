@@ -42,11 +42,13 @@
 #![warn(missing_docs)]
 
 mod accumulate;
+pub mod camera;
 mod certify;
+pub mod colmap;
 mod error;
 mod frame;
-mod linalg;
 pub mod kernels;
+mod linalg;
 mod nullspace;
 mod refine;
 mod reproj;
@@ -56,9 +58,7 @@ mod solver;
 
 pub use error::{DegenerateKind, InputKind, PnpError};
 pub use nullspace::CandidateSource;
-pub use solver::{
-    solve, Intrinsics, PlanarDetection, Refinement, Solution, Solutions, Solver,
-};
+pub use solver::{solve, Intrinsics, PlanarDetection, Refinement, Solution, Solutions, Solver};
 
 /// Error metrics of ALGORITHM.md section 1 (the paper's).
 pub mod metrics {

@@ -82,12 +82,79 @@ pub(crate) fn smallest_eigenvector<const D: usize>(
     Some(x)
 }
 
+/// Householder reduction of the symmetric 9x9 `m` to tridiagonal form `Q^T m Q = T` (Q not
+/// formed): the diagonal and the off-diagonal of `T`. Seven reflections; no allocation.
+#[allow(clippy::needless_range_loop)]
+fn tridiagonal9(m: &SMatrix<f64, 9, 9>) -> ([f64; 9], [f64; 8]) {
+    const N: usize = 9;
+    let mut a = [[0.0f64; N]; N];
+    for i in 0..N {
+        for j in 0..N {
+            a[i][j] = 0.5 * (m[(i, j)] + m[(j, i)]);
+        }
+    }
+    let mut off = [0.0f64; N - 1];
+    for k in 0..N - 2 {
+        // Reflection v (entries k+1..N) mapping a[k+1..N][k] onto a multiple of e_{k+1}.
+        let mut scale = 0.0f64;
+        for i in k + 1..N {
+            scale = scale.max(a[i][k].abs());
+        }
+        if scale == 0.0 {
+            off[k] = 0.0;
+            continue;
+        }
+        let mut v = [0.0f64; N];
+        let mut norm2 = 0.0;
+        for i in k + 1..N {
+            v[i] = a[i][k] / scale;
+            norm2 += v[i] * v[i];
+        }
+        let alpha = -norm2.sqrt().copysign(v[k + 1]);
+        off[k] = alpha * scale;
+        v[k + 1] -= alpha;
+        let vnorm2: f64 = (k + 1..N).map(|i| v[i] * v[i]).sum();
+        if !(vnorm2 > 0.0) {
+            continue;
+        }
+        let beta = 2.0 / vnorm2;
+        // Trailing block update: A <- H A H, H = I - beta v v^T (rows/cols k+1..N).
+        let mut p = [0.0f64; N];
+        for i in k + 1..N {
+            let mut s = 0.0;
+            for j in k + 1..N {
+                s += a[i][j] * v[j];
+            }
+            p[i] = beta * s;
+        }
+        let mut vp = 0.0;
+        for i in k + 1..N {
+            vp += v[i] * p[i];
+        }
+        let kk = 0.5 * beta * vp;
+        for i in k + 1..N {
+            p[i] -= kk * v[i];
+        }
+        for i in k + 1..N {
+            for j in k + 1..N {
+                a[i][j] -= v[i] * p[j] + p[i] * v[j];
+            }
+        }
+    }
+    off[N - 2] = a[N - 1][N - 2];
+    let mut diag = [0.0f64; N];
+    for i in 0..N {
+        diag[i] = a[i][i];
+    }
+    (diag, off)
+}
+
 /// Number of eigenvalues of the symmetric `m` strictly below `tau`: Householder
 /// tridiagonalisation (a fixed number of reflections) and the Sturm count of `T - tau I` (the
 /// number of negative pivots of its LDL^T factorisation equals the number of negative
 /// eigenvalues, by Sylvester's law of inertia; the tridiagonal recurrence is backward stable).
 pub(crate) fn count_eigenvalues_below(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
-    let (diag, off) = nalgebra::SymmetricTridiagonal::new(*m).unpack_tridiagonal();
+    let (diag, off) = tridiagonal9(m);
     let mut count = 0;
     let mut q = 1.0f64;
     for i in 0..9 {
@@ -114,9 +181,8 @@ mod tests {
         let q = nalgebra::SMatrix::<f64, 9, 9>::from_fn(|i, j| ((i * 7 + j * 3) as f64).sin())
             .qr()
             .q();
-        let lam = SVector::<f64, 9>::from_column_slice(&[
-            1e-9, 0.05, 0.2, 0.5, 1.0, 2.0, 3.0, 4.0, 5.0,
-        ]);
+        let lam =
+            SVector::<f64, 9>::from_column_slice(&[1e-9, 0.05, 0.2, 0.5, 1.0, 2.0, 3.0, 4.0, 5.0]);
         let m = q * SMatrix::<f64, 9, 9>::from_diagonal(&lam) * q.transpose();
         let v = smallest_eigenvector(&m, m.trace()).unwrap();
         let v1 = q.column(0);
@@ -124,10 +190,39 @@ mod tests {
         assert!((v.dot(&v1).abs() - 1.0).abs() < 1e-8);
         assert_eq!(count_eigenvalues_below(&m, 1e-10 * m.trace()), 1);
         assert_eq!(count_eigenvalues_below(&m, 0.3), 3);
-        let m2 = q * SMatrix::<f64, 9, 9>::from_diagonal(&SVector::<f64, 9>::from_column_slice(&[
-            0.0, 1e-14, 1e-13, 1e-15, 0.0, 2.0, 3.0, 4.0, 5.0,
-        ])) * q.transpose();
+        let m2 =
+            q * SMatrix::<f64, 9, 9>::from_diagonal(&SVector::<f64, 9>::from_column_slice(&[
+                0.0, 1e-14, 1e-13, 1e-15, 0.0, 2.0, 3.0, 4.0, 5.0,
+            ])) * q.transpose();
         assert_eq!(count_eigenvalues_below(&m2, 1e-10 * m2.trace()), 5);
+    }
+
+    #[test]
+    fn eigenvalue_count_matches_a_full_decomposition() {
+        // Random symmetric matrices with eigenvalues spread over decades: the Sturm count below
+        // the midpoint between consecutive eigenvalues must equal the index.
+        let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        for _ in 0..200 {
+            let b = SMatrix::<f64, 9, 9>::from_fn(|_, _| next());
+            let q = b.qr().q();
+            let lam = SVector::<f64, 9>::from_fn(|i, _| {
+                10f64.powf(-8.0 + 1.0 * i as f64) * (1.0 + 0.5 * next())
+            });
+            let m = q * SMatrix::<f64, 9, 9>::from_diagonal(&lam) * q.transpose();
+            let mut sorted: Vec<f64> = lam.iter().copied().collect();
+            sorted.sort_by(f64::total_cmp);
+            for k in 0..8 {
+                let mid = (sorted[k] * sorted[k + 1]).sqrt();
+                assert_eq!(count_eigenvalues_below(&m, mid), k + 1);
+            }
+            assert_eq!(count_eigenvalues_below(&m, 0.5 * sorted[0]), 0);
+        }
     }
 
     #[test]

@@ -77,7 +77,14 @@ fn col_block(v: &SVector<f64, 6>, j: usize) -> Vector3<f64> {
 }
 
 fn sym3_upper(q: &Matrix3<f64>) -> [f64; 6] {
-    [q[(0, 0)], q[(0, 1)], q[(0, 2)], q[(1, 1)], q[(1, 2)], q[(2, 2)]]
+    [
+        q[(0, 0)],
+        q[(0, 1)],
+        q[(0, 2)],
+        q[(1, 1)],
+        q[(1, 2)],
+        q[(2, 2)],
+    ]
 }
 
 /// Real roots of the cubic `c0 + c1 x + c2 x^2 + c3 x^3` for back-substitution.
@@ -242,7 +249,9 @@ fn case4(v: &[SVector<f64, 9>; 4], mut emit: impl FnMut(SVector<f64, 9>)) {
     }
     let perm = perms[pi];
     let mm = mm_of(&perm);
-    let Some(mm_inv) = mm.try_inverse() else { return };
+    let Some(mm_inv) = mm.try_inverse() else {
+        return;
+    };
     // N(k1) per equation e: columns [deg 1, deg 1, deg 2] in the hidden variable (index perm[1]).
     let (o, hv, a, b) = (perm[0], perm[1], perm[2], perm[3]);
     let ncoef = |e: usize, j: usize, n: usize| -> f64 {

@@ -66,6 +66,7 @@ pub(crate) struct ReprojOutcome {
     /// Refined working-frame translation.
     pub t: Vector3<f64>,
     /// Cost `E` at the start (NaN when skipped).
+    #[cfg_attr(not(test), allow(dead_code))]
     pub e0: f64,
     /// Cost `E` at the returned pose (NaN when skipped); never above `e0`.
     pub e: f64,

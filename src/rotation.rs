@@ -51,6 +51,7 @@ pub(crate) fn cgr_to_rotation(s: &Vector3<f64>) -> Matrix3<f64> {
 ///
 /// Singular at 180 degrees (`1 + trace R = 0`: the result is infinite or NaN) and
 /// ill-conditioned near it (trap T1); the refinement never uses it for that reason.
+#[cfg(test)]
 pub(crate) fn rotation_to_cgr(r: &Matrix3<f64>) -> Vector3<f64> {
     Vector3::new(
         r[(2, 1)] - r[(1, 2)],

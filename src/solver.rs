@@ -2,16 +2,14 @@
 
 use crate::accumulate::{self, System};
 use crate::certify;
-use crate::linalg;
 use crate::error::PnpError;
 use crate::frame::{self, WorkingFrame};
+use crate::linalg;
 use crate::nullspace::{self, Candidate, CandidateSource, Candidates, MAX_CANDIDATES};
 use crate::refine::{self, NewtonOptions};
 use crate::reproj::{self, ReprojOptions};
 use arrayvec::ArrayVec;
-use nalgebra::{
-    Isometry3, Matrix3, Point2, Point3, SMatrix, SVector, Translation3, Vector3,
-};
+use nalgebra::{Isometry3, Matrix3, Point2, Point3, SMatrix, SVector, Translation3, Vector3};
 
 /// Which cost the returned pose minimises.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -67,7 +65,10 @@ impl Intrinsics {
     /// Pixel of a normalised image point.
     #[must_use]
     pub fn project(&self, p: &Point2<f64>) -> Point2<f64> {
-        Point2::new(self.fx * p.x + self.skew * p.y + self.cx, self.fy * p.y + self.cy)
+        Point2::new(
+            self.fx * p.x + self.skew * p.y + self.cx,
+            self.fy * p.y + self.cy,
+        )
     }
 }
 
@@ -270,7 +271,9 @@ impl Solver {
         pixels: &[Point2<f64>],
         k: &Intrinsics,
     ) -> Result<Solution, PnpError> {
-        let ok = [k.fx, k.fy, k.cx, k.cy, k.skew].iter().all(|x| x.is_finite())
+        let ok = [k.fx, k.fy, k.cx, k.cy, k.skew]
+            .iter()
+            .all(|x| x.is_finite())
             && k.fx > 0.0
             && k.fy > 0.0;
         if !ok {
@@ -330,10 +333,7 @@ impl Solver {
         }
         // S3.
         let (nonplanar, planar) = match self.planar {
-            PlanarDetection::Auto => (
-                fr.ratio >= NONPLANAR_MIN_RATIO,
-                fr.ratio < PLANAR_MAX_RATIO,
-            ),
+            PlanarDetection::Auto => (fr.ratio >= NONPLANAR_MIN_RATIO, fr.ratio < PLANAR_MAX_RATIO),
             PlanarDetection::Planar => (false, true),
             PlanarDetection::NonPlanar => (true, false),
         };
@@ -460,8 +460,11 @@ impl Solver {
             let v = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
             (v.transpose() * sys.m * v)[(0, 0)]
         };
-        let mut init: ArrayVec<(f64, usize), MAX_CANDIDATES> =
-            cands.iter().enumerate().map(|(i, c)| (f_of(&c.r), i)).collect();
+        let mut init: ArrayVec<(f64, usize), MAX_CANDIDATES> = cands
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (f_of(&c.r), i))
+            .collect();
         init.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         for &(_, i) in &init {
             let c = cands[i];
@@ -554,6 +557,11 @@ impl Ctx<'_> {
     fn finish(&self, m: &Minimum, mode: Refinement, opts: &ReprojOptions) -> Solution {
         let (mut r, mut t) = (m.r, m.t);
         let mut iters = 0;
+        // What S9 already knows at its final pose: the cost (equal to the reprojection error
+        // when the two residual rows are not reweighted) and the depth signs, which it never
+        // changes (a step that moves a point across z = 0 is rejected).
+        let mut s9_error = None;
+        let mut depth_signs_kept = false;
         if mode == Refinement::Reprojection {
             let out = reproj::refine_reprojection(
                 self.world,
@@ -569,20 +577,30 @@ impl Ctx<'_> {
             if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
                 r = out.r;
                 t = out.t;
+                if out.stop != reproj::ReprojStop::SkippedZeroDepth {
+                    depth_signs_kept = true;
+                    if opts.row_weights == (1.0, 1.0) && out.e.is_finite() {
+                        s9_error = Some(out.e);
+                    }
+                }
             }
             iters = out.iterations;
         }
         let rv = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
         let f = (rv.transpose() * self.sys.m * rv)[(0, 0)];
-        let cheirality = if mode == Refinement::Algebraic {
-            m.cheirality.unwrap_or_else(|| {
-                in_front(self.world, self.weights, self.fr, &r, &t, self.fr.n_active)
-            })
-        } else {
-            in_front(self.world, self.weights, self.fr, &r, &t, self.fr.n_active)
+        let cheirality = match m.cheirality {
+            Some(c) if mode == Refinement::Algebraic || depth_signs_kept => c,
+            _ => in_front(self.world, self.weights, self.fr, &r, &t, self.fr.n_active),
         };
         let (rw, tw) = self.fr.to_world(&r, &t);
-        let (e, wsum) = reprojection_error(self.world, self.image, self.weights, &rw, &tw);
+        let (e, wsum) = match s9_error {
+            Some(e) => (
+                e,
+                self.weights
+                    .map_or(self.fr.n_active as f64, |w| w.iter().sum::<f64>()),
+            ),
+            None => reprojection_error(self.world, self.image, self.weights, &rw, &tw),
+        };
         let rot = crate::rotation::to_unit_quaternion(&rw);
         Solution {
             pose: Isometry3::from_parts(Translation3::from(tw), rot),
@@ -593,7 +611,11 @@ impl Ctx<'_> {
                 e
             },
             algebraic_cost: f / self.scale,
-            reprojection_rmse: if wsum > 0.0 { (e / wsum).sqrt() } else { f64::NAN },
+            reprojection_rmse: if wsum > 0.0 {
+                (e / wsum).sqrt()
+            } else {
+                f64::NAN
+            },
             cheirality_ok: cheirality,
             degenerate: self.degenerate,
             planar: m.planar,
