@@ -1,0 +1,162 @@
+//! Command-line interface of the `eopnp` binary.
+
+mod input;
+mod register;
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use eopnp::{Refinement, Solver};
+
+/// Camera pose from 2D-3D point correspondences (EOPnP, Zhou & Kaess 2019, plus a
+/// reprojection-error refinement).
+///
+/// Without arguments, re-estimates the poses of the COLMAP reconstruction bundled with the
+/// repository (data/colmap-boxes) and explains the output.
+///
+/// Exit codes: 0 success, 1 the solver failed on valid input, 2 bad input or arguments.
+#[derive(Debug, Parser)]
+#[command(name = "eopnp", version, about, long_about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Re-estimate every image's pose of a COLMAP model from its 2D-3D correspondences and
+    /// compare with the model's (bundle-adjusted) pose.
+    Register(RegisterArgs),
+    /// Solve one PnP problem from a CSV or JSON file of correspondences; prints the pose as
+    /// JSON.
+    #[command(long_about = SOLVE_HELP)]
+    Solve(SolveArgs),
+}
+
+const SOLVE_HELP: &str =
+    "Solve one PnP problem from a file of correspondences; prints the pose as JSON.
+
+Input formats (chosen by the extension .csv or .json; otherwise by content):
+
+  CSV: a header line `x,y,X,Y,Z`, then one correspondence per line: pixel x, pixel y and the
+  3D point X, Y, Z. Blank lines and lines starting with # are ignored. The camera is given with
+  --camera.
+
+  JSON: {\"camera\": {\"model\": \"SIMPLE_RADIAL\", \"params\": [1245.65, 600, 800, 0.0577]},
+         \"points2d\": [[x, y], ...], \"points3d\": [[X, Y, Z], ...]}
+  (--camera, if given, replaces the file's camera.)
+
+Camera models and parameter orders are COLMAP's: SIMPLE_PINHOLE f,cx,cy; PINHOLE fx,fy,cx,cy;
+SIMPLE_RADIAL f,cx,cy,k; RADIAL f,cx,cy,k1,k2; OPENCV fx,fy,cx,cy,k1,k2,p1,p2; OPENCV_FISHEYE
+fx,fy,cx,cy,k1,k2,k3,k4; FULL_OPENCV fx,fy,cx,cy,k1,k2,p1,p2,k3,k4,k5,k6; SIMPLE_RADIAL_FISHEYE
+f,cx,cy,k; RADIAL_FISHEYE f,cx,cy,k1,k2.
+
+Output: rotation (matrix, row-major, and quaternion w,x,y,z) and translation of the
+world-to-camera pose x_cam = R X + t, number of points and inliers, the minimised cost and the
+reprojection RMSE in pixels.";
+
+/// Options of `register`.
+#[derive(Debug, Args)]
+pub(crate) struct RegisterArgs {
+    /// COLMAP model directory: cameras, images and points3D in text (.txt) or binary (.bin)
+    /// format (binary is used if both are present).
+    model_dir: PathBuf,
+    #[command(flatten)]
+    opts: RegisterOptions,
+}
+
+/// Estimation options shared by `register` and the no-argument default run.
+#[derive(Debug, Args, Clone, Default)]
+pub(crate) struct RegisterOptions {
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Use the paper's algebraic cost only (no reprojection-error refinement).
+    #[arg(long)]
+    algebraic: bool,
+    // Robust estimation (`--ransac`, `--outliers FRACTION --seed S`) goes here; it plugs into
+    // `register::estimate`.
+}
+
+impl RegisterOptions {
+    fn solver(&self) -> Solver {
+        if self.algebraic {
+            Solver::default().refinement(Refinement::Algebraic)
+        } else {
+            Solver::default()
+        }
+    }
+}
+
+/// Options of `solve`.
+#[derive(Debug, Args)]
+struct SolveArgs {
+    /// Correspondence file (.csv or .json).
+    file: PathBuf,
+    /// Camera as "MODEL P1 P2 ...", e.g. "SIMPLE_RADIAL 1245.65 600 800 0.0577" (COLMAP's model
+    /// names and parameter orders). Required for CSV input.
+    #[arg(long, allow_hyphen_values = true)]
+    camera: Option<String>,
+    /// Use the paper's algebraic cost only (no reprojection-error refinement).
+    #[arg(long)]
+    algebraic: bool,
+}
+
+/// A failure: the message for stderr and the exit code.
+#[derive(Debug)]
+pub struct Failure {
+    /// What went wrong (file, line and reason for input errors).
+    pub message: String,
+    /// Process exit code: 1 solver failure, 2 bad input.
+    pub code: u8,
+}
+
+impl Failure {
+    pub(crate) fn input(message: impl Into<String>) -> Self {
+        Failure {
+            message: message.into(),
+            code: 2,
+        }
+    }
+
+    pub(crate) fn solver(message: impl Into<String>) -> Self {
+        Failure {
+            message: message.into(),
+            code: 1,
+        }
+    }
+}
+
+/// Writes `text` to stdout; a closed pipe (e.g. `| head`) is not an error.
+pub(crate) fn emit(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) => Err(Failure::solver(format!("cannot write output: {e}"))),
+    }
+}
+
+/// The bundled model (a copy of `shared/data/colmap-boxes`).
+fn bundled_model() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/colmap-boxes")
+}
+
+/// Runs the command line.
+pub fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        None => register::run(&bundled_model(), &RegisterOptions::default(), true),
+        Some(Command::Register(a)) => register::run(&a.model_dir, &a.opts, false),
+        Some(Command::Solve(a)) => {
+            let solver = if a.algebraic {
+                Solver::default().refinement(Refinement::Algebraic)
+            } else {
+                Solver::default()
+            };
+            let problem = input::read_problem(&a.file, a.camera.as_deref())?;
+            let json = input::solve(&problem, &solver)?;
+            emit(&json)
+        }
+    }
+}

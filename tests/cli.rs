@@ -1,0 +1,219 @@
+//! End-to-end tests of the `eopnp` binary (feature `cli`).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use eopnp::colmap::read_model;
+
+fn eopnp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_eopnp"))
+        .args(args)
+        .output()
+        .expect("runs the eopnp binary")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(name)
+}
+
+fn scratch_file(name: &str, contents: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, contents).unwrap();
+    p
+}
+
+/// Asserts a clean input-error exit: code 2, the message on stderr, no panic.
+fn assert_input_error(o: &Output, needles: &[&str]) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "expected {n:?} in: {err}");
+    }
+}
+
+#[test]
+fn no_arguments_registers_the_bundled_model_and_explains() {
+    let o = eopnp(&[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("Columns:"), "{out}");
+    assert!(out.contains("6 of 6 images registered"), "{out}");
+    assert!(
+        out.contains("WhatsApp Image 2020-04-24 at 5.12.56 PM (1).jpeg"),
+        "{out}"
+    );
+}
+
+#[test]
+fn register_json_on_the_binary_copy() {
+    let dir = data("colmap-boxes-bin");
+    let o = eopnp(&["register", dir.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("valid JSON");
+    assert_eq!(v["format"], "binary");
+    let images = v["images"].as_array().unwrap();
+    assert_eq!(images.len(), 6);
+    for im in images {
+        // The issue's default-mode bounds (see tests/colmap.rs).
+        assert!(im["rotation_error_deg"].as_f64().unwrap() <= 0.01, "{im}");
+        assert!(
+            im["translation_error_pct"].as_f64().unwrap() <= 0.05,
+            "{im}"
+        );
+        assert_eq!(im["n"], im["inliers"]);
+    }
+}
+
+/// Image 2's correspondences as CSV and JSON, and its camera as a `--camera` string.
+fn image2_files() -> (PathBuf, PathBuf, String, nalgebra::Matrix3<f64>) {
+    let m = read_model(data("colmap-boxes")).unwrap();
+    let img = &m.images[&2];
+    let cam = &m.cameras[&img.camera_id];
+    let (world, pixels) = m.correspondences(2);
+    let mut csv = String::from("x,y,X,Y,Z\n");
+    for (w, p) in world.iter().zip(&pixels) {
+        csv.push_str(&format!("{},{},{},{},{}\n", p.x, p.y, w.x, w.y, w.z));
+    }
+    let camera = format!(
+        "{} {}",
+        cam.model().name(),
+        cam.params()
+            .iter()
+            .map(f64::to_string)
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    let json = serde_json::json!({
+        "camera": { "model": cam.model().name(), "params": cam.params() },
+        "points2d": pixels.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>(),
+        "points3d": world.iter().map(|w| [w.x, w.y, w.z]).collect::<Vec<_>>(),
+    });
+    (
+        scratch_file("img2.csv", &csv),
+        scratch_file("img2.json", &json.to_string()),
+        camera,
+        img.pose().0,
+    )
+}
+
+fn rotation_of(v: &serde_json::Value) -> nalgebra::Matrix3<f64> {
+    let r = &v["rotation"];
+    nalgebra::Matrix3::from_fn(|i, j| r[i][j].as_f64().unwrap())
+}
+
+#[test]
+fn solve_csv_and_json_give_the_model_pose() {
+    let (csv, json, camera, r_model) = image2_files();
+    for out in [
+        eopnp(&["solve", csv.to_str().unwrap(), "--camera", &camera]),
+        eopnp(&["solve", json.to_str().unwrap()]),
+    ] {
+        assert!(out.status.success(), "{}", stderr(&out));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+        let r = rotation_of(&v);
+        // Same pixel weighting as `register`: the issue's default-mode bound.
+        assert!(
+            eopnp::metrics::rotation_error_deg(&r, &r_model) <= 0.01,
+            "{v}"
+        );
+        assert_eq!(v["quaternion_wxyz"].as_array().unwrap().len(), 4);
+        assert_eq!(v["translation"].as_array().unwrap().len(), 3);
+        assert!(v["reprojection_rmse_px"].as_f64().unwrap() < 2.0, "{v}");
+        assert!(v["cost"].as_f64().unwrap().is_finite());
+    }
+}
+
+#[test]
+fn bad_csv_reports_line_and_reason() {
+    let p = scratch_file("bad1.csv", "x,y,X,Y,Z\n1,2,3,4,5\n1,2,3,4\n");
+    let o = eopnp(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--camera",
+        "SIMPLE_PINHOLE 1000 600 800",
+    ]);
+    assert_input_error(&o, &["bad1.csv:3:", "5 comma-separated"]);
+    let p = scratch_file("bad2.csv", "x,y,X,Y,Z\n1,2,abc,4,5\n");
+    let o = eopnp(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--camera",
+        "SIMPLE_PINHOLE 1000 600 800",
+    ]);
+    assert_input_error(&o, &["bad2.csv:2:", "abc"]);
+    let p = scratch_file("bad3.csv", "u,v\n");
+    let o = eopnp(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--camera",
+        "SIMPLE_PINHOLE 1000 600 800",
+    ]);
+    assert_input_error(&o, &["bad3.csv:1:", "x,y,X,Y,Z"]);
+    // No camera for a CSV file.
+    let p = scratch_file("ok.csv", "x,y,X,Y,Z\n");
+    let o = eopnp(&["solve", p.to_str().unwrap()]);
+    assert_input_error(&o, &["--camera"]);
+}
+
+#[test]
+fn bad_json_reports_line_and_reason() {
+    let p = scratch_file(
+        "bad1.json",
+        "{\"camera\": {\"model\": \"SIMPLE_RADIAL\", \"params\": [1, 2, 3, 4]},\n \
+         \"points2d\": [[1, 2], [3]],\n \"points3d\": []}\n",
+    );
+    let o = eopnp(&["solve", p.to_str().unwrap()]);
+    assert_input_error(&o, &["bad1.json:2:", "length"]);
+    let p = scratch_file(
+        "bad2.json",
+        "{\"camera\": {\"model\": \"FANCY\", \"params\": [1]},\n \"points2d\": [],\n \
+         \"points3d\": []}\n",
+    );
+    let o = eopnp(&["solve", p.to_str().unwrap()]);
+    assert_input_error(&o, &["bad2.json:1:", "FANCY"]);
+    let p = scratch_file(
+        "bad3.json",
+        "{\"points2d\": [[1, 2]],\n \"points3d\": [[1, 2, \"x\"]]}",
+    );
+    let o = eopnp(&["solve", p.to_str().unwrap()]);
+    assert_input_error(&o, &["bad3.json:2:"]);
+}
+
+#[test]
+fn unsupported_camera_and_missing_model_are_input_errors() {
+    let p = scratch_file("cam.csv", "x,y,X,Y,Z\n");
+    let o = eopnp(&["solve", p.to_str().unwrap(), "--camera", "FOV 1 2 3 4 5"]);
+    assert_input_error(&o, &["FOV"]);
+    let o = eopnp(&["register", env!("CARGO_TARGET_TMPDIR")]);
+    assert_input_error(&o, &["not a COLMAP model"]);
+}
+
+#[test]
+fn malformed_model_reports_file_and_line() {
+    let dir =
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-model-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["cameras.txt", "images.txt", "points3D.txt"] {
+        std::fs::copy(data("colmap-boxes").join(f), dir.join(f)).unwrap();
+    }
+    std::fs::write(
+        dir.join("cameras.txt"),
+        "1 SIMPLE_RADIAL 1200 1600 1245.65 600 800 0.05\n2 SIMPLE_RADIAL 1200\n",
+    )
+    .unwrap();
+    let o = eopnp(&["register", dir.to_str().unwrap()]);
+    assert_input_error(&o, &["cameras.txt:2:", "truncated"]);
+}

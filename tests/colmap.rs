@@ -1,0 +1,350 @@
+//! Real-data checks on the bundled COLMAP reconstruction (`data/colmap-boxes`, text format, and
+//! its binary copy `data/colmap-boxes-bin` written by `write_model_binary`), and malformed-file
+//! handling of the model readers.
+
+use std::path::{Path, PathBuf};
+
+use eopnp::colmap::{
+    read_model, read_model_binary, read_model_text, register_image, write_model_binary, Location,
+    Model, ModelError,
+};
+use eopnp::{Refinement, Solver};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(name)
+}
+
+fn text_model() -> Model {
+    read_model_text(data("colmap-boxes")).expect("bundled text model reads")
+}
+
+/// A fresh scratch directory under Cargo's per-test temporary directory.
+fn scratch(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("colmap-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("create scratch dir");
+    d
+}
+
+#[test]
+fn bundled_model_has_the_expected_content() {
+    let m = text_model();
+    assert_eq!(m.cameras.len(), 6);
+    assert_eq!(m.images.len(), 6);
+    assert_eq!(m.points.len(), 3154);
+    // Names contain spaces: everything after CAMERA_ID.
+    assert_eq!(
+        m.images[&1].name,
+        "WhatsApp Image 2020-04-24 at 5.12.56 PM (1).jpeg"
+    );
+    assert_eq!(m.images[&1].camera_id, 3);
+    for id in m.images.keys() {
+        let (w, p) = m.correspondences(*id);
+        assert_eq!(w.len(), p.len());
+        assert!((1500..2300).contains(&w.len()), "image {id}: {}", w.len());
+    }
+}
+
+/// Default mode (reprojection refinement, pixel-weighted): every image, all correspondences,
+/// against COLMAP's bundle-adjusted pose. The bounds are the issue's acceptance criteria:
+/// 0.01 degrees (max column angle) and 0.05 % translation. (Measured: <= 0.0010 degrees and
+/// <= 0.0025 %.)
+#[test]
+fn default_mode_reproduces_colmap_poses() {
+    let m = text_model();
+    for id in m.images.keys() {
+        let r = register_image(&m, *id, &Solver::default()).expect("registers");
+        assert_eq!(r.skipped, 0, "image {id}: every observation undistorts");
+        assert!(
+            r.rotation_error_deg <= 0.01,
+            "image {id}: rotation differs by {} degrees",
+            r.rotation_error_deg
+        );
+        assert!(
+            r.translation_error_pct <= 0.05,
+            "image {id}: translation differs by {} %",
+            r.translation_error_pct
+        );
+        assert!(r.solution.cheirality_ok);
+        // Both poses minimise the same pixel error: the RMS reprojection errors agree to
+        // 0.1 % (measured: 3e-7 relative).
+        assert!(
+            (r.rmse_px - r.model_rmse_px).abs() <= 1e-3 * r.model_rmse_px,
+            "image {id}: rmse {} px vs COLMAP's {} px",
+            r.rmse_px,
+            r.model_rmse_px
+        );
+    }
+}
+
+/// Algebraic mode (the paper's cost, no reprojection refinement): the issue's bound of 0.05
+/// degrees. (Measured: <= 0.013 degrees.) The issue sets no translation bound for this mode;
+/// 0.1 % is a regression guard (measured <= 0.055 %).
+#[test]
+fn algebraic_mode_is_close_to_colmap_poses() {
+    let m = text_model();
+    let solver = Solver::default().refinement(Refinement::Algebraic);
+    for id in m.images.keys() {
+        let r = register_image(&m, *id, &solver).expect("registers");
+        assert!(
+            r.rotation_error_deg <= 0.05,
+            "image {id}: rotation differs by {} degrees",
+            r.rotation_error_deg
+        );
+        assert!(
+            r.translation_error_pct <= 0.1,
+            "image {id}: translation differs by {} %",
+            r.translation_error_pct
+        );
+    }
+}
+
+#[test]
+fn binary_copy_reads_to_the_identical_model() {
+    let text = text_model();
+    let bin = read_model_binary(data("colmap-boxes-bin")).expect("bundled binary model reads");
+    assert_eq!(text, bin);
+    // Auto-detection picks each format.
+    assert_eq!(read_model(data("colmap-boxes-bin")).unwrap(), text);
+    assert_eq!(read_model(data("colmap-boxes")).unwrap(), text);
+}
+
+#[test]
+fn binary_writer_round_trips_and_matches_the_bundled_copy() {
+    let text = text_model();
+    let dir = scratch("roundtrip");
+    write_model_binary(&text, &dir).unwrap();
+    assert_eq!(read_model_binary(&dir).unwrap(), text);
+    for f in ["cameras.bin", "images.bin", "points3D.bin"] {
+        assert_eq!(
+            std::fs::read(dir.join(f)).unwrap(),
+            std::fs::read(data("colmap-boxes-bin").join(f)).unwrap(),
+            "{f} differs from the bundled binary copy"
+        );
+    }
+    // With both formats present, binary is preferred (and gives the same model).
+    for f in ["cameras.txt", "images.txt", "points3D.txt"] {
+        std::fs::copy(data("colmap-boxes").join(f), dir.join(f)).unwrap();
+    }
+    assert_eq!(
+        eopnp::colmap::detect_format(&dir).unwrap(),
+        eopnp::colmap::ModelFormat::Binary
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The bundled text model with one file replaced by `contents`.
+fn text_model_with(name: &str, file: &str, contents: &[u8]) -> Result<Model, ModelError> {
+    let dir = scratch(name);
+    for f in ["cameras.txt", "images.txt", "points3D.txt"] {
+        std::fs::copy(data("colmap-boxes").join(f), dir.join(f)).unwrap();
+    }
+    std::fs::write(dir.join(file), contents).unwrap();
+    let r = read_model(&dir);
+    let _ = std::fs::remove_dir_all(&dir);
+    r
+}
+
+/// `images.txt` with line `line` (1-based) replaced by `f(old line)`.
+fn images_with_line(line: usize, f: impl Fn(&str) -> String) -> Vec<u8> {
+    let s = std::fs::read_to_string(data("colmap-boxes").join("images.txt")).unwrap();
+    let mut out = String::new();
+    for (i, l) in s.lines().enumerate() {
+        out.push_str(&if i + 1 == line { f(l) } else { l.to_string() });
+        out.push('\n');
+    }
+    out.into_bytes()
+}
+
+#[test]
+fn truncated_text_line_reports_its_line() {
+    // Line 6 holds image 1's observations; cut it in the middle of a triple.
+    let bytes = images_with_line(6, |l| {
+        let toks: Vec<&str> = l.split_whitespace().collect();
+        toks[..toks.len() - 1].join(" ")
+    });
+    let e = text_model_with("trunc-line", "images.txt", &bytes).unwrap_err();
+    assert_eq!(e.location, Location::Line(6), "{e}");
+    assert!(e.file.ends_with("images.txt"));
+    assert!(e.reason.contains("truncated"), "{e}");
+    // A header line cut before the name.
+    let bytes = images_with_line(5, |l| {
+        l.split_whitespace().take(6).collect::<Vec<_>>().join(" ")
+    });
+    let e = text_model_with("trunc-header", "images.txt", &bytes).unwrap_err();
+    assert_eq!(e.location, Location::Line(5), "{e}");
+    assert!(e.to_string().contains("images.txt:5:"), "{e}");
+}
+
+#[test]
+fn bad_number_reports_its_line() {
+    let bytes = images_with_line(7, |l| l.replacen('.', "x", 1));
+    let e = text_model_with("bad-number", "images.txt", &bytes).unwrap_err();
+    assert_eq!(e.location, Location::Line(7), "{e}");
+    assert!(e.reason.contains("bad"), "{e}");
+    let points = b"1 0.5 1e999 2 1 2 3 0.1 1 0\n";
+    let e = text_model_with("bad-points", "points3D.txt", points).unwrap_err();
+    assert_eq!(e.location, Location::Line(1), "{e}");
+}
+
+#[test]
+fn unknown_camera_model_is_named_with_its_line() {
+    let cams = "# comment\n# comment\n1 SIMPLE_RADIAL 1200 1600 1245.65 600 800 0.0577\n\
+                2 FANCY_LENS 1200 1600 1 2 3\n";
+    let e = text_model_with("bad-model", "cameras.txt", cams.as_bytes()).unwrap_err();
+    assert_eq!(e.location, Location::Line(4), "{e}");
+    assert!(e.reason.contains("FANCY_LENS"), "{e}");
+    let cams = "1 SIMPLE_RADIAL 1200 1600 1245.65 600 800\n";
+    let e = text_model_with("bad-params", "cameras.txt", cams.as_bytes()).unwrap_err();
+    assert_eq!(e.location, Location::Line(1), "{e}");
+    assert!(e.reason.contains("f, cx, cy, k"), "{e}");
+}
+
+#[test]
+fn dangling_references_are_errors() {
+    // Only camera 1: image 1 uses camera 3.
+    let cams = "1 SIMPLE_RADIAL 1200 1600 1245.65 600 800 0.0577\n";
+    let e = text_model_with("no-camera", "cameras.txt", cams.as_bytes()).unwrap_err();
+    assert!(e.reason.contains("camera 3"), "{e}");
+    assert!(matches!(e.location, Location::Line(_)), "{e}");
+}
+
+/// A copy of the bundled binary model with `file` truncated to `len` bytes (or patched).
+fn binary_model_with(
+    name: &str,
+    file: &str,
+    edit: impl Fn(&mut Vec<u8>),
+) -> Result<Model, ModelError> {
+    let dir = scratch(name);
+    for f in ["cameras.bin", "images.bin", "points3D.bin"] {
+        std::fs::copy(data("colmap-boxes-bin").join(f), dir.join(f)).unwrap();
+    }
+    let mut b = std::fs::read(dir.join(file)).unwrap();
+    edit(&mut b);
+    std::fs::write(dir.join(file), &b).unwrap();
+    let r = read_model(&dir);
+    let _ = std::fs::remove_dir_all(&dir);
+    r
+}
+
+#[test]
+fn truncated_binary_reports_the_offset() {
+    for file in ["cameras.bin", "images.bin", "points3D.bin"] {
+        let full = std::fs::read(data("colmap-boxes-bin").join(file))
+            .unwrap()
+            .len();
+        for cut in [0, 5, 8, 20, full / 3, full - 1] {
+            let e = binary_model_with("trunc-bin", file, |b| b.truncate(cut)).unwrap_err();
+            assert!(e.file.ends_with(file), "{e}");
+            match e.location {
+                Location::Offset(o) => assert!(o as usize <= cut, "{file} cut at {cut}: {e}"),
+                other => panic!("{file} cut at {cut}: expected an offset, got {other:?}: {e}"),
+            }
+        }
+    }
+    // A cut inside the second parameter of the fourth camera (records of 4 + 4 + 8 + 8 + 4 * 8
+    // = 56 bytes after the 8-byte count) is reported at the start of that parameter.
+    let param = 8 + 3 * 56 + 24 + 8;
+    let e = binary_model_with("trunc-param", "cameras.bin", |b| b.truncate(param + 3)).unwrap_err();
+    assert_eq!(e.location, Location::Offset(param as u64), "{e}");
+    assert!(
+        e.reason.contains("truncated") && e.reason.contains("camera parameter"),
+        "{e}"
+    );
+}
+
+#[test]
+fn huge_binary_counts_are_rejected_without_allocating() {
+    // The number of 2D points of the first image claims 10^12 elements. Its offset: 8 (count)
+    // + 64 (id, pose, camera id) + name + NUL.
+    let m = text_model();
+    let name_len = m.images.values().next().unwrap().name.len();
+    let at = 8 + 64 + name_len + 1;
+    let e = binary_model_with("huge", "images.bin", |b| {
+        b[at..at + 8].copy_from_slice(&1_000_000_000_000u64.to_le_bytes());
+    })
+    .unwrap_err();
+    assert_eq!(e.location, Location::Offset(at as u64), "{e}");
+    // And the file-level count.
+    let e = binary_model_with("huge-top", "points3D.bin", |b| {
+        b[..8].copy_from_slice(&u64::MAX.to_le_bytes());
+    })
+    .unwrap_err();
+    assert_eq!(e.location, Location::Offset(0), "{e}");
+    // An unsupported model id is named.
+    let e = binary_model_with("bad-model-id", "cameras.bin", |b| {
+        b[12..16].copy_from_slice(&7i32.to_le_bytes());
+    })
+    .unwrap_err();
+    assert!(e.reason.contains("FOV"), "{e}");
+    assert_eq!(e.location, Location::Offset(8), "{e}");
+}
+
+/// Regenerates `data/colmap-boxes-bin` from the text model with the crate's binary writer:
+/// `cargo test --test colmap -- --ignored regenerate_binary_copy`.
+#[test]
+#[ignore = "writes into data/; run by hand after changing the bundled text model"]
+fn regenerate_binary_copy() {
+    let dir = data("colmap-boxes-bin");
+    std::fs::create_dir_all(&dir).unwrap();
+    write_model_binary(&text_model(), &dir).unwrap();
+}
+
+/// Random corruptions (byte flips, truncations, inserted bytes) of every model file never
+/// panic: each read returns a model or an error. Deterministic (fixed seed), 50 per file (a smoke test; real fuzzing is separate).
+#[test]
+fn random_corruptions_never_panic() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    let cases = [
+        ("colmap-boxes", "cameras.txt"),
+        ("colmap-boxes", "images.txt"),
+        ("colmap-boxes", "points3D.txt"),
+        ("colmap-boxes-bin", "cameras.bin"),
+        ("colmap-boxes-bin", "images.bin"),
+        ("colmap-boxes-bin", "points3D.bin"),
+    ];
+    let dir = scratch("fuzz");
+    for (src, file) in cases {
+        let names: Vec<String> = std::fs::read_dir(data(src))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        for n in &names {
+            std::fs::copy(data(src).join(n), dir.join(n)).unwrap();
+        }
+        let orig = std::fs::read(data(src).join(file)).unwrap();
+        for _ in 0..50 {
+            let mut b = orig.clone();
+            match rng.random_range(0..3) {
+                0 => {
+                    for _ in 0..rng.random_range(1..4) {
+                        // Bias towards the header region, where counts and ids live.
+                        let hi = if rng.random_bool(0.5) {
+                            b.len().min(200)
+                        } else {
+                            b.len()
+                        };
+                        let i = rng.random_range(0..hi);
+                        b[i] = rng.random();
+                    }
+                }
+                1 => b.truncate(rng.random_range(0..b.len())),
+                _ => {
+                    let i = rng.random_range(0..b.len());
+                    b.insert(i, rng.random());
+                }
+            }
+            std::fs::write(dir.join(file), &b).unwrap();
+            // Must return (Ok or Err), never panic.
+            let _ = read_model(&dir);
+        }
+        for n in &names {
+            std::fs::remove_file(dir.join(n)).unwrap();
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
