@@ -42,6 +42,8 @@
 #![warn(missing_docs)]
 
 mod accumulate;
+#[doc(hidden)]
+pub mod bench_hooks;
 pub mod camera;
 mod certify;
 pub mod colmap;

@@ -1,0 +1,131 @@
+//! Thin wrappers around internal pipeline stages, for the criterion benches (`benches/stages.rs`)
+//! only. Not a stable API: the signatures follow the internals and may change at any time.
+//!
+//! Each hook does exactly one stage so that a bench measures that stage alone; the inputs of a
+//! stage are produced once, outside the timed closure, by [`prepare`].
+
+use crate::accumulate::{self, System};
+use crate::frame::{self, WorkingFrame};
+use crate::nullspace::{self, Candidates};
+use crate::refine::{self, NewtonOptions};
+use crate::reproj::{self, ReprojOptions};
+use nalgebra::{Matrix3, Point2, Point3, SMatrix, SVector, Vector3};
+
+/// Hard bound on the symmetric eigen-decomposition sweeps (as in the solver).
+const EIGEN_MAX_ITER: usize = 1000;
+
+/// The intermediates of one problem that the later stages take as input.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    fr: WorkingFrame,
+    sys: System,
+    m45: [f64; 45],
+    v4: [SVector<f64, 9>; 4],
+    start: Matrix3<f64>,
+    refined: Matrix3<f64>,
+    t: Vector3<f64>,
+}
+
+/// S1 + S2: working frame and accumulation of `M` (9x9) and `G`. `None` on invalid input.
+#[must_use]
+pub fn accumulate(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<SMatrix<f64, 9, 9>> {
+    let fr = frame::working_frame(world, image, None, true).ok()?;
+    let acc = accumulate::accumulate(world, image, None, &fr);
+    acc.system(false).map(|s| s.m)
+}
+
+/// The 9x9 symmetric eigen-decomposition of S3 (eigenvalues, eigenvectors), as the solver
+/// calls it.
+#[must_use]
+pub fn eigen9(m: &SMatrix<f64, 9, 9>) -> Option<(SVector<f64, 9>, SMatrix<f64, 9, 9>)> {
+    nalgebra::SymmetricEigen::try_new(*m, f64::EPSILON, EIGEN_MAX_ITER)
+        .map(|e| (e.eigenvalues, e.eigenvectors))
+}
+
+/// The fast path's eigenvector of the smallest eigenvalue of `M` (inverse iteration,
+/// `crate::linalg::smallest_eigenvector`), as the solver calls it with `scale = trace(M)`.
+#[must_use]
+pub fn smallest_eigenvector9(m: &SMatrix<f64, 9, 9>, scale: f64) -> Option<SVector<f64, 9>> {
+    crate::linalg::smallest_eigenvector(m, scale)
+}
+
+/// The degeneracy test's count of eigenvalues of `M` below `tau` (Sturm count,
+/// `crate::linalg::count_eigenvalues_below`).
+#[must_use]
+pub fn count_eigenvalues_below9(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
+    crate::linalg::count_eigenvalues_below(m, tau)
+}
+
+/// Every intermediate of one problem (S1-S6, non-planar branch): computed once, outside the
+/// timed code. `None` on invalid input.
+#[must_use]
+pub fn prepare(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Prepared> {
+    let fr = frame::working_frame(world, image, None, true).ok()?;
+    let sys = accumulate::accumulate(world, image, None, &fr).system(false)?;
+    let (vals, vecs) = eigen9(&sys.m)?;
+    let mut order: [usize; 9] = std::array::from_fn(|i| i);
+    order.sort_by(|&a, &b| vals[a].total_cmp(&vals[b]));
+    let v4: [SVector<f64, 9>; 4] = std::array::from_fn(|i| vecs.column(order[i]).into_owned());
+    let v1: [f64; 9] = v4[0].into();
+    let start = crate::rotation::candidate_to_rotation(&v1)?;
+    let m45 = accumulate::m_upper(&sys.m);
+    let refined = refine::refine_so3(&m45, sys.trace, &start, &NewtonOptions::default()).r;
+    let rv = SVector::<f64, 9>::from_row_slice(refined.transpose().as_slice());
+    let t = sys.g * rv;
+    Some(Prepared {
+        fr,
+        sys,
+        m45,
+        v4,
+        start,
+        refined,
+        t,
+    })
+}
+
+impl Prepared {
+    /// `M` of the problem.
+    #[must_use]
+    pub fn m(&self) -> &SMatrix<f64, 9, 9> {
+        &self.sys.m
+    }
+
+    /// `trace(M)`, the solver's scale.
+    #[must_use]
+    pub fn scale(&self) -> f64 {
+        self.sys.trace
+    }
+}
+
+/// S4, all non-planar null-space cases (1-4) from the four smallest eigenvectors; returns the
+/// number of candidates.
+#[must_use]
+pub fn nonplanar_candidates(p: &Prepared) -> usize {
+    let mut cands = Candidates::new();
+    nullspace::nonplanar_candidates(&p.v4, &mut cands);
+    cands.len()
+}
+
+/// S6: damped Newton on SO(3) from the case-1 start (default options); returns f.
+#[must_use]
+pub fn newton(p: &Prepared) -> f64 {
+    refine::refine_so3(&p.m45, p.sys.trace, &p.start, &NewtonOptions::default()).f
+}
+
+/// S9: Levenberg-Marquardt on the reprojection error from the refined case-1 minimum (default
+/// options); returns the final cost.
+#[must_use]
+pub fn reprojection(world: &[Point3<f64>], image: &[Point2<f64>], p: &Prepared) -> f64 {
+    reproj::refine_reprojection(
+        world,
+        image,
+        None,
+        &p.fr.c,
+        p.fr.d,
+        &p.fr.rw,
+        &p.refined,
+        &p.t,
+        &ReprojOptions::default(),
+    )
+    .e
+}
