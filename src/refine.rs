@@ -237,7 +237,13 @@ pub(crate) fn refine_so3_until(
     let mut stopped_early = false;
     for it in 0..opts.max_iterations {
         iterations = it + 1;
-        let shift = (-min_eigenvalue_sym3(&h)).max(0.0);
+        // shift = max(0, -lambda_min(H)); a successful Cholesky of H proves lambda_min > 0
+        // (shift 0), so the eigenvalue is only computed for an indefinite H.
+        let shift = if cholesky3(&h).is_some() {
+            0.0
+        } else {
+            (-min_eigenvalue_sym3(&h)).max(0.0)
+        };
         let gnorm = g.norm();
         let mut accepted = None;
         for _ in 0..MAX_DAMPING_STEPS {
