@@ -52,6 +52,8 @@ mod frame;
 pub mod kernels;
 mod linalg;
 mod nullspace;
+pub mod p3p;
+pub mod ransac;
 mod refine;
 mod reproj;
 pub mod roots;

@@ -67,7 +67,7 @@ pub(crate) struct RegisterArgs {
 }
 
 /// Estimation options shared by `register` and the no-argument default run.
-#[derive(Debug, Args, Clone, Default)]
+#[derive(Debug, Args, Clone)]
 pub(crate) struct RegisterOptions {
     /// Print JSON instead of a table.
     #[arg(long)]
@@ -75,11 +75,61 @@ pub(crate) struct RegisterOptions {
     /// Use the paper's algebraic cost only (no reprojection-error refinement).
     #[arg(long)]
     algebraic: bool,
-    // Robust estimation (`--ransac`, `--outliers FRACTION --seed S`) goes here; it plugs into
-    // `register::estimate`.
+    /// Robust estimation: RANSAC with P3P hypotheses, EOPnP local optimisation and final fit
+    /// (`eopnp::ransac`). The inliers column is RANSAC's inlier count.
+    #[arg(long)]
+    ransac: bool,
+    /// RANSAC inlier threshold on the pixel reprojection error.
+    #[arg(long, value_name = "PX", default_value_t = 4.0)]
+    threshold: f64,
+    /// Replace this fraction (0 to 1) of each image's correspondences by wrong 3D points
+    /// (random points of the model's cloud plus Gaussian noise of 0.5 model units, seeded by
+    /// --seed and the image id), to test robustness. The errors of EOPnP on the true
+    /// correspondences alone (the floor) are reported alongside.
+    #[arg(long, value_name = "FRACTION")]
+    outliers: Option<f64>,
+    /// Seed of the outlier injection and of RANSAC's sampling.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    seed: u64,
+    /// Write each image's problem (camera, pixels, 3D points with the injected outliers, true
+    /// correspondence mask, model pose) as JSON to FILE, e.g. for scripts/compare_poselib.py.
+    #[arg(long, value_name = "FILE")]
+    export_problems: Option<PathBuf>,
+}
+
+impl Default for RegisterOptions {
+    fn default() -> Self {
+        RegisterOptions {
+            json: false,
+            algebraic: false,
+            ransac: false,
+            threshold: 4.0,
+            outliers: None,
+            seed: 0,
+            export_problems: None,
+        }
+    }
 }
 
 impl RegisterOptions {
+    /// Checks the values clap cannot.
+    fn validate(&self) -> Result<(), Failure> {
+        if !(self.threshold.is_finite() && self.threshold > 0.0) {
+            return Err(Failure::input(format!(
+                "--threshold must be a positive number of pixels, got {}",
+                self.threshold
+            )));
+        }
+        if let Some(f) = self.outliers {
+            if !(0.0..=1.0).contains(&f) {
+                return Err(Failure::input(format!(
+                    "--outliers must be a fraction between 0 and 1, got {f}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
     fn solver(&self) -> Solver {
         if self.algebraic {
             Solver::default().refinement(Refinement::Algebraic)

@@ -6,6 +6,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use eopnp::colmap::{self, Model, RegisterError, Registration};
+use eopnp::ransac::{self, ImageProblem, Outliers, Ransac, RansacStats};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
@@ -14,26 +15,169 @@ use super::{emit, Failure, RegisterOptions};
 /// Show the progress bar once a run has taken this long (short runs never show one).
 const PROGRESS_AFTER: Duration = Duration::from_millis(500);
 
-/// One image's pose estimate. Robust estimation (part B: RANSAC, injected outliers) extends
-/// this function; the table and JSON output already carry the inlier count.
+/// Robust-mode extras of one image.
+#[derive(Clone, Debug)]
+struct Extra {
+    /// RANSAC statistics (`None` without `--ransac`).
+    stats: Option<RansacStats>,
+    /// Correspondences that were not replaced by wrong ones.
+    true_correspondences: usize,
+    /// Inliers that are true correspondences (`None` without `--ransac`).
+    true_inliers: Option<usize>,
+    /// EOPnP on the true correspondences alone (with `--outliers`).
+    floor: Option<Registration>,
+}
+
+/// The standard deviation (model units) of the noise added to the injected wrong 3D points.
+const OUTLIER_NOISE: f64 = 0.5;
+
+impl super::RegisterOptions {
+    fn outlier_spec(&self) -> Option<Outliers> {
+        self.outliers.map(|fraction| Outliers {
+            fraction,
+            noise: OUTLIER_NOISE,
+            seed: self.seed,
+        })
+    }
+
+    fn ransac_options(&self) -> Ransac {
+        Ransac::default()
+            .threshold_px(self.threshold)
+            .seed(self.seed)
+    }
+}
+
+/// One image's pose estimate: plain EOPnP on all correspondences, or with `--ransac` the
+/// robust estimate, on the model's correspondences or, with `--outliers`, on a copy with
+/// injected wrong 3D points.
 fn estimate(
     model: &Model,
     image_id: u32,
     opts: &RegisterOptions,
-) -> Result<Registration, RegisterError> {
+) -> (Result<Registration, RegisterError>, Option<Extra>) {
     // The solve is deterministic; the time reported is the best of three runs, as a shared
     // machine's scheduling noise otherwise dominates single ~1 ms measurements.
     let solver = opts.solver();
-    let mut best = colmap::register_image(model, image_id, &solver)?;
-    for _ in 0..2 {
-        let again = colmap::register_image(model, image_id, &solver)?;
-        best.micros = best.micros.min(again.micros);
+    let spec = opts.outlier_spec();
+    if !opts.ransac && spec.is_none() {
+        let run = || colmap::register_image(model, image_id, &solver);
+        let result = run().and_then(|mut best| {
+            for _ in 0..2 {
+                best.micros = best.micros.min(run()?.micros);
+            }
+            Ok(best)
+        });
+        return (result, None);
     }
-    Ok(best)
+    let problem = ransac::image_problem(model, image_id, spec.as_ref());
+    let floor = spec
+        .as_ref()
+        .and_then(|_| ransac::floor(model, image_id, &problem, &solver).ok());
+    let mut extra = Extra {
+        stats: None,
+        true_correspondences: problem.truth.iter().filter(|b| **b).count(),
+        true_inliers: None,
+        floor,
+    };
+    let result = if opts.ransac {
+        let r = opts.ransac_options();
+        let run = || ransac::register_image(model, image_id, &r, &solver, spec.as_ref());
+        run().and_then(|(mut best, sol, _)| {
+            for _ in 0..2 {
+                best.micros = best.micros.min(run()?.0.micros);
+            }
+            extra.true_inliers = Some(
+                sol.inliers
+                    .iter()
+                    .zip(&problem.truth)
+                    .filter(|(a, b)| **a && **b)
+                    .count(),
+            );
+            extra.stats = Some(sol.stats);
+            Ok(best)
+        })
+    } else {
+        plain_on_problem(model, image_id, &problem, &solver)
+    };
+    (result, Some(extra))
 }
 
-/// Outcome for one image: the registration or why it failed.
-type Row = (u32, String, Result<Registration, RegisterError>);
+/// Plain EOPnP (no outlier rejection) on a problem with injected outliers.
+fn plain_on_problem(
+    model: &Model,
+    image_id: u32,
+    problem: &ImageProblem,
+    solver: &eopnp::Solver,
+) -> Result<Registration, RegisterError> {
+    let cam = model
+        .images
+        .get(&image_id)
+        .and_then(|i| model.cameras.get(&i.camera_id))
+        .ok_or(RegisterError::UnknownImage(image_id))?;
+    let mut best = f64::INFINITY;
+    let mut sol = None;
+    for _ in 0..3 {
+        let start = Instant::now();
+        let s = eopnp::camera::solve_pixels(solver, cam, &problem.world, &problem.pixels)?;
+        best = best.min(start.elapsed().as_secs_f64() * 1e6);
+        sol = Some(s);
+    }
+    let s = sol.ok_or(RegisterError::UnknownImage(image_id))?;
+    let mut reg = ransac::registration(model, image_id, problem, &s.solution, s.used)?;
+    reg.micros = best;
+    Ok(reg)
+}
+
+/// Outcome for one image: the registration or why it failed, and the robust-mode extras.
+type Row = (
+    u32,
+    String,
+    Result<Registration, RegisterError>,
+    Option<Extra>,
+);
+
+/// The problems of `--export-problems` as JSON.
+fn export_problems(model: &Model, opts: &RegisterOptions) -> String {
+    let spec = opts.outlier_spec();
+    let images: Vec<serde_json::Value> = model
+        .images
+        .iter()
+        .filter_map(|(id, img)| {
+            let cam = model.cameras.get(&img.camera_id)?;
+            let p = ransac::image_problem(model, *id, spec.as_ref());
+            let (r, t) = img.pose();
+            Some(json!({
+                "image_id": id,
+                "name": img.name,
+                "camera": {
+                    "model": cam.model().name(),
+                    "width": cam.width(),
+                    "height": cam.height(),
+                    "params": cam.params(),
+                },
+                "points2d": p.pixels.iter().map(|q| [q.x, q.y]).collect::<Vec<_>>(),
+                "points3d": p.world.iter().map(|x| [x.x, x.y, x.z]).collect::<Vec<_>>(),
+                "truth": p.truth,
+                "reference_rotation": [
+                    [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                    [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                    [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+                ],
+                "reference_translation": [t.x, t.y, t.z],
+            }))
+        })
+        .collect();
+    let v = json!({
+        "outliers": opts.outliers.unwrap_or(0.0),
+        "outlier_noise": OUTLIER_NOISE,
+        "seed": opts.seed,
+        "threshold_px": opts.threshold,
+        "images": images,
+    });
+    let mut s = serde_json::to_string(&v).unwrap_or_default();
+    s.push('\n');
+    s
+}
 
 pub(crate) fn run(dir: &Path, opts: &RegisterOptions, intro: bool) -> Result<(), Failure> {
     let format = colmap::detect_format(dir).map_err(|e| {
@@ -44,7 +188,12 @@ pub(crate) fn run(dir: &Path, opts: &RegisterOptions, intro: bool) -> Result<(),
         };
         Failure::input(format!("{e}{hint}"))
     })?;
+    opts.validate()?;
     let model = colmap::read_model(dir).map_err(|e| Failure::input(e.to_string()))?;
+    if let Some(path) = &opts.export_problems {
+        std::fs::write(path, export_problems(&model, opts))
+            .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
+    }
 
     let bar = progress_bar(model.images.len() as u64);
     let started = Instant::now();
@@ -53,15 +202,17 @@ pub(crate) fn run(dir: &Path, opts: &RegisterOptions, intro: bool) -> Result<(),
         if started.elapsed() >= PROGRESS_AFTER && std::io::stderr().is_terminal() {
             bar.set_draw_target(ProgressDrawTarget::stderr());
         }
-        rows.push((*id, img.name.clone(), estimate(&model, *id, opts)));
+        let (result, extra) = estimate(&model, *id, opts);
+        rows.push((*id, img.name.clone(), result, extra));
         bar.inc(1);
     }
     bar.finish_and_clear();
 
-    let mode = if opts.algebraic {
-        "algebraic"
-    } else {
-        "reprojection"
+    let mode = match (opts.algebraic, opts.ransac) {
+        (true, false) => "algebraic",
+        (false, false) => "reprojection",
+        (true, true) => "ransac+algebraic",
+        (false, true) => "ransac+reprojection",
     };
     let text = if opts.json {
         to_json(dir, format, mode, &rows)
@@ -92,10 +243,32 @@ fn format_name(format: colmap::ModelFormat) -> &'static str {
     }
 }
 
+fn extra_json(e: &Extra) -> serde_json::Value {
+    json!({
+        "true_correspondences": e.true_correspondences,
+        "true_inliers": e.true_inliers,
+        "ransac": e.stats.map(|s| json!({
+            "iterations": s.iterations,
+            "hypotheses": s.hypotheses,
+            "local_fits": s.local_fits,
+            "final_fits": s.final_fits,
+            "inliers": s.inliers,
+            "inlier_ratio": s.inlier_ratio,
+            "micros": s.micros,
+        })),
+        "floor": e.floor.as_ref().map(|f| json!({
+            "rotation_error_deg": f.rotation_error_deg,
+            "translation_error_pct": f.translation_error_pct,
+            "rmse_px": f.rmse_px,
+            "micros": f.micros,
+        })),
+    })
+}
+
 fn to_json(dir: &Path, format: colmap::ModelFormat, mode: &str, rows: &[Row]) -> String {
     let images: Vec<serde_json::Value> = rows
         .iter()
-        .map(|(id, name, r)| match r {
+        .map(|(id, name, r, extra)| match r {
             Ok(r) => {
                 let rm = r.solution.rotation;
                 let t = r.solution.pose.translation.vector;
@@ -119,6 +292,7 @@ fn to_json(dir: &Path, format: colmap::ModelFormat, mode: &str, rows: &[Row]) ->
                     "quaternion_wxyz": [q.w, q.i, q.j, q.k],
                     "translation": [t.x, t.y, t.z],
                     "cheirality_ok": r.solution.cheirality_ok,
+                    "robust": extra.as_ref().map(extra_json),
                 })
             }
             Err(e) => json!({ "image_id": id, "name": name, "error": e.to_string() }),
@@ -132,6 +306,28 @@ fn to_json(dir: &Path, format: colmap::ModelFormat, mode: &str, rows: &[Row]) ->
     });
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
     s.push('\n');
+    s
+}
+
+/// The indented second line of an image in robust mode.
+fn extra_line(e: &Extra) -> String {
+    let mut s = String::new();
+    if let (Some(st), Some(ti)) = (&e.stats, e.true_inliers) {
+        let _ = write!(
+            s,
+            "ransac: {} iterations, {} inliers ({ti} of the {} true correspondences)",
+            st.iterations, st.inliers, e.true_correspondences
+        );
+    } else {
+        let _ = write!(s, "{} true correspondences", e.true_correspondences);
+    }
+    if let Some(f) = &e.floor {
+        let _ = write!(
+            s,
+            "; floor: rot {:.6} deg, trans {:.6} %",
+            f.rotation_error_deg, f.translation_error_pct
+        );
+    }
     s
 }
 
@@ -173,7 +369,7 @@ fn to_table(
     let label = |id: &u32, name: &str| format!("{id} {name}");
     let wname = rows
         .iter()
-        .map(|(id, name, _)| label(id, name).chars().count())
+        .map(|(id, name, _, _)| label(id, name).chars().count())
         .max()
         .unwrap_or(5)
         .max(5);
@@ -188,7 +384,9 @@ fn to_table(
         "-".repeat(wname + 2 + 6 + 2 + 7 + 2 + 13 + 2 + 13 + 2 + 15 + 2 + 8)
     );
     let (mut worst_r, mut worst_t, mut ok) = (0.0f64, 0.0f64, 0usize);
-    for (id, name, r) in rows {
+    let robust = rows.iter().any(|r| r.3.is_some());
+    let (mut floor_r, mut floor_t) = (0.0f64, 0.0f64);
+    for (id, name, r, extra) in rows {
         match r {
             Ok(r) => {
                 ok += 1;
@@ -206,6 +404,13 @@ fn to_table(
                     rmse,
                     r.micros
                 );
+                if let Some(e) = extra {
+                    if let Some(f) = &e.floor {
+                        floor_r = floor_r.max(f.rotation_error_deg);
+                        floor_t = floor_t.max(f.translation_error_pct);
+                    }
+                    let _ = writeln!(s, "{:<wname$}  {}", "", extra_line(e));
+                }
             }
             Err(e) => {
                 let _ = writeln!(s, "{:<wname$}  failed: {e}", label(id, name));
@@ -219,6 +424,17 @@ fn to_table(
             "{ok} of {} images registered; worst differences to COLMAP: rotation {worst_r:.6} \
              degrees, translation {worst_t:.6} %.",
             rows.len()
+        );
+    }
+    if robust
+        && rows
+            .iter()
+            .any(|r| r.3.as_ref().is_some_and(|e| e.floor.is_some()))
+    {
+        let _ = writeln!(
+            s,
+            "Floor (EOPnP on the true correspondences alone), worst: rotation {floor_r:.6} \
+             degrees, translation {floor_t:.6} %."
         );
     }
     if intro {

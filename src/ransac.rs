@@ -1,0 +1,956 @@
+//! Robust pose estimation: RANSAC with the [`crate::p3p`] minimal solver, EOPnP local
+//! optimisation and a final fit that keeps every good point.
+//!
+//! ```
+//! use eopnp::ransac::Ransac;
+//! use eopnp::Solver;
+//! use nalgebra::{Point2, Point3, Vector3};
+//!
+//! // 40 points seen by a camera at (0, 0, -6); every fourth correspondence is wrong.
+//! let mut world = Vec::new();
+//! let mut image = Vec::new();
+//! for i in 0..40 {
+//!     let x = Point3::new((i % 7) as f64 - 3.0, (i % 5) as f64 - 2.0, (i % 3) as f64);
+//!     let p = x.coords + Vector3::new(0.0, 0.0, 6.0);
+//!     let obs = if i % 4 == 0 { Point2::new(0.3, -0.2) } else { Point2::new(p.x / p.z, p.y / p.z) };
+//!     world.push(x);
+//!     image.push(obs);
+//! }
+//! // Normalised image points, focal length 1000 px, 2 px threshold.
+//! let r = Ransac::default().threshold_px(2.0).seed(7);
+//! let sol = r.estimate(&Solver::default(), &world, &image, (1000.0, 1000.0), None)?;
+//! assert_eq!(sol.num_inliers, 30);
+//! assert!((sol.solution.pose.translation.vector - Vector3::new(0.0, 0.0, 6.0)).norm() < 1e-9);
+//! # Ok::<(), eopnp::PnpError>(())
+//! ```
+//!
+//! # Method
+//!
+//! 1. Hypotheses: three distinct correspondences drawn uniformly by a seeded PCG generator
+//!    (`rand_pcg::Pcg64`: the same seed gives the same samples on every platform), solved by
+//!    P3P (up to four poses each).
+//! 2. Scoring: MSAC, the truncated quadratic cost `sum_i min(e_i^2, T^2)` of the pixel
+//!    reprojection errors `e_i` (`T` = [`Ransac::threshold_px`]; a point behind the camera costs
+//!    `T^2`). Scoring a hypothesis stops as soon as its partial cost exceeds the best one.
+//! 3. Local optimisation: every new best hypothesis is refitted by EOPnP (the given
+//!    [`Solver`], i.e. by default the maximum-likelihood pose) on its inliers, repeated while
+//!    the MSAC cost drops (at most [`LO_STEPS`] times).
+//! 4. Adaptive stopping: after `k = ln(1 - p) / ln(1 - w^3)` iterations, `w` the best inlier
+//!    ratio and `p` = [`Ransac::confidence`], clamped to
+//!    [`Ransac::min_iterations`]..=[`Ransac::max_iterations`].
+//! 5. Final fit: EOPnP on the inliers, re-classify, refit, until the inlier set stops changing
+//!    (at most [`FINAL_STEPS`] refits). The final classification uses the threshold
+//!    `T * final_threshold_factor` (default 2): a fixed threshold `T` tuned for scoring noisy
+//!    three-point hypotheses cuts the tail of the true inliers' residual distribution off the
+//!    accurate final pose (on the bundled model, 4 px drops good observations that COLMAP kept
+//!    and the pose error rises several-fold), while wrong correspondences are typically tens to
+//!    hundreds of pixels off and are not readmitted.
+//!
+//! Every loop is bounded. Unlike [`Solver::solve`], this path allocates (the inlier mask and
+//! per-call scratch buffers, `O(N)`, once per call; nothing per iteration).
+
+use std::time::Instant;
+
+use nalgebra::{Matrix3, Point2, Point3, Vector3};
+use rand_core::{RngCore, SeedableRng};
+use rand_pcg::Pcg64;
+
+use crate::camera::Camera;
+use crate::colmap::{Model, RegisterError, Registration};
+use crate::error::{InputKind, PnpError};
+use crate::p3p::p3p;
+use crate::{Solution, Solver};
+
+/// Maximum EOPnP refits per local optimisation.
+pub const LO_STEPS: u32 = 4;
+/// Maximum refits of the final fit.
+pub const FINAL_STEPS: u32 = 10;
+/// Attempts to draw three distinct indices before giving up on one iteration (only reachable
+/// with absurdly few points).
+const SAMPLE_ATTEMPTS: u32 = 64;
+/// SPRT decision threshold: a good hypothesis is rejected with probability about `1 / SPRT_A`
+/// (accounted for in the adaptive iteration count).
+const SPRT_A: f64 = 1000.0;
+/// Initial and bounds of the SPRT's `delta` (fraction of points consistent with a bad model),
+/// re-estimated as the mean over the rejected hypotheses.
+const SPRT_DELTA0: f64 = 0.05;
+/// EOPnP needs four points; local optimisation also wants more than the sample itself.
+const MIN_FIT_POINTS: usize = 6;
+
+/// RANSAC options. `Ransac::default()` is the recommended configuration; the fields can also
+/// be set directly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Ransac {
+    /// Inlier threshold on the pixel reprojection error. Default: `4.0`.
+    pub threshold_px: f64,
+    /// Probability that at least one all-inlier sample is drawn (adaptive stopping).
+    /// Default: `0.999`.
+    pub confidence: f64,
+    /// Hard bound on the iterations (samples). Default: `10_000`.
+    pub max_iterations: u32,
+    /// Iterations always done. Default: `20`.
+    pub min_iterations: u32,
+    /// Seed of the sampling generator. Default: `0`.
+    pub seed: u64,
+    /// Local optimisation of every new best hypothesis by EOPnP. Default: `true`.
+    pub local_optimisation: bool,
+    /// The final inlier classification uses `threshold_px * final_threshold_factor`
+    /// (see the module documentation). Default: `2.0`. `1.0` keeps the scoring threshold.
+    pub final_threshold_factor: f64,
+}
+
+impl Default for Ransac {
+    fn default() -> Self {
+        Ransac {
+            threshold_px: 4.0,
+            confidence: 0.999,
+            max_iterations: 10_000,
+            min_iterations: 20,
+            seed: 0,
+            local_optimisation: true,
+            final_threshold_factor: 2.0,
+        }
+    }
+}
+
+/// Statistics of a RANSAC run.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub struct RansacStats {
+    /// Samples drawn.
+    pub iterations: u32,
+    /// P3P poses scored.
+    pub hypotheses: u32,
+    /// EOPnP fits in local optimisation.
+    pub local_fits: u32,
+    /// EOPnP fits in the final fit.
+    pub final_fits: u32,
+    /// Inliers of the returned pose (final threshold).
+    pub inliers: usize,
+    /// `inliers / N`.
+    pub inlier_ratio: f64,
+    /// Wall time, microseconds.
+    pub micros: f64,
+}
+
+/// The result of [`Ransac::estimate`].
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct RansacSolution {
+    /// The pose, fitted by EOPnP on the inliers.
+    pub solution: Solution,
+    /// `inliers[i]`: correspondence `i` is an inlier of the returned pose.
+    pub inliers: Vec<bool>,
+    /// Number of inliers.
+    pub num_inliers: usize,
+    /// Run statistics.
+    pub stats: RansacStats,
+}
+
+/// A hypothesis with its MSAC cost.
+#[derive(Clone, Copy, Debug)]
+struct Scored {
+    r: Matrix3<f64>,
+    t: Vector3<f64>,
+    cost: f64,
+    inliers: usize,
+}
+
+/// The data of one problem: squared pixel error of a pose at each point.
+struct Problem<'a> {
+    world: &'a [Point3<f64>],
+    image: &'a [Point2<f64>],
+    weights: Vec<f64>,
+    fx2: f64,
+    fy2: f64,
+    rows: (f64, f64),
+}
+
+impl Problem<'_> {
+    #[inline]
+    fn sq_err(&self, r: &Matrix3<f64>, t: &Vector3<f64>, i: usize) -> f64 {
+        let p = r * self.world[i].coords + t;
+        if !(p.z > 0.0) {
+            return f64::INFINITY;
+        }
+        let iz = 1.0 / p.z;
+        let dx = p.x * iz - self.image[i].x;
+        let dy = p.y * iz - self.image[i].y;
+        self.weights[i] * (self.fx2 * dx * dx + self.fy2 * dy * dy)
+    }
+
+    /// MSAC cost and inlier count, or `None` once the cost exceeds `bound`.
+    fn score(&self, r: &Matrix3<f64>, t: &Vector3<f64>, th2: f64, bound: f64) -> Option<Scored> {
+        let mut cost = 0.0;
+        let mut inliers = 0;
+        for i in 0..self.world.len() {
+            let e = self.sq_err(r, t, i);
+            if e < th2 {
+                cost += e;
+                inliers += 1;
+            } else {
+                cost += th2;
+            }
+            if cost > bound {
+                return None;
+            }
+        }
+        Some(Scored {
+            r: *r,
+            t: *t,
+            cost,
+            inliers,
+        })
+    }
+
+    /// As [`Problem::score`] for a P3P hypothesis, with Wald's sequential probability ratio test
+    /// (Chum and Matas 2008) on the points in the random order `order`: the hypothesis is
+    /// rejected as soon as the likelihood ratio of "bad model" over "good model" exceeds
+    /// [`SPRT_A`], `eps` the inlier ratio of a good model, `delta` the probability that a bad
+    /// model is consistent with a point. Returns the score or `(consistent, scored)` counts
+    /// of a rejected hypothesis.
+    #[allow(clippy::too_many_arguments)]
+    fn score_sprt(
+        &self,
+        r: &Matrix3<f64>,
+        t: &Vector3<f64>,
+        th2: f64,
+        bound: f64,
+        order: &[usize],
+        eps: f64,
+        delta: f64,
+    ) -> Result<Scored, (usize, usize)> {
+        let test = eps > 2.0 * delta && eps < 1.0;
+        let (ln_good, ln_bad) = if test {
+            ((delta / eps).ln(), ((1.0 - delta) / (1.0 - eps)).ln())
+        } else {
+            (0.0, 0.0)
+        };
+        let ln_a = SPRT_A.ln();
+        let mut lambda = 0.0;
+        let mut cost = 0.0;
+        let mut inliers = 0;
+        for (k, &i) in order.iter().enumerate() {
+            let e = self.sq_err(r, t, i);
+            if e < th2 {
+                cost += e;
+                inliers += 1;
+                lambda += ln_good;
+            } else {
+                cost += th2;
+                lambda += ln_bad;
+            }
+            if cost > bound || lambda > ln_a {
+                return Err((inliers, k + 1));
+            }
+        }
+        Ok(Scored {
+            r: *r,
+            t: *t,
+            cost,
+            inliers,
+        })
+    }
+
+    /// EOPnP on the points with squared error below `th2` under `(r, t)`; writes the mask.
+    fn fit(
+        &self,
+        solver: &Solver,
+        r: &Matrix3<f64>,
+        t: &Vector3<f64>,
+        th2: f64,
+        mask: &mut [bool],
+        buf: &mut FitBuffers,
+    ) -> Option<Solution> {
+        buf.clear();
+        for (i, m) in mask.iter_mut().enumerate() {
+            *m = self.sq_err(r, t, i) < th2;
+            if *m {
+                buf.world.push(self.world[i]);
+                buf.image.push(self.image[i]);
+                buf.weights.push(self.weights[i]);
+            }
+        }
+        if buf.world.len() < MIN_FIT_POINTS {
+            return None;
+        }
+        solver
+            .solve_with_row_weights(&buf.world, &buf.image, Some(&buf.weights), self.rows)
+            .ok()
+    }
+}
+
+/// Reused gather buffers of the EOPnP fits.
+#[derive(Default)]
+struct FitBuffers {
+    world: Vec<Point3<f64>>,
+    image: Vec<Point2<f64>>,
+    weights: Vec<f64>,
+}
+
+impl FitBuffers {
+    fn clear(&mut self) {
+        self.world.clear();
+        self.image.clear();
+        self.weights.clear();
+    }
+}
+
+/// Uniform index in `0..n` (Lemire's multiply-shift; the bias, below `n / 2^64`, is
+/// irrelevant here and the mapping is the same on every platform).
+#[inline]
+fn index(rng: &mut Pcg64, n: usize) -> usize {
+    ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
+}
+
+/// Standard normal deviate (Box-Muller on two uniform draws).
+fn normal(rng: &mut Pcg64) -> f64 {
+    let u1 = ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    let u2 = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
+}
+
+/// Iterations needed for `confidence` with inlier ratio `w` and samples of 3.
+fn needed_iterations(confidence: f64, w: f64) -> f64 {
+    let good = w * w * w;
+    if good >= 1.0 {
+        return 0.0;
+    }
+    if good <= 0.0 {
+        return f64::INFINITY;
+    }
+    // A good sample is found and survives the SPRT with probability about w^3 (1 - 1/A).
+    let good = good * (1.0 - 1.0 / SPRT_A);
+    (1.0 - confidence).ln() / (1.0 - good).ln()
+}
+
+impl Ransac {
+    /// Sets [`Ransac::threshold_px`].
+    #[must_use]
+    pub fn threshold_px(mut self, px: f64) -> Self {
+        self.threshold_px = px;
+        self
+    }
+
+    /// Sets [`Ransac::confidence`].
+    #[must_use]
+    pub fn confidence(mut self, p: f64) -> Self {
+        self.confidence = p;
+        self
+    }
+
+    /// Sets [`Ransac::max_iterations`].
+    #[must_use]
+    pub fn max_iterations(mut self, n: u32) -> Self {
+        self.max_iterations = n;
+        self
+    }
+
+    /// Sets [`Ransac::min_iterations`].
+    #[must_use]
+    pub fn min_iterations(mut self, n: u32) -> Self {
+        self.min_iterations = n;
+        self
+    }
+
+    /// Sets [`Ransac::seed`].
+    #[must_use]
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// Sets [`Ransac::local_optimisation`].
+    #[must_use]
+    pub fn local_optimisation(mut self, on: bool) -> Self {
+        self.local_optimisation = on;
+        self
+    }
+
+    /// Sets [`Ransac::final_threshold_factor`].
+    #[must_use]
+    pub fn final_threshold_factor(mut self, f: f64) -> Self {
+        self.final_threshold_factor = f;
+        self
+    }
+
+    /// Robust pose from normalised image points `(x/z, y/z)`.
+    ///
+    /// The pixel reprojection error of point `i` is `sqrt(w_i (fx^2 dx^2 + fy^2 dy^2))`,
+    /// `(dx, dy)` the normalised residual, `focal = (fx, fy)` in pixels and `w_i` the optional
+    /// per-point weight (1 if `None`; [`Ransac::estimate_pixels`] passes the lens distortion's
+    /// local scale, as [`crate::camera::solve_pixels`]). EOPnP fits minimise the same error.
+    ///
+    /// # Errors
+    /// [`PnpError::LengthMismatch`], [`PnpError::WeightsLength`], [`PnpError::TooFewPoints`]
+    /// (fewer than 4), [`PnpError::NonFinite`], [`PnpError::InvalidWeight`],
+    /// [`PnpError::InvalidIntrinsics`] for a non-positive focal length, and
+    /// [`PnpError::NoSolution`] if no hypothesis has enough inliers for an EOPnP fit.
+    pub fn estimate(
+        &self,
+        solver: &Solver,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        focal: (f64, f64),
+        weights: Option<&[f64]>,
+    ) -> Result<RansacSolution, PnpError> {
+        let start = Instant::now();
+        let n = world.len();
+        if image.len() != n {
+            return Err(PnpError::LengthMismatch {
+                world: n,
+                image: image.len(),
+            });
+        }
+        if let Some(w) = weights {
+            if w.len() != n {
+                return Err(PnpError::WeightsLength {
+                    weights: w.len(),
+                    points: n,
+                });
+            }
+        }
+        if n < 4 {
+            return Err(PnpError::TooFewPoints { got: n, need: 4 });
+        }
+        let (fx, fy) = focal;
+        if !(fx.is_finite() && fy.is_finite() && fx > 0.0 && fy > 0.0) {
+            return Err(PnpError::InvalidIntrinsics);
+        }
+        for (i, (x, p)) in world.iter().zip(image).enumerate() {
+            if !x.coords.iter().all(|v| v.is_finite()) {
+                return Err(PnpError::NonFinite {
+                    index: i,
+                    input: InputKind::World,
+                });
+            }
+            if !(p.x.is_finite() && p.y.is_finite()) {
+                return Err(PnpError::NonFinite {
+                    index: i,
+                    input: InputKind::Image,
+                });
+            }
+        }
+        let weights = match weights {
+            Some(w) => {
+                for (i, v) in w.iter().enumerate() {
+                    if !v.is_finite() {
+                        return Err(PnpError::NonFinite {
+                            index: i,
+                            input: InputKind::Weight,
+                        });
+                    }
+                    if *v < 0.0 {
+                        return Err(PnpError::InvalidWeight { index: i });
+                    }
+                }
+                w.to_vec()
+            }
+            None => vec![1.0; n],
+        };
+        let fmax = fx.max(fy);
+        let prob = Problem {
+            world,
+            image,
+            weights,
+            fx2: fx * fx,
+            fy2: fy * fy,
+            rows: ((fx / fmax).powi(2), (fy / fmax).powi(2)),
+        };
+        let th = if self.threshold_px.is_finite() && self.threshold_px > 0.0 {
+            self.threshold_px
+        } else {
+            Ransac::default().threshold_px
+        };
+        let th2 = th * th;
+        let confidence = if self.confidence > 0.0 && self.confidence < 1.0 {
+            self.confidence
+        } else {
+            Ransac::default().confidence
+        };
+        let bearings: Vec<Vector3<f64>> =
+            image.iter().map(|p| Vector3::new(p.x, p.y, 1.0)).collect();
+
+        let mut stats = RansacStats::default();
+        let mut rng = Pcg64::seed_from_u64(self.seed);
+        let mut mask = vec![false; n];
+        let mut buf = FitBuffers::default();
+        let mut best: Option<Scored> = None;
+        let mut needed = f64::INFINITY;
+        // Random scoring order for the SPRT (the input order may correlate with inlierness).
+        let mut order: Vec<usize> = (0..n).collect();
+        for i in 0..n.saturating_sub(1) {
+            let j = i + index(&mut rng, n - i);
+            order.swap(i, j);
+        }
+        let (mut rej_consistent, mut rej_scored) = (0usize, 0usize);
+        let mut delta = SPRT_DELTA0;
+        let max_it = self.max_iterations.max(1);
+        while stats.iterations < max_it
+            && (stats.iterations < self.min_iterations || f64::from(stats.iterations) < needed)
+        {
+            stats.iterations += 1;
+            let Some(idx) = sample3(&mut rng, n) else {
+                continue;
+            };
+            let wp = [world[idx[0]], world[idx[1]], world[idx[2]]];
+            let bp = [bearings[idx[0]], bearings[idx[1]], bearings[idx[2]]];
+            for pose in p3p(&wp, &bp) {
+                stats.hypotheses += 1;
+                let bound = best.map_or(f64::INFINITY, |b| b.cost);
+                let eps = best.map_or(0.0, |b| b.inliers as f64 / n as f64);
+                let mut cand = match prob.score_sprt(
+                    &pose.rotation,
+                    &pose.translation,
+                    th2,
+                    bound,
+                    &order,
+                    eps,
+                    delta,
+                ) {
+                    Ok(c) => c,
+                    Err((consistent, scored)) => {
+                        rej_consistent += consistent;
+                        rej_scored += scored;
+                        if rej_scored > 0 {
+                            delta = (rej_consistent as f64 / rej_scored as f64).clamp(1e-3, 0.2);
+                        }
+                        continue;
+                    }
+                };
+                if self.local_optimisation {
+                    for _ in 0..LO_STEPS {
+                        stats.local_fits += 1;
+                        let Some(s) = prob.fit(solver, &cand.r, &cand.t, th2, &mut mask, &mut buf)
+                        else {
+                            break;
+                        };
+                        let t = s.pose.translation.vector;
+                        match prob.score(&s.rotation, &t, th2, cand.cost) {
+                            Some(better) if better.cost < cand.cost => cand = better,
+                            _ => break,
+                        }
+                    }
+                }
+                best = Some(cand);
+                needed = needed_iterations(confidence, cand.inliers as f64 / n as f64);
+            }
+        }
+        let best = best.ok_or(PnpError::NoSolution)?;
+
+        // Final fit: refit and re-classify with the final threshold until the set is stable.
+        let factor =
+            if self.final_threshold_factor.is_finite() && self.final_threshold_factor >= 1.0 {
+                self.final_threshold_factor
+            } else {
+                1.0
+            };
+        let thf2 = (th * factor).powi(2);
+        let (mut r, mut t) = (best.r, best.t);
+        let mut solution: Option<Solution> = None;
+        let mut prev_mask: Vec<bool> = Vec::new();
+        for _ in 0..FINAL_STEPS {
+            stats.final_fits += 1;
+            let Some(s) = prob.fit(solver, &r, &t, thf2, &mut mask, &mut buf) else {
+                break;
+            };
+            r = s.rotation;
+            t = s.pose.translation.vector;
+            solution = Some(s);
+            let stable = prev_mask == mask;
+            prev_mask.clone_from(&mask);
+            if stable {
+                break;
+            }
+        }
+        let solution = solution.ok_or(PnpError::NoSolution)?;
+        // The mask of the returned pose.
+        for (i, m) in mask.iter_mut().enumerate() {
+            *m = prob.sq_err(&r, &t, i) < thf2;
+        }
+        let num_inliers = mask.iter().filter(|m| **m).count();
+        stats.inliers = num_inliers;
+        stats.inlier_ratio = num_inliers as f64 / n as f64;
+        stats.micros = start.elapsed().as_secs_f64() * 1e6;
+        Ok(RansacSolution {
+            solution,
+            inliers: mask,
+            num_inliers,
+            stats,
+        })
+    }
+
+    /// Robust pose from observed (distorted) pixels and a camera model: the pixels are
+    /// undistorted and weighted as in [`crate::camera::solve_pixels`], then
+    /// [`Ransac::estimate`] runs in normalised coordinates with the camera's focal lengths, so
+    /// the threshold applies to (first-order) pixel reprojection errors through the lens
+    /// distortion. A pixel that cannot be undistorted is an outlier (`false` in the mask).
+    /// The time in the statistics includes the undistortion.
+    ///
+    /// # Errors
+    /// As [`Ransac::estimate`].
+    pub fn estimate_pixels(
+        &self,
+        solver: &Solver,
+        camera: &Camera,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+    ) -> Result<RansacSolution, PnpError> {
+        let start = Instant::now();
+        if world.len() != pixels.len() {
+            return Err(PnpError::LengthMismatch {
+                world: world.len(),
+                image: pixels.len(),
+            });
+        }
+        let (fx, fy) = camera.intrinsics_scale();
+        let mut used = Vec::with_capacity(world.len());
+        let mut w = Vec::with_capacity(world.len());
+        let mut image = Vec::with_capacity(world.len());
+        let mut weights = Vec::with_capacity(world.len());
+        for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
+            let Ok(nrm) = camera.undistort(*px) else {
+                continue;
+            };
+            let j = camera.project_jacobian(nrm);
+            weights.push(((j[0] * j[3] - j[1] * j[2]) / (fx * fy)).abs());
+            w.push(*x);
+            image.push(nrm);
+            used.push(i);
+        }
+        let mut sol = self.estimate(solver, &w, &image, (fx, fy), Some(&weights))?;
+        if used.len() != world.len() {
+            let mut full = vec![false; world.len()];
+            for (k, &i) in used.iter().enumerate() {
+                full[i] = sol.inliers[k];
+            }
+            sol.inliers = full;
+            sol.stats.inlier_ratio = sol.num_inliers as f64 / world.len() as f64;
+        }
+        sol.stats.micros = start.elapsed().as_secs_f64() * 1e6;
+        Ok(sol)
+    }
+}
+
+/// Three distinct indices in `0..n`, or `None` (n < 3, or the bounded attempts ran out).
+fn sample3(rng: &mut Pcg64, n: usize) -> Option<[usize; 3]> {
+    if n < 3 {
+        return None;
+    }
+    let a = index(rng, n);
+    let mut b = index(rng, n);
+    let mut c = index(rng, n);
+    for _ in 0..SAMPLE_ATTEMPTS {
+        if b != a {
+            break;
+        }
+        b = index(rng, n);
+    }
+    for _ in 0..SAMPLE_ATTEMPTS {
+        if c != a && c != b {
+            break;
+        }
+        c = index(rng, n);
+    }
+    (a != b && a != c && b != c).then_some([a, b, c])
+}
+
+/// Replaces `round(fraction * N)` of the correspondences' world points, chosen uniformly
+/// without replacement, by wrong ones: a uniformly chosen point of `cloud` plus Gaussian noise
+/// of standard deviation `noise` in each coordinate, all drawn from a PCG generator seeded with
+/// `seed`. Returns the mask of the **true** (unchanged) correspondences. A test and
+/// benchmarking tool (`eopnp register --outliers`); `fraction` is clamped to `[0, 1]`, an
+/// empty cloud changes nothing.
+pub fn inject_outliers(
+    world: &mut [Point3<f64>],
+    cloud: &[Point3<f64>],
+    fraction: f64,
+    noise: f64,
+    seed: u64,
+) -> Vec<bool> {
+    let n = world.len();
+    let mut truth = vec![true; n];
+    if cloud.is_empty() || !(fraction > 0.0) {
+        return truth;
+    }
+    let k = ((fraction.min(1.0) * n as f64).round() as usize).min(n);
+    let mut rng = Pcg64::seed_from_u64(seed);
+    let mut order: Vec<usize> = (0..n).collect();
+    // Partial Fisher-Yates: the first k entries are a uniform k-subset.
+    for i in 0..k {
+        let j = i + index(&mut rng, n - i);
+        order.swap(i, j);
+    }
+    let noise = if noise.is_finite() { noise.abs() } else { 0.0 };
+    for &i in &order[..k] {
+        let p = cloud[index(&mut rng, cloud.len())];
+        let d = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * noise;
+        world[i] = p + d;
+        truth[i] = false;
+    }
+    truth
+}
+
+/// The per-image seed of [`register_image`]'s outlier injection: `seed` mixed with the image
+/// id (SplitMix64 finaliser), so images get independent wrong points.
+#[must_use]
+pub fn image_seed(seed: u64, image_id: u32) -> u64 {
+    let mut z = seed ^ u64::from(image_id).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Injected outliers for [`register_image`] (see [`inject_outliers`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outliers {
+    /// Fraction of each image's correspondences replaced by wrong 3D points.
+    pub fraction: f64,
+    /// Standard deviation of the noise added to the wrong points (model units).
+    pub noise: f64,
+    /// Seed (mixed with the image id, [`image_seed`]).
+    pub seed: u64,
+}
+
+/// One image's 2D-3D problem of a model, with injected outliers.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct ImageProblem {
+    /// World points (wrong ones where `truth` is false).
+    pub world: Vec<Point3<f64>>,
+    /// Observed pixels.
+    pub pixels: Vec<Point2<f64>>,
+    /// `truth[i]`: correspondence `i` is the model's (not replaced).
+    pub truth: Vec<bool>,
+}
+
+/// The correspondences of image `image_id` ([`Model::correspondences`]) with
+/// `outliers.fraction` of them replaced by random points of the model's cloud plus noise.
+#[must_use]
+pub fn image_problem(model: &Model, image_id: u32, outliers: Option<&Outliers>) -> ImageProblem {
+    let (mut world, pixels) = model.correspondences(image_id);
+    let truth = match outliers {
+        Some(o) => {
+            let cloud: Vec<Point3<f64>> = model.points.values().map(|p| p.xyz).collect();
+            inject_outliers(
+                &mut world,
+                &cloud,
+                o.fraction,
+                o.noise,
+                image_seed(o.seed, image_id),
+            )
+        }
+        None => vec![true; world.len()],
+    };
+    ImageProblem {
+        world,
+        pixels,
+        truth,
+    }
+}
+
+/// [`crate::colmap::register_image`] with RANSAC ([`Ransac::estimate_pixels`]) on the image's
+/// correspondences, optionally with injected outliers ([`image_problem`]).
+/// `registration.inliers` is the RANSAC inlier count; the pixel RMSEs are over the true
+/// correspondences.
+///
+/// # Errors
+/// As [`crate::colmap::register_image`].
+pub fn register_image(
+    model: &Model,
+    image_id: u32,
+    ransac: &Ransac,
+    solver: &Solver,
+    outliers: Option<&Outliers>,
+) -> Result<(Registration, RansacSolution, ImageProblem), RegisterError> {
+    let img = model
+        .images
+        .get(&image_id)
+        .ok_or(RegisterError::UnknownImage(image_id))?;
+    let cam = model
+        .cameras
+        .get(&img.camera_id)
+        .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+    let problem = image_problem(model, image_id, outliers);
+    let sol = ransac.estimate_pixels(solver, cam, &problem.world, &problem.pixels)?;
+    let reg = registration(model, image_id, &problem, &sol.solution, sol.num_inliers)?;
+    let mut reg = reg;
+    reg.micros = sol.stats.micros;
+    Ok((reg, sol, problem))
+}
+
+/// A [`Registration`] of `solution` for image `image_id` (errors against the model's pose,
+/// pixel RMSEs over the true correspondences of `problem`).
+///
+/// # Errors
+/// [`RegisterError::UnknownImage`], [`RegisterError::UnknownCamera`].
+pub fn registration(
+    model: &Model,
+    image_id: u32,
+    problem: &ImageProblem,
+    solution: &Solution,
+    inliers: usize,
+) -> Result<Registration, RegisterError> {
+    let img = model
+        .images
+        .get(&image_id)
+        .ok_or(RegisterError::UnknownImage(image_id))?;
+    let cam = model
+        .cameras
+        .get(&img.camera_id)
+        .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+    let (r_ref, t_ref) = img.pose();
+    let r = solution.rotation;
+    let t = solution.pose.translation.vector;
+    let rmse = |r: &Matrix3<f64>, t: &Vector3<f64>| {
+        let (mut s, mut k) = (0.0, 0usize);
+        for ((x, px), ok) in problem
+            .world
+            .iter()
+            .zip(&problem.pixels)
+            .zip(&problem.truth)
+        {
+            if *ok {
+                let p = r * x.coords + t;
+                let q = cam.project(Point2::new(p.x / p.z, p.y / p.z));
+                s += (q - px).norm_squared();
+                k += 1;
+            }
+        }
+        if k == 0 {
+            f64::NAN
+        } else {
+            (s / k as f64).sqrt()
+        }
+    };
+    Ok(Registration {
+        image_id,
+        name: img.name.clone(),
+        n: problem.world.len(),
+        inliers,
+        skipped: 0,
+        solution: *solution,
+        rotation_error_deg: crate::metrics::rotation_error_deg(&r, &r_ref),
+        translation_error_pct: crate::metrics::translation_error_pct(&t, &t_ref),
+        rmse_px: rmse(&r, &t),
+        model_rmse_px: rmse(&r_ref, &t_ref),
+        micros: 0.0,
+    })
+}
+
+/// The floor of an image problem: EOPnP ([`crate::camera::solve_pixels`] with `solver`) on the
+/// true correspondences only, as a [`Registration`].
+///
+/// # Errors
+/// As [`crate::colmap::register_image`].
+pub fn floor(
+    model: &Model,
+    image_id: u32,
+    problem: &ImageProblem,
+    solver: &Solver,
+) -> Result<Registration, RegisterError> {
+    let img = model
+        .images
+        .get(&image_id)
+        .ok_or(RegisterError::UnknownImage(image_id))?;
+    let cam = model
+        .cameras
+        .get(&img.camera_id)
+        .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+    let (mut w, mut p) = (Vec::new(), Vec::new());
+    for ((x, px), ok) in problem
+        .world
+        .iter()
+        .zip(&problem.pixels)
+        .zip(&problem.truth)
+    {
+        if *ok {
+            w.push(*x);
+            p.push(*px);
+        }
+    }
+    let start = Instant::now();
+    let sol = crate::camera::solve_pixels(solver, cam, &w, &p)?;
+    let micros = start.elapsed().as_secs_f64() * 1e6;
+    let mut reg = registration(model, image_id, problem, &sol.solution, sol.used)?;
+    reg.micros = micros;
+    Ok(reg)
+}
+
+/// `impl sample_consensus::Estimator` (feature `sample-consensus`), so rust-cv's consensus
+/// algorithms (e.g. `arrsac::Arrsac`) can drive the [`crate::p3p`] minimal solver; refit the
+/// consensus's inliers with [`Solver`] (EOPnP) afterwards, as [`Ransac`] does.
+#[cfg(feature = "sample-consensus")]
+pub mod consensus {
+    use arrayvec::ArrayVec;
+    use nalgebra::{Matrix3, Point2, Point3, Vector3};
+    use sample_consensus::{Estimator, Model};
+
+    use crate::p3p::{p3p, MAX_P3P_SOLUTIONS};
+
+    /// One 2D-3D correspondence: world point, normalised image point `(x/z, y/z)` and the
+    /// scale from normalised to pixel residuals (e.g. the focal length).
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Correspondence {
+        /// World point.
+        pub world: Point3<f64>,
+        /// Normalised image point.
+        pub image: Point2<f64>,
+        /// Pixels per normalised unit at this point.
+        pub pixel_scale: f64,
+    }
+
+    /// A world-to-camera pose `x_cam = R X + t`.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct PoseModel {
+        /// Rotation `R`.
+        pub rotation: Matrix3<f64>,
+        /// Translation `t`.
+        pub translation: Vector3<f64>,
+    }
+
+    impl Model<Correspondence> for PoseModel {
+        /// Pixel reprojection error (infinite behind the camera).
+        fn residual(&self, c: &Correspondence) -> f64 {
+            let p = self.rotation * c.world.coords + self.translation;
+            if !(p.z > 0.0) {
+                return f64::INFINITY;
+            }
+            let d = Point2::new(p.x / p.z, p.y / p.z) - c.image;
+            c.pixel_scale * d.norm()
+        }
+    }
+
+    /// The P3P minimal solver as a `sample_consensus::Estimator` (3 samples, up to 4 models).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub struct P3pEstimator;
+
+    impl Estimator<Correspondence> for P3pEstimator {
+        type Model = PoseModel;
+        type ModelIter = ArrayVec<PoseModel, MAX_P3P_SOLUTIONS>;
+        const MIN_SAMPLES: usize = 3;
+
+        /// Poses from the first three correspondences; none (rather than the trait's suggested
+        /// panic) if fewer are given or the triplet is degenerate.
+        fn estimate<I>(&self, mut data: I) -> Self::ModelIter
+        where
+            I: Iterator<Item = Correspondence> + Clone,
+        {
+            let (Some(a), Some(b), Some(c)) = (data.next(), data.next(), data.next()) else {
+                return ArrayVec::new();
+            };
+            let bearing = |c: &Correspondence| Vector3::new(c.image.x, c.image.y, 1.0);
+            p3p(
+                &[a.world, b.world, c.world],
+                &[bearing(&a), bearing(&b), bearing(&c)],
+            )
+            .into_iter()
+            .map(|p| PoseModel {
+                rotation: p.rotation,
+                translation: p.translation,
+            })
+            .collect()
+        }
+    }
+}
