@@ -26,30 +26,6 @@ use nalgebra::{Matrix2, Matrix3, SMatrix, SVector};
 /// eigenvalue of `Q` along `vec(A)`, ~1e-16 trace(M)).
 const CERT_EPS: f64 = 1e-11;
 
-/// Cholesky factorisation test of a small symmetric matrix (no allocation).
-fn positive_definite<const D: usize>(a: &SMatrix<f64, D, D>) -> bool {
-    let mut l = SMatrix::<f64, D, D>::zeros();
-    for j in 0..D {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= l[(j, k)] * l[(j, k)];
-        }
-        if !(d > 0.0) {
-            return false;
-        }
-        let djj = d.sqrt();
-        l[(j, j)] = djj;
-        for i in j + 1..D {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= l[(i, k)] * l[(j, k)];
-            }
-            l[(i, j)] = s / djj;
-        }
-    }
-    true
-}
-
 /// Whether the rotation `a` is certified as a global minimum of `vec(R)^T M vec(R)` over O(3).
 pub(crate) fn global_minimum(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, scale: f64) -> bool {
     let r = SVector::<f64, 9>::from_row_slice(a.transpose().as_slice());
@@ -69,7 +45,7 @@ pub(crate) fn global_minimum(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, scale: f6
     for i in 0..9 {
         q[(i, i)] += eps;
     }
-    positive_definite(&q)
+    crate::linalg::cholesky(&q).is_some()
 }
 
 /// Planar certificate: `a`'s first two columns are a global minimum of the planar cost
@@ -102,5 +78,5 @@ pub(crate) fn global_minimum_planar(m9: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, s
     for i in 0..6 {
         q[(i, i)] += eps;
     }
-    positive_definite(&q)
+    crate::linalg::cholesky(&q).is_some()
 }

@@ -4,8 +4,9 @@
 
 use nalgebra::{SMatrix, SVector};
 
-/// Cholesky factor `L` (lower) of a symmetric positive definite matrix, or `None`.
-fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
+/// Cholesky factor `L` (lower) of a symmetric positive definite matrix, or `None` (also for a
+/// NaN entry).
+pub(crate) fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
     let mut l = SMatrix::<f64, D, D>::zeros();
     for j in 0..D {
         let mut d = a[(j, j)];
