@@ -193,8 +193,9 @@ impl Solver {
         self
     }
 
-    /// `true` runs every candidate generator and refines every start for every problem
-    /// (ALGORITHM.md S4-S6 literally). Default: `false`: the case-1 (planar: p1) start is refined
+    /// `true` runs every candidate generator and refines every start to convergence for every
+    /// problem (ALGORITHM.md S4-S6 literally: no certified early exit, no skipping of starts
+    /// that lie near an already refined minimum). Default: `false`: the case-1 (planar: p1) start is refined
     /// first, and accepted without the rest of the search when a Lagrangian dual certificate
     /// proves it is the global minimum of the cost and more than half of the points are in
     /// front of it; S7 would select the same minimum.
@@ -361,7 +362,7 @@ impl Solver {
             let known: ArrayVec<Matrix3<f64>, MAX_CANDIDATES> =
                 minima.iter().map(|m| m.r).collect();
             let refined = refine::refine_so3_until(&m45, scale, r0, &self.newton, &mut |r| {
-                known.iter().any(|k| (k - r).norm() <= IN_BASIN)
+                !self.exhaustive && known.iter().any(|k| (k - r).norm() <= IN_BASIN)
             });
             if refined.stopped_early
                 || !refined.f.is_finite()
@@ -469,7 +470,7 @@ impl Solver {
         for &(_, i) in &init {
             let c = cands[i];
             // A start already inside the basin of a known minimum would only find it again.
-            if minima.iter().any(|m| (m.r - c.r).norm() <= IN_BASIN) {
+            if !self.exhaustive && minima.iter().any(|m| (m.r - c.r).norm() <= IN_BASIN) {
                 continue;
             }
             if let Some(mut m) = refine_start(&c.r, c.source, &minima) {
