@@ -40,6 +40,8 @@
 //! Image points are normalised coordinates; for pixels use [`Solver::solve_pixels`] with
 //! [`Intrinsics`]. The pose maps world to camera: `x_cam = R X + t`.
 #![warn(missing_docs)]
+// `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod accumulate;
 #[doc(hidden)]
@@ -74,13 +76,13 @@ pub mod metrics {
 pub mod __internal {
     use nalgebra::{Matrix3, Point2, Point3, SMatrix};
 
+    /// `(M, G, Rw, ratio)`: the S1-S2 intermediates in the working frame.
+    pub type Intermediates = (SMatrix<f64, 9, 9>, SMatrix<f64, 3, 9>, Matrix3<f64>, f64);
+
     /// `(M, G, Rw, ratio)` of ALGORITHM.md S1-S2 in the working frame, or `None` on invalid
     /// input.
     #[must_use]
-    pub fn intermediates(
-        world: &[Point3<f64>],
-        image: &[Point2<f64>],
-    ) -> Option<(SMatrix<f64, 9, 9>, SMatrix<f64, 3, 9>, Matrix3<f64>, f64)> {
+    pub fn intermediates(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Intermediates> {
         let fr = crate::frame::working_frame(world, image, None, true).ok()?;
         let acc = crate::accumulate::accumulate(world, image, None, &fr);
         let sys = acc.system(false)?;
