@@ -4,7 +4,6 @@
 //! does not depend on the values). 64 inputs per kernel, cycled inside the timed closure.
 
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code)]
 mod common;
 mod support;
 

@@ -2,7 +2,6 @@
 //! algebraic refinement. Each benchmark cycles through a fixed, pre-generated problem set.
 
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code)]
 mod common;
 mod support;
 

@@ -5,7 +5,6 @@
 //! are computed outside the timed closure.
 
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code)]
 mod common;
 mod support;
 

@@ -10,7 +10,6 @@
 //! produced the winning start.
 
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code)]
 mod common;
 
 use common::{mean, median, trial_seed, Problem, ProblemOptions, RotationKind, Scene};
@@ -89,10 +88,9 @@ fn run(
 fn print_table(title: &str, rows: &[Row]) {
     println!("\n### {title}\n");
     println!(
-        "| {} | default rot mean / median | algebraic rot mean / median | LM-from-GT rot mean / median \
+        "| case | default rot mean / median | algebraic rot mean / median | LM-from-GT rot mean / median \
          | default t% mean / median | algebraic t% mean / median | LM-from-GT t% mean / median \
-         | failures default / algebraic / LM |",
-        "case"
+         | failures default / algebraic / LM |"
     );
     println!("|---|---|---|---|---|---|---|---|");
     for r in rows {

@@ -235,7 +235,7 @@ fn inv3(a: &[[Q; 3]; 3]) -> Option<[[Q; 3]; 3]> {
         let rs: Vec<usize> = (0..3).filter(|&i| i != r).collect();
         let cs: Vec<usize> = (0..3).filter(|&i| i != c).collect();
         let d = m(rs[0], cs[0]) * m(rs[1], cs[1]) - m(rs[0], cs[1]) * m(rs[1], cs[0]);
-        if (r + c) % 2 == 0 {
+        if (r + c).is_multiple_of(2) {
             d
         } else {
             -d
@@ -251,6 +251,7 @@ fn inv3(a: &[[Q; 3]; 3]) -> Option<[[Q; 3]; 3]> {
 }
 
 #[test]
+#[allow(clippy::needless_range_loop)] // symmetric fill f[i][j] = f[j][i]
 fn case4_determinant_vanishes_at_a_known_root() {
     // Three quadrics in (1, k1, k2, k3) with a common root (k1*, k2*, k3*): random symmetric
     // 4x4 forms, each with F00 adjusted so that w^T F w = 0 at w = (1, k1*, k2*, k3*).
@@ -353,7 +354,7 @@ fn case4_determinant_has_degree_8_and_17395_terms() {
 fn bareiss_agrees_with_cofactor_on_a_symbolic_sylvester() {
     // Small symbolic case: two quadratics' 4x4 Sylvester matrix via Bareiss equals the textbook
     // resultant a2^2 c0^2 - ... checked by vanishing at a common root.
-    let a: Vec<Poly> = (0..3).map(|i| Poly::var(i)).collect();
+    let a: Vec<Poly> = (0..3).map(Poly::var).collect();
     let r = q(3);
     // second quadratic (x - r)(x - 2) and first a0 + a1 x + a2 x^2 with a0 = -(a1 r + a2 r^2)
     let a0 = a[1].scale(&r).add(&a[2].scale(&(r * r))).neg();

@@ -25,7 +25,6 @@
 //! read by `scripts/compare_opencv.py`); `DIR` defaults to `target/compare` in the workspace.
 
 #[path = "../../tests/common/mod.rs"]
-#[allow(dead_code)]
 mod common;
 mod peers;
 mod svg;
