@@ -20,12 +20,12 @@
 //! then 48 multiply-adds for the sums (q: 2, w u / w v / w q: 3, su/sv/sq: 3, w P: 3, a: 3,
 //! a_u/a_v/a_q: 9, w P P^T: 6, S/S_u/S_v/S_q: 6 + 18): 60 in all, no allocation.
 
-use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector3};
+use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector2, Vector3};
 
 use crate::frame::WorkingFrame;
 
 /// The weighted sums of S2 (symmetric matrices stored in full).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Accumulator {
     /// `sum w` (the N of the unweighted formulas).
     pub sw: f64,
@@ -71,6 +71,7 @@ const SYM6: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2
 /// the working frame on the fly ([`WorkingFrame::to_working`]). Weights must already be
 /// validated ([`crate::frame::working_frame`]); a point with weight 0 is skipped, so it gives
 /// bit-identical sums to removing it.
+#[cfg_attr(not(test), allow(dead_code))]
 pub(crate) fn accumulate(
     world: &[Point3<f64>],
     image: &[Point2<f64>],
@@ -139,6 +140,191 @@ pub(crate) fn accumulate(
         s_u: full(&s_u),
         s_v: full(&s_v),
         s_q: full(&s_q),
+    }
+}
+
+/// Parameters of [`accumulate_centred`]: the point map `Y = X * inv_unit - centre` (exact
+/// power-of-two units, then centred), the optional linear map applied to `Y`, the weight unit
+/// and the image map used for the image spread.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CentredMap {
+    /// `1 / sx`, an exact power of two (world unit).
+    pub inv_unit: f64,
+    /// Weighted centroid in world units of `sx`.
+    pub centre: Vector3<f64>,
+    /// `1 / sw`, an exact power of two (weight unit).
+    pub inv_weight: f64,
+    /// `1 / sm`, an exact power of two (image unit; spread only).
+    pub inv_image: f64,
+    /// Weighted image mean in image units of `sm` (spread only).
+    pub image_mean: Vector2<f64>,
+}
+
+/// Output of [`accumulate_centred`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CentredSums {
+    /// The S2 sums of the mapped points `p = A Y` (or `Y`), with weights `w / sw`.
+    pub acc: Accumulator,
+    /// `sum (w / sw) |m / sm - image_mean|^2` (the S1 image spread, before dividing by the
+    /// weight sum).
+    pub spread: f64,
+}
+
+/// Sums of one point (`T` monomials x 4 weight factors) kept as a flat array: row `k` holds
+/// the monomial `k` of `p` = `1, x, y, z, xx, xy, xz, yy, yz, zz` times `[w, w u, w v, w q]`.
+type Sums = [[f64; 4]; 10];
+
+/// Add one point to `s`; `p` is the mapped point, `w` the scaled weight (> 0).
+#[inline(always)]
+fn add_point(s: &mut Sums, p: [f64; 3], u: f64, v: f64, w: f64) {
+    let q = u * u + v * v;
+    let f = [w, w * u, w * v, w * q];
+    let mono = [
+        1.0,
+        p[0],
+        p[1],
+        p[2],
+        p[0] * p[0],
+        p[0] * p[1],
+        p[0] * p[2],
+        p[1] * p[1],
+        p[1] * p[2],
+        p[2] * p[2],
+    ];
+    for k in 0..10 {
+        for j in 0..4 {
+            s[k][j] += f[j] * mono[k];
+        }
+    }
+}
+
+/// The centred pass over all points (`W`: weights present; `R`: apply `a` to `Y`).
+#[inline(always)]
+fn centred_pass<const W: bool, const R: bool>(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: &[f64],
+    map: &CentredMap,
+    a: &Matrix3<f64>,
+) -> (Sums, f64) {
+    let mut s: Sums = [[0.0; 4]; 10];
+    let mut spread = 0.0f64;
+    let (isx, c, isw, ism, mm) = (
+        map.inv_unit,
+        map.centre,
+        map.inv_weight,
+        map.inv_image,
+        map.image_mean,
+    );
+    let n = world.len().min(image.len());
+    for i in 0..n {
+        let w = if W { weights[i] } else { 1.0 };
+        if W && w <= 0.0 {
+            continue;
+        }
+        let w = w * isw;
+        let x = &world[i];
+        let y = [x.x * isx - c.x, x.y * isx - c.y, x.z * isx - c.z];
+        let p = if R {
+            [
+                a[(0, 0)] * y[0] + a[(0, 1)] * y[1] + a[(0, 2)] * y[2],
+                a[(1, 0)] * y[0] + a[(1, 1)] * y[1] + a[(1, 2)] * y[2],
+                a[(2, 0)] * y[0] + a[(2, 1)] * y[1] + a[(2, 2)] * y[2],
+            ]
+        } else {
+            y
+        };
+        let m = &image[i];
+        let du = m.x * ism - mm.x;
+        let dv = m.y * ism - mm.y;
+        spread += w * (du * du + dv * dv);
+        add_point(&mut s, p, m.x, m.y, w);
+    }
+    (s, spread)
+}
+
+/// S1/S2 fused pass: the S2 sums of `p = A Y` (`a = Some(A)`) or of `p = Y` (`a = None`),
+/// `Y = X / sx - centre`, with weights `w / sw` (points with `w <= 0` are skipped, so they give
+/// bit-identical sums to removing them), plus the S1 image spread. The weights must already
+/// be validated.
+///
+/// Cost per point: 3 (+ 15 with `A`) flops for the point, 7 for the spread, 3 for `q` and
+/// `w u, w v, w q`, 6 for the quadratic monomials and 40 multiply-adds for the sums.
+pub(crate) fn accumulate_centred(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    map: &CentredMap,
+    a: Option<&Matrix3<f64>>,
+) -> CentredSums {
+    let id = Matrix3::identity();
+    let (s, spread) = match (weights, a) {
+        (None, None) => centred_pass::<false, false>(world, image, &[], map, &id),
+        (None, Some(a)) => centred_pass::<false, true>(world, image, &[], map, a),
+        (Some(w), None) => centred_pass::<true, false>(world, image, w, map, &id),
+        (Some(w), Some(a)) => centred_pass::<true, true>(world, image, w, map, a),
+    };
+    let vec = |j: usize| Vector3::new(s[1][j], s[2][j], s[3][j]);
+    let mat = |j: usize| {
+        Matrix3::new(
+            s[4][j], s[5][j], s[6][j], //
+            s[5][j], s[7][j], s[8][j], //
+            s[6][j], s[8][j], s[9][j],
+        )
+    };
+    CentredSums {
+        acc: Accumulator {
+            sw: s[0][0],
+            su: s[0][1],
+            sv: s[0][2],
+            sq: s[0][3],
+            a: vec(0),
+            a_u: vec(1),
+            a_v: vec(2),
+            a_q: vec(3),
+            s: mat(0),
+            s_u: mat(1),
+            s_v: mat(2),
+            s_q: mat(3),
+        },
+        spread,
+    }
+}
+
+/// `B S B^T` for symmetric `S`, exactly symmetric (upper triangle computed, then mirrored).
+fn congruence(b: &Matrix3<f64>, s: &Matrix3<f64>) -> Matrix3<f64> {
+    let bs = b * s;
+    let mut out = Matrix3::zeros();
+    for &(r, c) in &SYM6 {
+        let x = bs.row(r).dot(&b.row(c));
+        out[(r, c)] = x;
+        out[(c, r)] = x;
+    }
+    out
+}
+
+impl Accumulator {
+    /// The sums of the points `B p` with weights `scale * w`, from the sums of the points `p`
+    /// with weights `w`: scalar sums times `scale`, vector sums `scale B a`, matrix sums
+    /// `scale B S B^T`. An exact identity up to rounding (the sums are linear and quadratic in
+    /// `p`). `scale` is a power of two (the weight unit), so it is applied exactly.
+    pub(crate) fn transformed(&self, b: &Matrix3<f64>, scale: f64) -> Accumulator {
+        let v = |x: &Vector3<f64>| (b * x) * scale;
+        let m = |x: &Matrix3<f64>| congruence(b, x) * scale;
+        Accumulator {
+            sw: self.sw * scale,
+            su: self.su * scale,
+            sv: self.sv * scale,
+            sq: self.sq * scale,
+            a: v(&self.a),
+            a_u: v(&self.a_u),
+            a_v: v(&self.a_v),
+            a_q: v(&self.a_q),
+            s: m(&self.s),
+            s_u: m(&self.s_u),
+            s_v: m(&self.s_v),
+            s_q: m(&self.s_q),
+        }
     }
 }
 

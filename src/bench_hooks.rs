@@ -30,7 +30,7 @@ pub struct Prepared {
 #[must_use]
 pub fn accumulate(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<SMatrix<f64, 9, 9>> {
     let fr = frame::working_frame(world, image, None, true).ok()?;
-    let acc = accumulate::accumulate(world, image, None, &fr);
+    let acc = fr.sums;
     acc.system(false).map(|s| s.m)
 }
 
@@ -61,7 +61,7 @@ pub fn count_eigenvalues_below9(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
 #[must_use]
 pub fn prepare(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Prepared> {
     let fr = frame::working_frame(world, image, None, true).ok()?;
-    let sys = accumulate::accumulate(world, image, None, &fr).system(false)?;
+    let sys = fr.sums.system(false)?;
     let (vals, vecs) = eigen9(&sys.m)?;
     let mut order: [usize; 9] = std::array::from_fn(|i| i);
     order.sort_by(|&a, &b| vals[a].total_cmp(&vals[b]));

@@ -84,7 +84,7 @@ pub mod __internal {
     #[must_use]
     pub fn intermediates(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Intermediates> {
         let fr = crate::frame::working_frame(world, image, None, true).ok()?;
-        let acc = crate::accumulate::accumulate(world, image, None, &fr);
+        let acc = fr.sums;
         let sys = acc.system(false)?;
         Some((sys.m, sys.g, fr.rw, fr.ratio))
     }

@@ -325,7 +325,7 @@ impl Solver {
         // S1.
         let fr = frame::working_frame(world, image, weights, self.align_world_axes)?;
         // S2.
-        let acc = accumulate::accumulate(world, image, weights, &fr);
+        let acc = fr.sums;
         let sys = acc.system(false).ok_or(PnpError::NoSolution)?;
         let m45 = accumulate::m_upper(&sys.m);
         let scale = sys.trace;
