@@ -415,7 +415,7 @@ impl Solver {
                 if let Some(mut m) = refine_start(&r0, source, &minima) {
                     if is_certified(&m.r) && in_front(world, weights, &fr, &m.r, &m.t, n_active) {
                         m.cheirality = Some(true);
-                        return Ok(ctx.finish(&m, self.refinement, &reproj_opts));
+                        return ctx.finish(&m, self.refinement, &reproj_opts);
                     }
                     minima.push(m);
                 }
@@ -480,7 +480,7 @@ impl Solver {
                     && in_front(world, weights, &fr, &m.r, &m.t, n_active)
                 {
                     m.cheirality = Some(true);
-                    return Ok(ctx.finish(&m, self.refinement, &reproj_opts));
+                    return ctx.finish(&m, self.refinement, &reproj_opts);
                 }
                 if !minima.is_full() {
                     minima.push(m);
@@ -496,14 +496,14 @@ impl Solver {
                 m.cheirality = Some(in_front(world, weights, &fr, &m.r, &m.t, n_active));
             }
             for m in &minima {
-                let s = ctx.finish(m, self.refinement, &reproj_opts);
-                if s.pose.rotation.coords.iter().all(|x| x.is_finite())
-                    && !all.iter().any(|o: &Solution| {
-                        (o.rotation - s.rotation).norm() <= 1e-6
-                            && (o.pose.translation.vector - s.pose.translation.vector).norm()
-                                <= 1e-6 * (1.0 + s.pose.translation.vector.norm())
-                    })
-                {
+                let Ok(s) = ctx.finish(m, self.refinement, &reproj_opts) else {
+                    continue;
+                };
+                if !all.iter().any(|o: &Solution| {
+                    (o.rotation - s.rotation).norm() <= 1e-6
+                        && (o.pose.translation.vector - s.pose.translation.vector).norm()
+                            <= 1e-6 * (1.0 + s.pose.translation.vector.norm())
+                }) {
                     all.push(s);
                 }
             }
@@ -527,7 +527,7 @@ impl Solver {
                 break;
             }
         }
-        Ok(ctx.finish(&minima[pick], self.refinement, &reproj_opts))
+        ctx.finish(&minima[pick], self.refinement, &reproj_opts)
     }
 }
 
@@ -555,7 +555,15 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     /// S9 (optional) and S8 for one minimum.
-    fn finish(&self, m: &Minimum, mode: Refinement, opts: &ReprojOptions) -> Solution {
+    /// S9 (optional) and S8 for one minimum. The only way out of the solver: a pose that is not
+    /// finite in the world frame (e.g. a translation that overflows when the working-frame
+    /// scale is undone) is [`PnpError::NoSolution`], never an `Ok`.
+    fn finish(
+        &self,
+        m: &Minimum,
+        mode: Refinement,
+        opts: &ReprojOptions,
+    ) -> Result<Solution, PnpError> {
         let (mut r, mut t) = (m.r, m.t);
         let mut iters = 0;
         // What S9 already knows at its final pose: the cost (equal to the reprojection error
@@ -603,7 +611,7 @@ impl Ctx<'_> {
             None => reprojection_error(self.world, self.image, self.weights, &rw, &tw),
         };
         let rot = crate::rotation::to_unit_quaternion(&rw);
-        Solution {
+        let sol = Solution {
             pose: Isometry3::from_parts(Translation3::from(tw), rot),
             rotation: rw,
             cost: if mode == Refinement::Algebraic {
@@ -623,6 +631,14 @@ impl Ctx<'_> {
             source: m.source,
             newton_iterations: m.iterations,
             reprojection_iterations: iters,
+        };
+        let finite = sol.rotation.iter().all(|x| x.is_finite())
+            && sol.pose.translation.vector.iter().all(|x| x.is_finite())
+            && sol.pose.rotation.coords.iter().all(|x| x.is_finite());
+        if finite {
+            Ok(sol)
+        } else {
+            Err(PnpError::NoSolution)
         }
     }
 }

@@ -433,3 +433,42 @@ proptest! {
         check_finite_or_err(eopnp::solve(&p.world, &p.image))?;
     }
 }
+
+/// Regression (found by `solve_never_panics` in CI rehearsal): world coordinates at 1e300 with
+/// an image coordinate at 1.2e137 made the translation overflow when the working-frame scale
+/// was undone, and `solve` returned `Ok` with an infinite translation. Every exit now checks
+/// that the world-frame pose is finite.
+#[test]
+fn huge_world_and_image_coordinates_never_give_a_non_finite_pose() {
+    let world = [
+        Point3::new(0.0, 0.0, 0.0),
+        Point3::new(0.0, 0.0, 0.0),
+        Point3::new(0.0, 0.0, 0.0),
+        Point3::new(0.0, 0.0, 1e300),
+        Point3::new(1e300, 0.0, 0.0),
+    ];
+    let image = [
+        Point2::new(0.0, 0.0),
+        Point2::new(0.0, 1.1912733123490079e137),
+        Point2::new(0.0, 0.0),
+        Point2::new(0.0, 0.0),
+        Point2::new(0.0, 0.0),
+    ];
+    for solver in [
+        eopnp::Solver::default(),
+        eopnp::Solver::default().refinement(eopnp::Refinement::Algebraic),
+    ] {
+        match solver.solve(&world, &image) {
+            Ok(s) => {
+                assert!(s.pose.translation.vector.iter().all(|x| x.is_finite()));
+                assert!(s.rotation.iter().all(|x| x.is_finite()));
+            }
+            Err(e) => assert_eq!(e, eopnp::PnpError::NoSolution, "{e}"),
+        }
+        if let Ok(all) = solver.solve_all(&world, &image) {
+            assert!(all
+                .iter()
+                .all(|s| s.pose.translation.vector.iter().all(|x| x.is_finite())));
+        }
+    }
+}
