@@ -75,6 +75,22 @@ pub struct Model {
 }
 
 impl Model {
+    /// An image and its camera.
+    ///
+    /// # Errors
+    /// [`RegisterError::UnknownImage`] or [`RegisterError::UnknownCamera`].
+    pub fn image_and_camera(&self, image_id: u32) -> Result<(&Image, &Camera), RegisterError> {
+        let img = self
+            .images
+            .get(&image_id)
+            .ok_or(RegisterError::UnknownImage(image_id))?;
+        let cam = self
+            .cameras
+            .get(&img.camera_id)
+            .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+        Ok((img, cam))
+    }
+
     /// The 2D-3D correspondences of an image: world points and their observed (distorted)
     /// pixels, in the order of the image's observations. Empty for an unknown image id.
     /// (Every referenced 3D point exists: [`read_model`] checks this.)
@@ -942,14 +958,7 @@ pub fn register_image(
     image_id: u32,
     solver: &Solver,
 ) -> Result<Registration, RegisterError> {
-    let img = model
-        .images
-        .get(&image_id)
-        .ok_or(RegisterError::UnknownImage(image_id))?;
-    let cam = model
-        .cameras
-        .get(&img.camera_id)
-        .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+    let (img, cam) = model.image_and_camera(image_id)?;
     let (world, pixels) = model.correspondences(image_id);
 
     let start = Instant::now();

@@ -779,14 +779,7 @@ pub fn register_image(
     solver: &Solver,
     outliers: Option<&Outliers>,
 ) -> Result<(Registration, RansacSolution, ImageProblem), RegisterError> {
-    let img = model
-        .images
-        .get(&image_id)
-        .ok_or(RegisterError::UnknownImage(image_id))?;
-    let cam = model
-        .cameras
-        .get(&img.camera_id)
-        .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+    let (_, cam) = model.image_and_camera(image_id)?;
     let problem = image_problem(model, image_id, outliers);
     let sol = ransac.estimate_pixels(solver, cam, &problem.world, &problem.pixels)?;
     let reg = registration(model, image_id, &problem, &sol.solution, sol.num_inliers)?;
@@ -807,14 +800,7 @@ pub fn registration(
     solution: &Solution,
     inliers: usize,
 ) -> Result<Registration, RegisterError> {
-    let img = model
-        .images
-        .get(&image_id)
-        .ok_or(RegisterError::UnknownImage(image_id))?;
-    let cam = model
-        .cameras
-        .get(&img.camera_id)
-        .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+    let (img, cam) = model.image_and_camera(image_id)?;
     let (r_ref, t_ref) = img.pose();
     let r = solution.rotation;
     let t = solution.pose.translation.vector;
@@ -865,14 +851,7 @@ pub fn floor(
     problem: &ImageProblem,
     solver: &Solver,
 ) -> Result<Registration, RegisterError> {
-    let img = model
-        .images
-        .get(&image_id)
-        .ok_or(RegisterError::UnknownImage(image_id))?;
-    let cam = model
-        .cameras
-        .get(&img.camera_id)
-        .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+    let (_, cam) = model.image_and_camera(image_id)?;
     let (mut w, mut p) = (Vec::new(), Vec::new());
     for ((x, px), ok) in problem
         .world
