@@ -61,6 +61,8 @@ mod reproj;
 pub mod roots;
 mod rotation;
 mod solver;
+#[cfg(test)]
+mod test_data;
 
 pub use error::{DegenerateKind, InputKind, PnpError};
 pub use nullspace::CandidateSource;
