@@ -229,17 +229,9 @@ fn read_file(path: &Path) -> Result<Vec<u8>, ModelError> {
 /// # Errors
 /// As [`read_model`].
 pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    let dir = dir.as_ref();
-    let [c, i, p] = TEXT_FILES.map(|n| dir.join(n));
-    let mut model = Model {
-        cameras: parse_cameras_text(&c, &read_file(&c)?)?,
-        ..Model::default()
-    };
-    let (images, locs) = parse_images_text(&i, &read_file(&i)?)?;
-    model.images = images;
-    model.points = parse_points_text(&p, &read_file(&p)?)?;
-    check_references(&model, &i, &locs)?;
-    Ok(model)
+    let paths = TEXT_FILES.map(|n| dir.as_ref().join(n));
+    let [c, i, p] = [0, 1, 2].map(|k| read_file(&paths[k]));
+    parse_text(&paths, [&c?, &i?, &p?])
 }
 
 /// Reads a binary-format model (`cameras.bin`, `images.bin`, `points3D.bin`) from `dir`.
@@ -247,16 +239,58 @@ pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
 /// # Errors
 /// As [`read_model`].
 pub fn read_model_binary(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    let dir = dir.as_ref();
-    let [c, i, p] = BIN_FILES.map(|n| dir.join(n));
+    let paths = BIN_FILES.map(|n| dir.as_ref().join(n));
+    let [c, i, p] = [0, 1, 2].map(|k| read_file(&paths[k]));
+    parse_binary(&paths, [&c?, &i?, &p?])
+}
+
+/// Parses a text-format model from the contents of its three files (e.g. read from an
+/// archive). Errors name the files `cameras.txt`, `images.txt` and `points3D.txt`.
+///
+/// # Errors
+/// As [`read_model`].
+pub fn parse_model_text(
+    cameras: &[u8],
+    images: &[u8],
+    points3d: &[u8],
+) -> Result<Model, ModelError> {
+    parse_text(&TEXT_FILES.map(PathBuf::from), [cameras, images, points3d])
+}
+
+/// Parses a binary-format model from the contents of its three files. Errors name the files
+/// `cameras.bin`, `images.bin` and `points3D.bin`.
+///
+/// # Errors
+/// As [`read_model`].
+pub fn parse_model_binary(
+    cameras: &[u8],
+    images: &[u8],
+    points3d: &[u8],
+) -> Result<Model, ModelError> {
+    parse_binary(&BIN_FILES.map(PathBuf::from), [cameras, images, points3d])
+}
+
+fn parse_text(paths: &[PathBuf; 3], [c, i, p]: [&[u8]; 3]) -> Result<Model, ModelError> {
     let mut model = Model {
-        cameras: parse_cameras_bin(&c, &read_file(&c)?)?,
+        cameras: parse_cameras_text(&paths[0], c)?,
         ..Model::default()
     };
-    let (images, locs) = parse_images_bin(&i, &read_file(&i)?)?;
+    let (images, locs) = parse_images_text(&paths[1], i)?;
     model.images = images;
-    model.points = parse_points_bin(&p, &read_file(&p)?)?;
-    check_references(&model, &i, &locs)?;
+    model.points = parse_points_text(&paths[2], p)?;
+    check_references(&model, &paths[1], &locs)?;
+    Ok(model)
+}
+
+fn parse_binary(paths: &[PathBuf; 3], [c, i, p]: [&[u8]; 3]) -> Result<Model, ModelError> {
+    let mut model = Model {
+        cameras: parse_cameras_bin(&paths[0], c)?,
+        ..Model::default()
+    };
+    let (images, locs) = parse_images_bin(&paths[1], i)?;
+    model.images = images;
+    model.points = parse_points_bin(&paths[2], p)?;
+    check_references(&model, &paths[1], &locs)?;
     Ok(model)
 }
 

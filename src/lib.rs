@@ -48,6 +48,11 @@ mod accumulate;
 pub mod bench_hooks;
 pub mod camera;
 mod certify;
+/// The `eopnp` command line (the binary is a thin `main` around [`cli::run`]). Public so that
+/// the fuzz targets can drive the input parsers; not a stable API.
+#[cfg(feature = "cli")]
+#[doc(hidden)]
+pub mod cli;
 pub mod colmap;
 mod error;
 mod frame;

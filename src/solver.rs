@@ -596,7 +596,10 @@ impl Ctx<'_> {
             iters = out.iterations;
         }
         let rv = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
-        let f = (rv.transpose() * self.sys.m * rv)[(0, 0)];
+        // M is positive semi-definite, so f >= 0 in exact arithmetic. With wildly scaled input
+        // (found by fuzzing: an image coordinate of 3e9) the accumulated M is not PSD to
+        // working precision and r^T M r comes out negative; the nearest admissible value is 0.
+        let f = (rv.transpose() * self.sys.m * rv)[(0, 0)].max(0.0);
         let cheirality = match m.cheirality {
             Some(c) if mode == Refinement::Algebraic || depth_signs_kept => c,
             _ => in_front(self.world, self.weights, self.fr, &r, &t, self.fr.n_active),

@@ -2,8 +2,8 @@
 
 use std::path::Path;
 
-use eopnp::camera::Camera;
-use eopnp::Solver;
+use crate::camera::Camera;
+use crate::Solver;
 use nalgebra::{Point2, Point3};
 use serde::Deserialize;
 use serde_json::json;
@@ -11,7 +11,7 @@ use serde_json::json;
 use super::Failure;
 
 /// A parsed problem: camera, pixels and world points.
-pub(crate) struct Problem {
+pub struct Problem {
     camera: Camera,
     pixels: Vec<Point2<f64>>,
     world: Vec<Point3<f64>>,
@@ -64,7 +64,22 @@ fn line_of(text: &str, needle: &str) -> Option<usize> {
 pub(crate) fn read_problem(path: &Path, camera_arg: Option<&str>) -> Result<Problem, Failure> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| Failure::input(format!("{name}: {e}")))?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    parse_problem(&name, &bytes, ext.as_deref(), camera_arg)
+}
+
+/// Parses the contents of a problem file named `name` (for messages) with extension `ext`
+/// (`"json"`, `"csv"`, or anything else: JSON when the text starts with `{`).
+pub fn parse_problem(
+    name: &str,
+    bytes: &[u8],
+    ext: Option<&str>,
+    camera_arg: Option<&str>,
+) -> Result<Problem, Failure> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
         let line = 1 + bytes[..e.valid_up_to()]
             .iter()
             .filter(|&&b| b == b'\n')
@@ -72,17 +87,13 @@ pub(crate) fn read_problem(path: &Path, camera_arg: Option<&str>) -> Result<Prob
         Failure::input(format!("{name}:{line}: invalid UTF-8"))
     })?;
     let camera_arg = camera_arg.map(parse_camera_arg).transpose()?;
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let is_json = match ext.as_deref() {
+    let is_json = match ext {
         Some("json") => true,
         Some("csv") => false,
         _ => text.trim_start().starts_with('{'),
     };
     if is_json {
-        read_json(&name, text, camera_arg)
+        read_json(name, text, camera_arg)
     } else {
         let camera = camera_arg.ok_or_else(|| {
             Failure::input(format!(
@@ -90,7 +101,7 @@ pub(crate) fn read_problem(path: &Path, camera_arg: Option<&str>) -> Result<Prob
                  --camera \"SIMPLE_RADIAL 1245.65 600 800 0.0577\""
             ))
         })?;
-        read_csv(&name, text, camera)
+        read_csv(name, text, camera)
     }
 }
 
@@ -220,7 +231,7 @@ fn truncate(s: &str) -> String {
 }
 
 /// Solves the problem and renders the pose JSON.
-pub(crate) fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
+pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
     // Undistortion failures are input errors here (`solve_pixels` would skip the point).
     for (k, px) in p.pixels.iter().enumerate() {
         p.camera.undistort(*px).map_err(|e| {
@@ -232,7 +243,7 @@ pub(crate) fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
             ))
         })?;
     }
-    let sol = eopnp::camera::solve_pixels(solver, &p.camera, &p.world, &p.pixels)
+    let sol = crate::camera::solve_pixels(solver, &p.camera, &p.world, &p.pixels)
         .map_err(|e| Failure::solver(format!("no pose: {e}")))?
         .solution;
 

@@ -1,13 +1,13 @@
 //! Command-line interface of the `eopnp` binary.
 
-mod input;
+pub mod input;
 mod register;
 
 use std::io::Write;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use eopnp::{Refinement, Solver};
+use crate::{Refinement, Solver};
 
 /// Camera pose from 2D-3D point correspondences (EOPnP, Zhou & Kaess 2019, plus a
 /// reprojection-error refinement).

@@ -5,8 +5,8 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use eopnp::colmap::{self, Model, RegisterError, Registration};
-use eopnp::ransac::{self, ImageProblem, Outliers, Ransac, RansacStats};
+use crate::colmap::{self, Model, RegisterError, Registration};
+use crate::ransac::{self, ImageProblem, Outliers, Ransac, RansacStats};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
@@ -107,7 +107,7 @@ fn plain_on_problem(
     model: &Model,
     image_id: u32,
     problem: &ImageProblem,
-    solver: &eopnp::Solver,
+    solver: &crate::Solver,
 ) -> Result<Registration, RegisterError> {
     let cam = model
         .images
@@ -118,7 +118,7 @@ fn plain_on_problem(
     let mut sol = None;
     for _ in 0..3 {
         let start = Instant::now();
-        let s = eopnp::camera::solve_pixels(solver, cam, &problem.world, &problem.pixels)?;
+        let s = crate::camera::solve_pixels(solver, cam, &problem.world, &problem.pixels)?;
         best = best.min(start.elapsed().as_secs_f64() * 1e6);
         sol = Some(s);
     }

@@ -1,0 +1,203 @@
+#!/usr/bin/env python3
+"""Writes the seed inputs of the fuzz corpus (fuzz/corpus/<target>/seed-*).
+
+    python3 fuzz/seeds.py
+
+Seeds are small valid inputs in each target's layout (see fuzz/src/harness.rs), so that the
+fuzzer starts from the deep paths (a solved pose, a parsed model) and mutates from there. The
+COLMAP seeds are a subset (two images, their first observed 3D points) of the bundled model
+data/colmap-boxes.
+"""
+import math
+import os
+import random
+import struct
+
+ROOT = os.path.dirname(os.path.abspath(__file__))
+CORPUS = os.path.join(ROOT, "corpus")
+
+
+def quarter(v):
+    """Encoding 0..=2 of Reader::f64: (low - 16) / 4 with low in 0..32 (tag < 96)."""
+    low = int(round(v * 4 + 16))
+    assert 0 <= low < 32, v
+    return bytes([low])
+
+
+def i16(v):
+    """Encoding 5: i16 / 256 (tag 0xa0)."""
+    return bytes([0xA0]) + struct.pack("<h", int(round(v * 256)))
+
+
+def raw(v):
+    """Encoding 4: raw f64 bits (tag 0x80)."""
+    return bytes([0x80]) + struct.pack("<d", v)
+
+
+def problem(rng, n, project=True, planar=False, weighted=False, tile=None, special=None):
+    flags = (1 if project else 0) | (2 if weighted else 0) | (8 if tile else 0)
+    out = bytes([flags, n])
+    if tile:
+        out += struct.pack("<H", tile - 1)
+    world = []
+    for _ in range(n):
+        x = [rng.uniform(-2, 2), rng.uniform(-2, 2), 0.0 if planar else rng.uniform(-2, 2)]
+        world.append(x)
+        out += b"".join(i16(v) for v in x)
+    if project:
+        rv = [rng.uniform(-3, 3) for _ in range(3)]
+        t = [rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(6, 10)]
+        out += b"".join(i16(v) for v in rv + t)
+        for _ in range(n):
+            out += quarter(rng.choice([0.0, 0.25, -0.5])) + quarter(0.0)
+    else:
+        for _ in range(n):
+            out += i16(rng.uniform(-1, 1)) + i16(rng.uniform(-1, 1))
+    out += i16(0.5) + i16(-0.25) + i16(0.125)  # tiling offset
+    if weighted:
+        out += b"".join(quarter(rng.choice([0.25, 1.0, 2.0, 0.0])) for _ in range(n))
+    if special is not None:
+        out = out[:special] + bytes([0x64]) + out[special + 1 :]  # SPECIAL[4] = NaN
+    return out
+
+
+def write(target, name, data):
+    d = os.path.join(CORPUS, target)
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, "seed-" + name), "wb") as f:
+        f.write(data)
+
+
+SEP = b"\0\0\xff"
+
+
+def colmap_subset():
+    src = os.path.join(ROOT, "..", "data", "colmap-boxes")
+    cams = {}
+    for line in open(os.path.join(src, "cameras.txt")):
+        if line.startswith("#") or not line.strip():
+            continue
+        f = line.split()
+        cams[int(f[0])] = (f[1], int(f[2]), int(f[3]), [float(v) for v in f[4:]])
+    lines = [l for l in open(os.path.join(src, "images.txt")) if not l.startswith("#")]
+    points = {}
+    for line in open(os.path.join(src, "points3D.txt")):
+        if line.startswith("#") or not line.strip():
+            continue
+        f = line.split()
+        points[int(f[0])] = [float(v) for v in f[1:4]]
+    images = []
+    for k in range(2):
+        head = lines[2 * k].split()
+        obs = lines[2 * k + 1].split()
+        kept = []
+        for j in range(0, len(obs), 3):
+            pid = int(obs[j + 2])
+            if pid >= 0:
+                kept.append((float(obs[j]), float(obs[j + 1]), pid))
+            if len(kept) == 12:
+                break
+        images.append((head, kept))
+    used_cams = sorted({int(h[8]) for h, _ in images})
+    used_pts = sorted({p for _, kept in images for (_, _, p) in kept})
+    # Text.
+    ct = "# cameras\n" + "".join(
+        f"{c} {cams[c][0]} {cams[c][1]} {cams[c][2]} {' '.join(map(str, cams[c][3]))}\n"
+        for c in used_cams
+    )
+    it = "# images\n"
+    for head, kept in images:
+        it += " ".join(head) + "\n" + " ".join(f"{x} {y} {p}" for x, y, p in kept) + "\n"
+    pt = "# points\n" + "".join(
+        f"{p} {points[p][0]} {points[p][1]} {points[p][2]} 128 128 128 0.5 1 0\n" for p in used_pts
+    )
+    text = ct.encode() + SEP + it.encode() + SEP + pt.encode()
+    # Binary (COLMAP's layout: little-endian, model ids).
+    model_id = {"SIMPLE_RADIAL": 2, "PINHOLE": 1, "SIMPLE_PINHOLE": 0, "RADIAL": 3, "OPENCV": 4}
+    cb = struct.pack("<Q", len(used_cams))
+    for c in used_cams:
+        name, w, h, params = cams[c]
+        cb += struct.pack("<iiQQ", c, model_id[name], w, h) + struct.pack(f"<{len(params)}d", *params)
+    ib = struct.pack("<Q", len(images))
+    for head, kept in images:
+        ib += struct.pack("<I", int(head[0]))
+        ib += struct.pack("<7d", *[float(v) for v in head[1:8]])
+        ib += struct.pack("<I", int(head[8]))
+        ib += " ".join(head[9:]).encode() + b"\0"
+        ib += struct.pack("<Q", len(kept))
+        for x, y, p in kept:
+            ib += struct.pack("<ddq", x, y, p)
+    pb = struct.pack("<Q", len(used_pts))
+    for p in used_pts:
+        pb += struct.pack("<Q3d3Bd", p, *points[p], 128, 128, 128, 0.5)
+        pb += struct.pack("<Q", 1) + struct.pack("<II", 1, 0)
+    return text, cb + SEP + ib + SEP + pb
+
+
+def cli_seeds(rng):
+    def project(world):
+        f, cx, cy = 800.0, 320.0, 240.0
+        out = []
+        for x, y, z in world:
+            zc = z + 6.0
+            out.append((f * x / zc + cx, f * y / zc + cy))
+        return out
+
+    world = [[rng.uniform(-1, 1) for _ in range(3)] for _ in range(8)]
+    px = project(world)
+    csv = "x,y,X,Y,Z\n" + "".join(
+        f"{u:.4f},{v:.4f},{X:.4f},{Y:.4f},{Z:.4f}\n" for (u, v), (X, Y, Z) in zip(px, world)
+    )
+    js = (
+        '{"camera": {"model": "PINHOLE", "params": [800, 800, 320, 240]},\n'
+        + ' "points2d": ['
+        + ", ".join(f"[{u:.4f}, {v:.4f}]" for u, v in px)
+        + "],\n"
+        + ' "points3d": ['
+        + ", ".join(f"[{X:.4f}, {Y:.4f}, {Z:.4f}]" for X, Y, Z in world)
+        + "]}\n"
+    )
+    # mode byte: bits 0-1 extension (0 json, 1 csv, 2 txt, 3 none), bit 2: camera line first.
+    write("cli_input", "csv", bytes([1 | 4]) + b"PINHOLE 800 800 320 240\n" + csv.encode())
+    write("cli_input", "csv-radial", bytes([3 | 4]) + b"SIMPLE_RADIAL 800 320 240 0.05\n" + csv.encode())
+    write("cli_input", "json", bytes([0]) + js.encode())
+    write("cli_input", "json-noext", bytes([3]) + js.encode())
+
+
+def main():
+    rng = random.Random(7)
+    seeds = {
+        "n4": problem(rng, 4),
+        "n6": problem(rng, 6),
+        "n10": problem(rng, 10),
+        "planar6": problem(rng, 6, planar=True),
+        "planar10": problem(rng, 10, planar=True),
+        "weighted8": problem(rng, 8, weighted=True),
+        "direct7": problem(rng, 7, project=False),
+        "tiled1000": problem(rng, 10, tile=100),
+        "tiled10000": problem(rng, 10, tile=1000),
+        "nan": problem(rng, 6, special=5),
+    }
+    for name, p in seeds.items():
+        for cfg, b in [("default", 0), ("algebraic", 1), ("exhaustive", 2)]:
+            write("solve", f"{name}-{cfg}", bytes([b]) + p)
+        # ransac: solver byte, threshold, confidence, fx, fy, seed, max_iter/4, lo, min_iter,
+        # final factor, then the problem.
+        opts = (
+            bytes([0])
+            + i16(4.0)
+            + raw(0.999)
+            + i16(100.0)
+            + i16(100.0)
+            + bytes([3, 25, 1, 20])
+            + i16(2.0)
+        )
+        write("ransac", name, opts + p)
+    text, binary = colmap_subset()
+    write("colmap_text", "boxes-subset", text)
+    write("colmap_binary", "boxes-subset", binary)
+    cli_seeds(rng)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,457 @@
+//! The fuzz harnesses: bytes in, the library exercised, every property checked with `assert!`.
+//!
+//! Shared by the cargo-fuzz targets (`fuzz/fuzz_targets/*.rs`, coverage-guided) and by the
+//! stable test `tests/fuzz_corpus.rs`, which replays the committed corpus and the named
+//! regression inputs through the same functions on every CI run.
+//!
+//! Properties (any input whatsoever):
+//! - no panic, no hang (every call is bounded);
+//! - `Ok` only for finite input, with a finite pose, an orthonormal rotation (det +1) equal to
+//!   the quaternion's, and finite, non-negative costs;
+//! - `Err` for every input with a NaN or infinity, with the matching typed error;
+//! - the RANSAC inlier mask has one entry per point and agrees with the inlier count;
+//! - parsers return a typed error with a message, never a panic; a parsed model or problem is
+//!   then solved under the same properties.
+
+use eopnp::ransac::Ransac;
+use eopnp::{PlanarDetection, PnpError, Refinement, Solution, Solver};
+use nalgebra::{Matrix3, Point2, Point3, Rotation3, Vector3};
+
+/// Largest N the decoder builds (the issue asks for N up to 10,000).
+pub const MAX_POINTS: usize = 10_000;
+
+/// A little-endian byte reader that yields zeros once the input is exhausted, so every input
+/// decodes to something.
+pub struct Reader<'a> {
+    data: &'a [u8],
+    pos: usize,
+}
+
+/// Values that break naive numerics, picked by one byte.
+const SPECIAL: [f64; 16] = [
+    0.0,
+    -0.0,
+    1.0,
+    -1.0,
+    f64::NAN,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    1e300,
+    -1e300,
+    1e-300,
+    5e-324, // smallest subnormal
+    f64::MAX,
+    f64::MIN_POSITIVE,
+    1e-8,
+    1e8,
+    0.5,
+];
+
+impl<'a> Reader<'a> {
+    /// A reader over `data`.
+    pub fn new(data: &'a [u8]) -> Self {
+        Reader { data, pos: 0 }
+    }
+
+    /// The next byte (0 when exhausted).
+    pub fn u8(&mut self) -> u8 {
+        let b = self.data.get(self.pos).copied().unwrap_or(0);
+        self.pos += 1;
+        b
+    }
+
+    /// The next `n` bytes, zero-padded.
+    fn bytes<const N: usize>(&mut self) -> [u8; N] {
+        let mut out = [0; N];
+        for b in &mut out {
+            *b = self.u8();
+        }
+        out
+    }
+
+    /// A number: the tag byte's top three bits pick the encoding, so that small integers and
+    /// quarters, special values, raw `f64`/`f32` bit patterns and wide-range magnitudes are
+    /// all one mutation away from each other.
+    pub fn f64(&mut self) -> f64 {
+        let tag = self.u8();
+        let low = f64::from(tag & 31);
+        match tag >> 5 {
+            0..=2 => (low - 16.0) / 4.0,
+            3 => SPECIAL[usize::from(tag & 15)],
+            4 => f64::from_le_bytes(self.bytes::<8>()),
+            5 => f64::from(i16::from_le_bytes(self.bytes::<2>())) / 256.0,
+            6 => (f64::from(self.u8()) - 128.0) / 16.0 * 10f64.powi(i32::from(tag & 31) - 16),
+            _ => f64::from(f32::from_le_bytes(self.bytes::<4>())),
+        }
+    }
+
+    /// Whether the input is exhausted.
+    pub fn done(&self) -> bool {
+        self.pos >= self.data.len()
+    }
+}
+
+/// A decoded PnP problem.
+pub struct Problem {
+    /// World points.
+    pub world: Vec<Point3<f64>>,
+    /// Normalised image points (one more or one fewer than `world` when lengths are fuzzed).
+    pub image: Vec<Point2<f64>>,
+    /// Per-point weights (`None`: unweighted).
+    pub weights: Option<Vec<f64>>,
+}
+
+/// Decodes a problem. Layout: a flags byte, a base count, a tiling count, then the base points
+/// (and, when the flags say so, a pose that projects them, with per-point noise), then the tiling
+/// offset. Tiling repeats the base set shifted by multiples of the offset up to
+/// [`MAX_POINTS`], so that large N costs few input bytes.
+pub fn decode_problem(r: &mut Reader) -> Problem {
+    let flags = r.u8();
+    let project = flags & 1 != 0;
+    let weighted = flags & 2 != 0;
+    let length_fuzz = flags & 4 != 0;
+    let tile = flags & 8 != 0;
+    let base = usize::from(r.u8() % 48);
+    let reps = if tile {
+        1 + usize::from(u16::from_le_bytes([r.u8(), r.u8()])) % MAX_POINTS
+    } else {
+        1
+    };
+    let mut world0 = Vec::with_capacity(base);
+    for _ in 0..base {
+        world0.push(Point3::new(r.f64(), r.f64(), r.f64()));
+    }
+    let mut image0 = Vec::with_capacity(base);
+    let pose = if project {
+        // Rotation from a (possibly huge or non-finite) rotation vector, translation as given.
+        let rv = Vector3::new(r.f64(), r.f64(), r.f64());
+        let t = Vector3::new(r.f64(), r.f64(), r.f64());
+        let rot = if rv.iter().all(|x| x.is_finite()) && rv.norm().is_finite() {
+            Rotation3::new(rv).into_inner()
+        } else {
+            Matrix3::identity()
+        };
+        Some((rot, t))
+    } else {
+        None
+    };
+    for x in &world0 {
+        let p = match &pose {
+            Some((rot, t)) => {
+                let c = rot * x.coords + t;
+                let noise = (r.f64(), r.f64());
+                let scale = 1e-3;
+                Point2::new(c.x / c.z + scale * noise.0, c.y / c.z + scale * noise.1)
+            }
+            None => Point2::new(r.f64(), r.f64()),
+        };
+        image0.push(p);
+    }
+    let offset = Vector3::new(r.f64(), r.f64(), r.f64());
+    let n = (base * reps).min(MAX_POINTS);
+    let mut world = Vec::with_capacity(n);
+    let mut image = Vec::with_capacity(n);
+    for k in 0..n {
+        let (i, rep) = (k % base.max(1), (k / base.max(1)) as f64);
+        let x = world0[i] + rep * offset;
+        let p = match &pose {
+            Some((rot, t)) if rep > 0.0 => {
+                let c = rot * x.coords + t;
+                Point2::new(c.x / c.z, c.y / c.z)
+            }
+            _ => image0[i],
+        };
+        world.push(x);
+        image.push(p);
+    }
+    if length_fuzz {
+        match r.u8() % 3 {
+            0 => {
+                image.pop();
+            }
+            1 => image.push(Point2::new(0.0, 0.0)),
+            _ => {
+                world.pop();
+            }
+        }
+    }
+    let weights = weighted.then(|| {
+        let w: Vec<f64> = (0..base).map(|_| r.f64()).collect();
+        let mut out: Vec<f64> = (0..world.len())
+            .map(|k| if base == 0 { 1.0 } else { w[k % base] })
+            .collect();
+        if length_fuzz && r.u8() & 1 != 0 {
+            out.pop();
+        }
+        out
+    });
+    Problem {
+        world,
+        image,
+        weights,
+    }
+}
+
+/// A solver configuration from one byte.
+pub fn decode_solver(b: u8) -> Solver {
+    let mut s = Solver::default();
+    if b & 1 != 0 {
+        s = s.refinement(Refinement::Algebraic);
+    }
+    if b & 2 != 0 {
+        s = s.exhaustive(true);
+    }
+    s = s.planar_detection(match (b >> 2) & 3 {
+        1 => PlanarDetection::Planar,
+        2 => PlanarDetection::NonPlanar,
+        _ => PlanarDetection::Auto,
+    });
+    if b & 16 != 0 {
+        // Tiny iteration budgets: the hard bounds must be honoured without a wrong Ok.
+        s = s.newton_iterations(u32::from(b >> 5)).reprojection_iterations(u32::from(b >> 5));
+    }
+    s
+}
+
+/// The properties of a returned solution.
+pub fn check_solution(s: &Solution) {
+    let t = s.pose.translation.vector;
+    assert!(t.iter().all(|x| x.is_finite()), "non-finite translation {t:?}");
+    let r = s.rotation;
+    assert!(r.iter().all(|x| x.is_finite()), "non-finite rotation {r:?}");
+    let orth = (r.transpose() * r - Matrix3::identity()).norm();
+    assert!(orth < 1e-9, "rotation not orthonormal: |R^T R - I| = {orth:e}");
+    assert!(r.determinant() > 0.0, "reflection returned: det R = {}", r.determinant());
+    let q = s.pose.rotation.to_rotation_matrix().into_inner();
+    let dq = (q - r).norm();
+    assert!(dq < 1e-9, "pose.rotation and rotation differ by {dq:e}");
+    for (name, v) in [
+        ("cost", s.cost),
+        ("algebraic_cost", s.algebraic_cost),
+        ("reprojection_rmse", s.reprojection_rmse),
+    ] {
+        // Costs are sums of squares; tiny negative values from rounding in f / trace(M) are
+        // allowed.
+        assert!(v.is_finite() && v >= -1e-9, "{name} = {v}");
+    }
+}
+
+/// What the input checks must say about a problem, whatever the solver does afterwards: the
+/// first error in the documented order, or `None` when the input is acceptable so far.
+fn expected_input_error(p: &Problem) -> Option<PnpError> {
+    if p.world.len() != p.image.len() {
+        return Some(PnpError::LengthMismatch {
+            world: p.world.len(),
+            image: p.image.len(),
+        });
+    }
+    if let Some(w) = &p.weights {
+        if w.len() != p.world.len() {
+            return Some(PnpError::WeightsLength {
+                weights: w.len(),
+                points: p.world.len(),
+            });
+        }
+    }
+    None
+}
+
+fn all_finite(p: &Problem) -> bool {
+    p.world.iter().all(|x| x.coords.iter().all(|v| v.is_finite()))
+        && p.image.iter().all(|x| x.coords.iter().all(|v| v.is_finite()))
+        && p.weights.iter().flatten().all(|w| w.is_finite())
+}
+
+/// Checks a result against the input: typed errors for malformed input, properties for `Ok`.
+fn check_result(p: &Problem, res: &Result<Solution, PnpError>) {
+    if let Some(e) = expected_input_error(p) {
+        assert_eq!(res.as_ref().err(), Some(&e), "wrong error for malformed input");
+        return;
+    }
+    match res {
+        Ok(s) => {
+            assert!(all_finite(p), "Ok for input with a NaN or infinity");
+            check_solution(s);
+        }
+        Err(e) => {
+            // Every error renders a message.
+            assert!(!e.to_string().is_empty());
+            // Input checks run in a documented order: lengths, weights length, N >= 4, then
+            // finiteness.
+            if !all_finite(p) && p.world.len() >= 4 {
+                assert!(matches!(e, PnpError::NonFinite { .. }), "non-finite input gave {e:?}");
+            }
+        }
+    }
+}
+
+/// `solve`, `solve_weighted` and `solve_all` on an arbitrary problem.
+pub fn solve(data: &[u8]) {
+    let mut r = Reader::new(data);
+    let solver = decode_solver(r.u8());
+    let p = decode_problem(&mut r);
+    let res = match &p.weights {
+        Some(w) => solver.solve_weighted(&p.world, &p.image, w),
+        None => solver.solve(&p.world, &p.image),
+    };
+    check_result(&p, &res);
+    // solve_all on small problems: every minimum satisfies the same properties, the best
+    // equals solve's answer in exhaustive mode, and the list is non-empty exactly when Ok.
+    if p.weights.is_none() && p.world.len() <= 64 {
+        let all = solver.solve_all(&p.world, &p.image);
+        match (&all, &res) {
+            (Ok(all), Ok(_)) => {
+                assert!(!all.is_empty(), "solve_all: Ok with no solution");
+                all.iter().for_each(check_solution);
+            }
+            (Err(e), Err(f)) => {
+                // Input errors are the same whatever the mode; NoSolution may differ.
+                if !matches!(f, PnpError::NoSolution) && !matches!(e, PnpError::NoSolution) {
+                    assert_eq!(e, f, "solve and solve_all disagree on the error");
+                }
+            }
+            (Ok(all), Err(e)) => {
+                assert!(matches!(e, PnpError::NoSolution), "solve: {e:?}, solve_all: Ok");
+                all.iter().for_each(check_solution);
+            }
+            (Err(e), Ok(_)) => {
+                assert!(matches!(e, PnpError::NoSolution), "solve_all: {e:?}, solve: Ok");
+            }
+        }
+    }
+}
+
+/// `Ransac::estimate` on an arbitrary problem with arbitrary options.
+pub fn ransac(data: &[u8]) {
+    let mut r = Reader::new(data);
+    let solver = decode_solver(r.u8() & 0x0f);
+    let threshold = r.f64();
+    let confidence = r.f64();
+    let focal = (r.f64(), r.f64());
+    let seed = u64::from(r.u8());
+    let max_iter = u32::from(r.u8()) * 4;
+    let lo = r.u8() & 1 != 0;
+    let min_iter = u32::from(r.u8());
+    let factor = r.f64();
+    let p = decode_problem(&mut r);
+    // Every option as given (the fields are public: a user can set anything).
+    let ransac = Ransac::default()
+        .seed(seed)
+        .max_iterations(max_iter)
+        .min_iterations(min_iter)
+        .local_optimisation(lo)
+        .threshold_px(threshold)
+        .confidence(confidence)
+        .final_threshold_factor(factor);
+    let res = ransac.estimate(&solver, &p.world, &p.image, focal, p.weights.as_deref());
+    match &res {
+        Ok(sol) => {
+            assert!(all_finite(&p), "RANSAC Ok for non-finite input");
+            assert!(
+                focal.0 > 0.0 && focal.1 > 0.0 && focal.0.is_finite() && focal.1.is_finite(),
+                "RANSAC Ok with focal lengths {focal:?}"
+            );
+            check_solution(&sol.solution);
+            assert_eq!(sol.inliers.len(), p.world.len(), "inlier mask length");
+            let count = sol.inliers.iter().filter(|&&b| b).count();
+            assert_eq!(count, sol.num_inliers, "inlier count vs mask");
+        }
+        Err(e) => assert!(!e.to_string().is_empty()),
+    }
+}
+
+/// Splits the input into three files at the first two occurrences of the separator byte
+/// sequence `\0\0\xff`.
+fn three_files(data: &[u8]) -> [&[u8]; 3] {
+    const SEP: &[u8] = b"\0\0\xff";
+    let mut parts = [&data[..0]; 3];
+    let mut rest = data;
+    for (k, part) in parts.iter_mut().enumerate() {
+        if k == 2 {
+            *part = rest;
+            break;
+        }
+        match rest.windows(SEP.len()).position(|w| w == SEP) {
+            Some(at) => {
+                *part = &rest[..at];
+                rest = &rest[at + SEP.len()..];
+            }
+            None => {
+                *part = rest;
+                rest = &rest[rest.len()..];
+            }
+        }
+    }
+    parts
+}
+
+/// Registers (at most three of) the images of a parsed model, plain and with RANSAC.
+fn exercise_model(model: &eopnp::colmap::Model) {
+    let solver = Solver::default();
+    let ransac = Ransac::default().seed(1).max_iterations(50);
+    for &id in model.images.keys().take(3) {
+        if let Ok(reg) = eopnp::colmap::register_image(model, id, &solver) {
+            check_solution(&reg.solution);
+        }
+        if let Ok((reg, sol, _)) = eopnp::ransac::register_image(model, id, &ransac, &solver, None)
+        {
+            check_solution(&reg.solution);
+            check_solution(&sol.solution);
+        }
+    }
+}
+
+/// The COLMAP text reader (three files separated by `\0\0\xff`), then registration.
+pub fn colmap_text(data: &[u8]) {
+    let [c, i, p] = three_files(data);
+    match eopnp::colmap::parse_model_text(c, i, p) {
+        Ok(model) => exercise_model(&model),
+        Err(e) => assert!(!e.to_string().is_empty()),
+    }
+}
+
+/// The COLMAP binary reader (three files separated by `\0\0\xff`), then registration.
+pub fn colmap_binary(data: &[u8]) {
+    let [c, i, p] = three_files(data);
+    match eopnp::colmap::parse_model_binary(c, i, p) {
+        Ok(model) => exercise_model(&model),
+        Err(e) => assert!(!e.to_string().is_empty()),
+    }
+}
+
+/// The CLI's problem-file parser (CSV or JSON) and its pose output. The first byte picks the
+/// extension and whether a `--camera` argument (the first line) is given.
+pub fn cli_input(data: &[u8]) {
+    let Some((&mode, rest)) = data.split_first() else {
+        return;
+    };
+    let ext = match mode & 3 {
+        0 => Some("json"),
+        1 => Some("csv"),
+        2 => Some("txt"),
+        _ => None,
+    };
+    let (camera, body) = if mode & 4 != 0 {
+        let end = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
+        let cam = std::str::from_utf8(&rest[..end]).ok();
+        (cam, rest.get(end + 1..).unwrap_or(&[]))
+    } else {
+        (None, rest)
+    };
+    match eopnp::cli::input::parse_problem("fuzz", body, ext, camera) {
+        Ok(problem) => match eopnp::cli::input::solve(&problem, &Solver::default()) {
+            Ok(json) => {
+                let v: serde_json::Value = serde_json::from_str(&json).expect("output is JSON");
+                assert!(v["translation"].is_array(), "pose JSON without translation");
+            }
+            Err(f) => {
+                assert!(!f.message.is_empty());
+                assert!(f.code == 1 || f.code == 2, "exit code {}", f.code);
+            }
+        },
+        Err(f) => {
+            assert!(!f.message.is_empty());
+            assert_eq!(f.code, 2, "a parse failure is bad input (exit code 2)");
+        }
+    }
+}
