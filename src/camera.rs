@@ -674,7 +674,8 @@ fn iterative_undistortion(d: &Distortion, x0: (f64, f64)) -> Option<(f64, f64)> 
     const RADIUS: f64 = 0.1;
     let scale0 = 1f64.max(x0.0.hypot(x0.1));
     let (mut u, mut v) = x0;
-    for _ in 0..UNDISTORT_MAX_ITERATIONS {
+    let mut steps = crate::bounds::Budget::new(crate::bounds::Bound::Undistort);
+    while steps.next() {
         let ((xu, xv), j) = d.apply(u, v);
         let (fu, fv) = (xu - x0.0, xv - x0.1);
         let det = j[0] * j[3] - j[1] * j[2];

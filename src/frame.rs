@@ -55,7 +55,7 @@ use crate::rotation::svd3;
 /// (`sv2 / sv0 >= 1e-2`; see the module documentation, trap T9).
 const SCATTER_MIN: f64 = 1e-4;
 /// Hard bound on the Jacobi sweeps of [`sym_eigen3`] (3 x 3: about 4-6 sweeps).
-const EIGEN_MAX_SWEEPS: usize = 40;
+pub(crate) const EIGEN_MAX_SWEEPS: usize = 40;
 /// Raw (unscaled) pass-1 sums are used only when the world and image ranges are at most
 /// `2^RAW_RANGE` and the largest weight within `2^-RAW_RANGE ..= 2^RAW_RANGE`: then no term or
 /// partial sum over- or underflows for any N < 2^60, and the sums equal the power-of-two scaled
@@ -229,7 +229,8 @@ pub(crate) fn sym_eigen3(a: &Matrix3<f64>) -> Option<(Vector3<f64>, Matrix3<f64>
     let scale = pow2_scale(amax);
     b /= scale;
     let mut v = Matrix3::<f64>::identity();
-    for _sweep in 0..EIGEN_MAX_SWEEPS {
+    let mut sweeps = crate::bounds::Budget::new(crate::bounds::Bound::FrameEigenSweeps);
+    while sweeps.next() {
         let mut rotated = false;
         for &(p, q, r) in &[(0usize, 1usize, 2usize), (0, 2, 1), (1, 2, 0)] {
             let apq = b[(p, q)];

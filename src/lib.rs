@@ -46,6 +46,7 @@
 mod accumulate;
 #[doc(hidden)]
 pub mod bench_hooks;
+mod bounds;
 pub mod camera;
 mod certify;
 /// The `eopnp` command line (the binary is a thin `main` around [`cli::run`]). Public so that

@@ -32,6 +32,7 @@
 //!
 //! Everything is fixed-size (no heap allocation) and every loop is bounded.
 
+use crate::bounds::{converged, limit, Bound};
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix2x3, Matrix3, Point3, Vector2, Vector3};
 
@@ -43,7 +44,7 @@ pub const MAX_P3P_SOLUTIONS: usize = 4;
 const GAUSS_NEWTON_ITERATIONS: usize = 5;
 
 /// Bound on the QR sweeps of the 3x3 symmetric eigen-decomposition (converges in < 20).
-const EIGEN_MAX_ITER: usize = 100;
+pub(crate) const EIGEN_MAX_ITER: usize = 100;
 
 /// A world-to-camera pose `x_cam = R X + t` found by [`p3p`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -226,7 +227,8 @@ fn adjugate(m: &Matrix3<f64>) -> Matrix3<f64> {
 /// eigenvalue magnitude first, and `-s2/s1` (positive when `d0` is indefinite, i.e. a real
 /// plane pair). `None` if the decomposition fails or `d0` is not a real plane pair.
 fn plane_pair(d0: &Matrix3<f64>) -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
-    let eig = nalgebra::SymmetricEigen::try_new(*d0, f64::EPSILON, EIGEN_MAX_ITER)?;
+    let eig = nalgebra::SymmetricEigen::try_new(*d0, f64::EPSILON, limit(Bound::P3pEigen));
+    let eig = converged(eig, Bound::P3pEigen)?;
     let ev = eig.eigenvalues;
     // The null eigenvalue is the one of smallest magnitude.
     let mut idx = [0usize, 1, 2];

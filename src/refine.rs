@@ -102,7 +102,7 @@ fn local_model(m45: &[f64; 45], r: &Matrix3<f64>) -> (f64, Vector3<f64>, Matrix3
 }
 
 /// Hard bound on the Jacobi sweeps of [`min_eigenvalue_sym3`] (3 x 3 converges in ~4).
-const EIG_MAX_SWEEPS: usize = 32;
+pub(crate) const EIG_MAX_SWEEPS: usize = 32;
 
 /// Smallest eigenvalue of a symmetric 3 x 3 matrix by cyclic Jacobi rotations (at most
 /// [`EIG_MAX_SWEEPS`] sweeps), computed in units of the largest entry. Absolute error about
@@ -117,7 +117,8 @@ pub(crate) fn min_eigenvalue_sym3(h: &Matrix3<f64>) -> f64 {
     }
     let mut a = (h + h.transpose()) * (0.5 / scale);
     let thresh = 0.125 * f64::EPSILON * a.norm();
-    for _sweep in 0..EIG_MAX_SWEEPS {
+    let mut sweeps = crate::bounds::Budget::new(crate::bounds::Bound::HessianEigenSweeps);
+    while sweeps.next() {
         let mut rotated = false;
         for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
             let apq = a[(p, q)];
@@ -246,7 +247,8 @@ pub(crate) fn refine_so3_until(
         };
         let gnorm = g.norm();
         let mut accepted = None;
-        for _ in 0..MAX_DAMPING_STEPS {
+        let mut damping = crate::bounds::Budget::new(crate::bounds::Bound::NewtonDamping);
+        while damping.next() {
             // Also stops on a NaN mu or mu_max.
             if !matches!(
                 mu.partial_cmp(&opts.mu_max),

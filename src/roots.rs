@@ -70,9 +70,9 @@ const EPS: f64 = f64::EPSILON;
 /// Hard bound on safeguarded Newton/bisection iterations per root. Geometric bisection needs at
 /// most ~11 steps to get from the root bound (< 2^48) down to one binade anywhere in the f64 range,
 /// arithmetic bisection then at most 53: 160 is never reached in practice.
-const MAX_BRACKET_ITERS: usize = 160;
+pub(crate) const MAX_BRACKET_ITERS: usize = 160;
 /// Newton polishing steps for the closed forms (each accepted only if it reduces |p|).
-const POLISH_STEPS: usize = 4;
+pub(crate) const POLISH_STEPS: usize = 4;
 
 /// A list of at most [`MAX_DEGREE`] real roots, sorted ascending, without duplicates.
 ///
@@ -264,7 +264,8 @@ impl Poly {
     fn polish(&self, x0: f64) -> f64 {
         let mut x = x0;
         let (mut f, mut d) = self.eval_d(x);
-        for _ in 0..POLISH_STEPS {
+        let mut steps = crate::bounds::Budget::new(crate::bounds::Bound::RootPolish);
+        while steps.next() {
             if f == 0.0 || d == 0.0 {
                 break;
             }
@@ -369,7 +370,8 @@ fn bracket(q: &Poly, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f64 {
     let mut best_f = f64::INFINITY;
     let mut step_old = f64::INFINITY;
     let mut step = f64::INFINITY;
-    for _ in 0..MAX_BRACKET_ITERS {
+    let mut iters = crate::bounds::Budget::new(crate::bounds::Bound::RootBracket);
+    while iters.next() {
         let (f, d, s) = q.eval_d_abs(x);
         if f.abs() < best_f {
             best_f = f.abs();

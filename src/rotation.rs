@@ -98,7 +98,7 @@ pub(crate) struct Svd3 {
 }
 
 /// Hard bound on the Jacobi sweeps of [`svd3`] (a 3 x 3 matrix converges in about 4-6).
-const SVD_MAX_SWEEPS: usize = 40;
+pub(crate) const SVD_MAX_SWEEPS: usize = 40;
 
 /// Singular value decomposition of a 3 x 3 matrix by one-sided (Hestenes) Jacobi rotations.
 ///
@@ -122,7 +122,8 @@ pub(crate) fn svd3(a: &Matrix3<f64>) -> Option<Svd3> {
     let scale = pow2_scale(amax);
     let mut b = a / scale;
     let mut v = Matrix3::<f64>::identity();
-    for _sweep in 0..SVD_MAX_SWEEPS {
+    let mut sweeps = crate::bounds::Budget::new(crate::bounds::Bound::Svd3Sweeps);
+    while sweeps.next() {
         let mut rotated = false;
         for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
             let alpha = b.column(p).norm_squared();

@@ -1,6 +1,7 @@
 //! The EOPnP pipeline (ALGORITHM.md S1-S9) and its public entry points.
 
 use crate::accumulate::{self, System};
+use crate::bounds::{converged, limit, Bound};
 use crate::certify;
 use crate::error::PnpError;
 use crate::frame::{self, WorkingFrame};
@@ -147,7 +148,7 @@ const SAME_MINIMUM: f64 = 1e-8;
 /// refinement is skipped or stopped.
 const IN_BASIN: f64 = 0.05;
 /// Hard bound on the symmetric eigen-decomposition sweeps.
-const EIGEN_MAX_ITER: usize = 1000;
+pub(crate) const EIGEN_MAX_ITER: usize = 1000;
 
 /// The four fixed extra starting rotations of S4'' (working frame).
 const EXTRA_STARTS: [[f64; 3]; 4] = [
@@ -425,8 +426,8 @@ impl Solver {
         let mut cands = Candidates::new();
         // S4.
         if nonplanar {
-            let eig = nalgebra::SymmetricEigen::try_new(sys.m, f64::EPSILON, EIGEN_MAX_ITER)
-                .ok_or(PnpError::NoSolution)?;
+            let eig = nalgebra::SymmetricEigen::try_new(sys.m, f64::EPSILON, limit(Bound::MEigen));
+            let eig = converged(eig, Bound::MEigen).ok_or(PnpError::NoSolution)?;
             let mut order: [usize; 9] = std::array::from_fn(|i| i);
             order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
             let v: [SVector<f64, 9>; 4] =
@@ -702,7 +703,8 @@ fn reprojection_error(
 /// (ascending) and their unit eigenvectors.
 fn planar_eigen(sys_p: &System) -> Option<([f64; 2], [SVector<f64, 6>; 2])> {
     let mp = planar_m(sys_p);
-    let eig = nalgebra::SymmetricEigen::try_new(mp, f64::EPSILON, EIGEN_MAX_ITER)?;
+    let eig = nalgebra::SymmetricEigen::try_new(mp, f64::EPSILON, limit(Bound::MEigen));
+    let eig = converged(eig, Bound::MEigen)?;
     let mut order: [usize; 6] = std::array::from_fn(|i| i);
     order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
     Some((

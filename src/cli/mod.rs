@@ -6,8 +6,8 @@ mod register;
 use std::io::Write;
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
 use crate::{Refinement, Solver};
+use clap::{Args, Parser, Subcommand};
 
 /// Camera pose from 2D-3D point correspondences (EOPnP, Zhou & Kaess 2019, plus a
 /// reprojection-error refinement).
