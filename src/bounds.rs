@@ -422,7 +422,7 @@ pub(crate) mod tests {
             .seed(3);
         match ransac.estimate(&Solver::default(), &w, &i, (500.0, 500.0), None) {
             Ok(sol) => assert_eq!(sol.stats.iterations, 30),
-            Err(e) => assert_eq!(e, PnpError::NoSolution),
+            Err(e) => assert_eq!(e, PnpError::NoConsensus { iterations: 30 }),
         }
     }
 }

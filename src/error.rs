@@ -113,6 +113,19 @@ pub enum PnpError {
     InvalidIntrinsics,
     /// No candidate rotation survived (numerical failure); not observed on valid input.
     NoSolution,
+    /// A [`crate::ransac::Ransac`] option is outside its range: `threshold_px` must be finite
+    /// and > 0, `confidence` in (0, 1), `max_iterations` >= 1, `final_threshold_factor` finite
+    /// and >= 1.
+    InvalidOption {
+        /// The option's field name.
+        option: &'static str,
+    },
+    /// RANSAC drew `iterations` samples and no pose had at least 4 correspondences within the
+    /// threshold (or no fit on them succeeded).
+    NoConsensus {
+        /// Samples drawn.
+        iterations: u32,
+    },
 }
 
 impl fmt::Display for PnpError {
@@ -148,6 +161,25 @@ impl fmt::Display for PnpError {
                 "no solution found (numerical failure on every candidate); the input may be \
                  extremely ill-conditioned",
             ),
+            PnpError::InvalidOption { option } => {
+                let range = match *option {
+                    "threshold_px" => "a finite number of pixels > 0",
+                    "confidence" => "a probability strictly between 0 and 1",
+                    "max_iterations" => "at least 1",
+                    "final_threshold_factor" => "finite and >= 1",
+                    _ => "see the option's documentation",
+                };
+                write!(
+                    f,
+                    "RANSAC option `{option}` is out of range: it must be {range}"
+                )
+            }
+            PnpError::NoConsensus { iterations } => write!(
+                f,
+                "RANSAC found no pose consistent with at least 4 correspondences after \
+                 {iterations} samples; check the correspondences and the intrinsics (focal \
+                 length in pixels), or raise threshold_px or max_iterations"
+            ),
         }
     }
 }
@@ -177,6 +209,10 @@ mod tests {
             PnpError::Degenerate(DegenerateKind::CoincidentImagePoints),
             PnpError::Degenerate(DegenerateKind::ScaleOutOfRange),
             PnpError::NoSolution,
+            PnpError::InvalidOption {
+                option: "confidence",
+            },
+            PnpError::NoConsensus { iterations: 30 },
         ];
         for e in &cases {
             let s = e.to_string();

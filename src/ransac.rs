@@ -386,6 +386,24 @@ impl Ransac {
         self
     }
 
+    /// [`PnpError::InvalidOption`] for the first option out of its range.
+    fn check(&self) -> Result<(), PnpError> {
+        let bad = |option| Err(PnpError::InvalidOption { option });
+        if !(self.threshold_px.is_finite() && self.threshold_px > 0.0) {
+            return bad("threshold_px");
+        }
+        if !(self.confidence > 0.0 && self.confidence < 1.0) {
+            return bad("confidence");
+        }
+        if self.max_iterations == 0 {
+            return bad("max_iterations");
+        }
+        if !(self.final_threshold_factor.is_finite() && self.final_threshold_factor >= 1.0) {
+            return bad("final_threshold_factor");
+        }
+        Ok(())
+    }
+
     /// Robust pose from normalised image points `(x/z, y/z)`.
     ///
     /// The pixel reprojection error of point `i` is `sqrt(w_i (fx^2 dx^2 + fy^2 dy^2))`,
@@ -396,8 +414,9 @@ impl Ransac {
     /// # Errors
     /// [`PnpError::LengthMismatch`], [`PnpError::WeightsLength`], [`PnpError::TooFewPoints`]
     /// (fewer than 4), [`PnpError::NonFinite`], [`PnpError::InvalidWeight`],
-    /// [`PnpError::InvalidIntrinsics`] for a non-positive focal length, and
-    /// [`PnpError::NoSolution`] if no hypothesis has enough inliers for an EOPnP fit.
+    /// [`PnpError::InvalidIntrinsics`] for a non-positive focal length,
+    /// [`PnpError::InvalidOption`] for an option out of its range (checked first), and
+    /// [`PnpError::NoConsensus`] if no hypothesis has enough inliers for an EOPnP fit.
     pub fn estimate(
         &self,
         solver: &Solver,
@@ -407,6 +426,7 @@ impl Ransac {
         weights: Option<&[f64]>,
     ) -> Result<RansacSolution, PnpError> {
         let start = Instant::now();
+        self.check()?;
         let n = world.len();
         if image.len() != n {
             return Err(PnpError::LengthMismatch {
@@ -469,17 +489,9 @@ impl Ransac {
             fy2: fy * fy,
             rows: ((fx / fmax).powi(2), (fy / fmax).powi(2)),
         };
-        let th = if self.threshold_px.is_finite() && self.threshold_px > 0.0 {
-            self.threshold_px
-        } else {
-            Ransac::default().threshold_px
-        };
+        let th = self.threshold_px;
         let th2 = th * th;
-        let confidence = if self.confidence > 0.0 && self.confidence < 1.0 {
-            self.confidence
-        } else {
-            Ransac::default().confidence
-        };
+        let confidence = self.confidence;
         let bearings: Vec<Vector3<f64>> =
             image.iter().map(|p| Vector3::new(p.x, p.y, 1.0)).collect();
 
@@ -497,7 +509,7 @@ impl Ransac {
         }
         let (mut rej_consistent, mut rej_scored) = (0usize, 0usize);
         let mut delta = SPRT_DELTA0;
-        let max_it = self.max_iterations.max(1);
+        let max_it = self.max_iterations;
         while stats.iterations < max_it
             && (stats.iterations < self.min_iterations || f64::from(stats.iterations) < needed)
         {
@@ -552,15 +564,13 @@ impl Ransac {
                 needed = needed_iterations(confidence, cand.inliers as f64 / n as f64);
             }
         }
-        let best = best.ok_or(PnpError::NoSolution)?;
+        let no_consensus = PnpError::NoConsensus {
+            iterations: stats.iterations,
+        };
+        let best = best.ok_or(no_consensus.clone())?;
 
         // Final fit: refit and re-classify with the final threshold until the set is stable.
-        let factor =
-            if self.final_threshold_factor.is_finite() && self.final_threshold_factor >= 1.0 {
-                self.final_threshold_factor
-            } else {
-                1.0
-            };
+        let factor = self.final_threshold_factor;
         let thf2 = (th * factor).powi(2);
         let (mut r, mut t) = (best.r, best.t);
         let mut solution: Option<Solution> = None;
@@ -579,7 +589,7 @@ impl Ransac {
                 break;
             }
         }
-        let solution = solution.ok_or(PnpError::NoSolution)?;
+        let solution = solution.ok_or(no_consensus)?;
         // The mask of the returned pose.
         for (i, m) in mask.iter_mut().enumerate() {
             *m = prob.sq_err(&r, &t, i) < thf2;
@@ -613,6 +623,7 @@ impl Ransac {
         pixels: &[Point2<f64>],
     ) -> Result<RansacSolution, PnpError> {
         let start = Instant::now();
+        self.check()?;
         if world.len() != pixels.len() {
             return Err(PnpError::LengthMismatch {
                 world: world.len(),

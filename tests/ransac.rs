@@ -177,3 +177,77 @@ fn bad_input_is_an_error_not_a_panic() {
         .estimate(&s, &w, &i.repeat(2)[..8], (1000.0, 1000.0), None)
         .is_err());
 }
+
+#[test]
+fn options_out_of_range_are_typed_errors() {
+    use eopnp::PnpError;
+    use nalgebra::{Point2, Point3};
+    let s = Solver::default();
+    let w: Vec<Point3<f64>> = (0..8)
+        .map(|k| Point3::new(f64::from(k).sin(), f64::from(k).cos(), f64::from(k) * 0.1))
+        .collect();
+    let i: Vec<Point2<f64>> = w
+        .iter()
+        .map(|x| Point2::new(x.x / (x.z + 5.0), x.y / (x.z + 5.0)))
+        .collect();
+    let cases = [
+        (Ransac::default().threshold_px(0.0), "threshold_px"),
+        (Ransac::default().threshold_px(f64::NAN), "threshold_px"),
+        (Ransac::default().confidence(1.0), "confidence"),
+        (Ransac::default().confidence(-0.5), "confidence"),
+        (Ransac::default().max_iterations(0), "max_iterations"),
+        (
+            Ransac::default().final_threshold_factor(0.5),
+            "final_threshold_factor",
+        ),
+        (
+            Ransac::default().final_threshold_factor(f64::INFINITY),
+            "final_threshold_factor",
+        ),
+    ];
+    for (r, option) in cases {
+        let e = r.estimate(&s, &w, &i, (800.0, 800.0), None).unwrap_err();
+        assert_eq!(e, PnpError::InvalidOption { option });
+        assert!(e.to_string().contains(option), "{e}");
+        // Checked first, before the data.
+        assert_eq!(
+            r.estimate(&s, &w[..2], &i[..2], (800.0, 800.0), None)
+                .unwrap_err(),
+            PnpError::InvalidOption { option }
+        );
+    }
+    assert!(Ransac::default()
+        .estimate(&s, &w, &i, (800.0, 800.0), None)
+        .is_ok());
+}
+
+#[test]
+fn no_consensus_is_reported_with_the_sample_count() {
+    use eopnp::PnpError;
+    use nalgebra::{Point2, Point3};
+    // Image points unrelated to the world points: no pose explains 4 of them within 0.5 px.
+    let w: Vec<Point3<f64>> = (0..40)
+        .map(|k| {
+            let k = f64::from(k);
+            Point3::new((k * 1.3).sin(), (k * 0.7).cos(), (k * 0.37).sin())
+        })
+        .collect();
+    let i: Vec<Point2<f64>> = (0..40)
+        .map(|k| {
+            let k = f64::from(k);
+            Point2::new((k * 2.9).sin() * 0.4, (k * 5.3).cos() * 0.4)
+        })
+        .collect();
+    let r = Ransac::default().threshold_px(0.5).max_iterations(200);
+    match r.estimate(&Solver::default(), &w, &i, (800.0, 800.0), None) {
+        Err(PnpError::NoConsensus { iterations }) => {
+            assert_eq!(iterations, 200);
+            let msg = PnpError::NoConsensus { iterations }.to_string();
+            assert!(
+                msg.contains("200 samples") && msg.contains("threshold_px"),
+                "{msg}"
+            );
+        }
+        other => panic!("expected NoConsensus, got {other:?}"),
+    }
+}

@@ -208,7 +208,9 @@ pub fn decode_solver(b: u8) -> Solver {
     });
     if b & 16 != 0 {
         // Tiny iteration budgets: the hard bounds must be honoured without a wrong Ok.
-        s = s.newton_iterations(u32::from(b >> 5)).reprojection_iterations(u32::from(b >> 5));
+        s = s
+            .newton_iterations(u32::from(b >> 5))
+            .reprojection_iterations(u32::from(b >> 5));
     }
     s
 }
@@ -216,12 +218,22 @@ pub fn decode_solver(b: u8) -> Solver {
 /// The properties of a returned solution.
 pub fn check_solution(s: &Solution) {
     let t = s.pose.translation.vector;
-    assert!(t.iter().all(|x| x.is_finite()), "non-finite translation {t:?}");
+    assert!(
+        t.iter().all(|x| x.is_finite()),
+        "non-finite translation {t:?}"
+    );
     let r = s.rotation;
     assert!(r.iter().all(|x| x.is_finite()), "non-finite rotation {r:?}");
     let orth = (r.transpose() * r - Matrix3::identity()).norm();
-    assert!(orth < 1e-9, "rotation not orthonormal: |R^T R - I| = {orth:e}");
-    assert!(r.determinant() > 0.0, "reflection returned: det R = {}", r.determinant());
+    assert!(
+        orth < 1e-9,
+        "rotation not orthonormal: |R^T R - I| = {orth:e}"
+    );
+    assert!(
+        r.determinant() > 0.0,
+        "reflection returned: det R = {}",
+        r.determinant()
+    );
     let q = s.pose.rotation.to_rotation_matrix().into_inner();
     let dq = (q - r).norm();
     assert!(dq < 1e-9, "pose.rotation and rotation differ by {dq:e}");
@@ -257,15 +269,23 @@ fn expected_input_error(p: &Problem) -> Option<PnpError> {
 }
 
 fn all_finite(p: &Problem) -> bool {
-    p.world.iter().all(|x| x.coords.iter().all(|v| v.is_finite()))
-        && p.image.iter().all(|x| x.coords.iter().all(|v| v.is_finite()))
+    p.world
+        .iter()
+        .all(|x| x.coords.iter().all(|v| v.is_finite()))
+        && p.image
+            .iter()
+            .all(|x| x.coords.iter().all(|v| v.is_finite()))
         && p.weights.iter().flatten().all(|w| w.is_finite())
 }
 
 /// Checks a result against the input: typed errors for malformed input, properties for `Ok`.
 fn check_result(p: &Problem, res: &Result<Solution, PnpError>) {
     if let Some(e) = expected_input_error(p) {
-        assert_eq!(res.as_ref().err(), Some(&e), "wrong error for malformed input");
+        assert_eq!(
+            res.as_ref().err(),
+            Some(&e),
+            "wrong error for malformed input"
+        );
         return;
     }
     match res {
@@ -279,7 +299,10 @@ fn check_result(p: &Problem, res: &Result<Solution, PnpError>) {
             // Input checks run in a documented order: lengths, weights length, N >= 4, then
             // finiteness.
             if !all_finite(p) && p.world.len() >= 4 {
-                assert!(matches!(e, PnpError::NonFinite { .. }), "non-finite input gave {e:?}");
+                assert!(
+                    matches!(e, PnpError::NonFinite { .. }),
+                    "non-finite input gave {e:?}"
+                );
             }
         }
     }
@@ -311,11 +334,17 @@ pub fn solve(data: &[u8]) {
                 }
             }
             (Ok(all), Err(e)) => {
-                assert!(matches!(e, PnpError::NoSolution), "solve: {e:?}, solve_all: Ok");
+                assert!(
+                    matches!(e, PnpError::NoSolution),
+                    "solve: {e:?}, solve_all: Ok"
+                );
                 all.iter().for_each(check_solution);
             }
             (Err(e), Ok(_)) => {
-                assert!(matches!(e, PnpError::NoSolution), "solve_all: {e:?}, solve: Ok");
+                assert!(
+                    matches!(e, PnpError::NoSolution),
+                    "solve_all: {e:?}, solve: Ok"
+                );
             }
         }
     }
@@ -344,6 +373,20 @@ pub fn ransac(data: &[u8]) {
         .confidence(confidence)
         .final_threshold_factor(factor);
     let res = ransac.estimate(&solver, &p.world, &p.image, focal, p.weights.as_deref());
+    let options_ok = threshold.is_finite()
+        && threshold > 0.0
+        && confidence > 0.0
+        && confidence < 1.0
+        && max_iter > 0
+        && factor.is_finite()
+        && factor >= 1.0;
+    if !options_ok {
+        assert!(
+            matches!(res, Err(PnpError::InvalidOption { .. })),
+            "options out of range gave {res:?}"
+        );
+        return;
+    }
     match &res {
         Ok(sol) => {
             assert!(all_finite(&p), "RANSAC Ok for non-finite input");
