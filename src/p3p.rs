@@ -401,14 +401,15 @@ mod tests {
         }
     }
 
-    fn random_problem(
-        rng: &mut Rng,
-    ) -> (
+    /// Rotation, translation, world points and bearings of a random P3P problem.
+    type RandomProblem = (
         Matrix3<f64>,
         Vector3<f64>,
         [Point3<f64>; 3],
         [Vector3<f64>; 3],
-    ) {
+    );
+
+    fn random_problem(rng: &mut Rng) -> RandomProblem {
         let axis = Unit::new_normalize(Vector3::new(rng.sym(), rng.sym(), rng.sym()));
         let r = Rotation3::from_axis_angle(&axis, std::f64::consts::PI * rng.next()).into_inner();
         let t = Vector3::new(rng.sym(), rng.sym(), 4.0 + 2.0 * rng.next());

@@ -16,7 +16,10 @@ mod harness;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-const TARGETS: [(&str, fn(&[u8])); 5] = [
+/// A fuzz target: its name and its harness.
+type Target = (&'static str, fn(&[u8]));
+
+const TARGETS: [Target; 5] = [
     ("solve", harness::solve),
     ("ransac", harness::ransac),
     ("colmap_text", harness::colmap_text),
@@ -45,21 +48,32 @@ fn corpus_and_regressions_replay() {
         for sub in ["corpus", "regressions"] {
             for f in files(&fuzz_dir().join(sub).join(target)) {
                 // A running fuzzer may remove a file between listing and reading.
-                let Ok(data) = std::fs::read(&f) else { continue };
+                let Ok(data) = std::fs::read(&f) else {
+                    continue;
+                };
                 let res = std::panic::catch_unwind(|| run(&data));
                 assert!(res.is_ok(), "{target}: {} fails", f.display());
                 n += 1;
             }
         }
         assert!(n > 0, "{target}: empty corpus");
-        eprintln!("{target}: {n} inputs in {:.2} s", t0.elapsed().as_secs_f64());
+        eprintln!(
+            "{target}: {n} inputs in {:.2} s",
+            t0.elapsed().as_secs_f64()
+        );
         total += n;
     }
     eprintln!("{total} inputs replayed");
 }
 
 fn seed(target: &str, name: &str) -> Vec<u8> {
-    std::fs::read(fuzz_dir().join("corpus").join(target).join(format!("seed-{name}"))).unwrap()
+    std::fs::read(
+        fuzz_dir()
+            .join("corpus")
+            .join(target)
+            .join(format!("seed-{name}")),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -91,7 +105,10 @@ fn seeds_reach_the_solver() {
 #[test]
 fn seeds_reach_the_parsers_and_registration() {
     for (target, parse) in [
-        ("colmap_text", eopnp::colmap::parse_model_text as fn(&[u8], &[u8], &[u8]) -> _),
+        (
+            "colmap_text",
+            eopnp::colmap::parse_model_text as fn(&[u8], &[u8], &[u8]) -> _,
+        ),
         ("colmap_binary", eopnp::colmap::parse_model_binary),
     ] {
         let data = seed(target, "boxes-subset");
@@ -117,7 +134,11 @@ fn seeds_reach_the_parsers_and_registration() {
                 reg.rmse_px,
                 reg.model_rmse_px
             );
-            assert!(reg.rotation_error_deg < 5.0, "{target}: {}", reg.rotation_error_deg);
+            assert!(
+                reg.rotation_error_deg < 5.0,
+                "{target}: {}",
+                reg.rotation_error_deg
+            );
         }
     }
     for name in ["csv", "json", "json-noext", "csv-radial"] {
@@ -125,7 +146,10 @@ fn seeds_reach_the_parsers_and_registration() {
         let mode = data[0];
         let (camera, body) = if mode & 4 != 0 {
             let end = data[1..].iter().position(|&b| b == b'\n').unwrap() + 1;
-            (Some(std::str::from_utf8(&data[1..end]).unwrap()), &data[end + 1..])
+            (
+                Some(std::str::from_utf8(&data[1..end]).unwrap()),
+                &data[end + 1..],
+            )
         } else {
             (None, &data[1..])
         };

@@ -7,7 +7,7 @@ use criterion::Criterion;
 use std::time::Duration;
 
 /// Seed of every bench problem set (independent of `EOPNP_TEST_SEED`).
-pub const BENCH_SEED: u64 = 0xBE_4C_2019;
+pub const BENCH_SEED: u64 = 0xBE4C_2019;
 
 /// Problems per set: the timed closure cycles through them so that branch predictors and
 /// caches do not learn one input (glam-style).
