@@ -258,6 +258,12 @@ pub enum CameraError {
         /// The pixel.
         pixel: (f64, f64),
     },
+    /// The pixel is so far outside the image that its normalised coordinates, or the lens
+    /// model's local scale there, overflow `f64`.
+    OutOfRange {
+        /// The pixel.
+        pixel: (f64, f64),
+    },
 }
 
 impl fmt::Display for CameraError {
@@ -284,14 +290,21 @@ impl fmt::Display for CameraError {
             CameraError::NonFinite => f.write_str("point coordinate is NaN or infinite"),
             CameraError::NoConvergence { pixel } => write!(
                 f,
-                "undistortion of pixel ({}, {}) did not converge (outside the region where the \
-                 distortion model is invertible?)",
+                "undistortion of pixel ({:?}, {:?}) did not converge (outside the region where \
+                 the distortion model is invertible?)",
                 pixel.0, pixel.1
             ),
             CameraError::BeyondHemisphere { pixel } => write!(
                 f,
-                "pixel ({}, {}) is 90 degrees or more off the optical axis of this fisheye \
+                "pixel ({:?}, {:?}) is 90 degrees or more off the optical axis of this fisheye \
                  camera: it has no normalised image coordinates",
+                pixel.0, pixel.1
+            ),
+            CameraError::OutOfRange { pixel } => write!(
+                f,
+                "pixel ({:?}, {:?}) is too far outside the image for this camera model (its \
+                 normalised coordinates or the lens model's scale there overflow); check the \
+                 pixel coordinates and the camera parameters",
                 pixel.0, pixel.1
             ),
         }
@@ -585,6 +598,11 @@ impl Camera {
         } else {
             x0
         };
+        if !(u.is_finite() && v.is_finite()) {
+            return Err(CameraError::OutOfRange {
+                pixel: (pixel.x, pixel.y),
+            });
+        }
         if !self.model.is_fisheye() {
             return Ok(Point2::new(u, v));
         }
@@ -604,6 +622,32 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// [`Camera::undistort`] and the weight of the point in [`solve_pixels`]:
+    /// `|det J| / (fx fy)`, `J` the Jacobian of [`Camera::project`] at the normalised point (to
+    /// first order, the squared scale of a pixel error in normalised units relative to the
+    /// undistorted pinhole camera).
+    ///
+    /// # Errors
+    /// As [`Camera::undistort`], and [`CameraError::OutOfRange`] if the weight overflows.
+    pub fn undistort_weighted(
+        &self,
+        pixel: Point2<f64>,
+    ) -> Result<(Point2<f64>, f64), CameraError> {
+        let n = self.undistort(pixel)?;
+        let (fx, fy) = self.intrinsics_scale();
+        let j = self.project_jacobian(n);
+        let w = ((j[0] * j[3] - j[1] * j[2]) / (fx * fy)).abs();
+        if w.is_finite() {
+            Ok((n, w))
+        } else {
+            Err(CameraError::OutOfRange {
+                pixel: (pixel.x, pixel.y),
+            })
+        }
+    }
+}
+
 /// The result of [`solve_pixels`].
 #[derive(Clone, Copy, Debug)]
 #[non_exhaustive]
@@ -613,7 +657,7 @@ pub struct CameraSolution {
     /// Correspondences used.
     pub used: usize,
     /// Correspondences skipped because their pixel could not be undistorted
-    /// ([`Camera::undistort`] failed).
+    /// ([`Camera::undistort_weighted`] failed).
     pub skipped: usize,
 }
 
@@ -647,12 +691,10 @@ pub fn solve_pixels(
     let mut weights = Vec::with_capacity(world.len());
     let (fx, fy) = camera.intrinsics_scale();
     for (x, px) in world.iter().zip(pixels) {
-        let Ok(n) = camera.undistort(*px) else {
+        let Ok((n, weight)) = camera.undistort_weighted(*px) else {
             continue;
         };
-        let j = camera.project_jacobian(n);
-        // The squared geometric-mean scale of the distortion's Jacobian at this point.
-        weights.push(((j[0] * j[3] - j[1] * j[2]) / (fx * fy)).abs());
+        weights.push(weight);
         w.push(*x);
         image.push(n);
     }
@@ -819,6 +861,40 @@ mod tests {
         // r2 = 0.25, factor 1 + 0.1 * 0.25 = 1.025.
         assert!((p.x - (1000.0 * 0.3 * 1.025 + 600.0)).abs() < 1e-12);
         assert!((p.y - (1000.0 * -0.4 * 1.025 + 800.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn pixels_beyond_f64_range_are_out_of_range() {
+        // A pinhole camera with a tiny focal length: (px - cx) / fx overflows.
+        let cam = Camera::from_colmap("PINHOLE", 10, 10, vec![1e-10, 1e-10, 5.0, 5.0]).unwrap();
+        let px = Point2::new(1e300, 5.0);
+        let e = cam.undistort(px).unwrap_err();
+        assert_eq!(
+            e,
+            CameraError::OutOfRange {
+                pixel: (1e300, 5.0)
+            }
+        );
+        assert!(e.to_string().contains("1e300"), "{e}");
+        // A radial camera far outside the image: the undistortion converges (the model is
+        // monotone) but the local scale of the distortion overflows.
+        let cam =
+            Camera::from_colmap("SIMPLE_RADIAL", 100, 100, vec![1.0, 50.0, 50.0, 0.0]).unwrap();
+        assert!(cam.undistort_weighted(Point2::new(60.0, 40.0)).is_ok());
+        let radial =
+            Camera::from_colmap("RADIAL", 100, 100, vec![1.0, 50.0, 50.0, 0.1, 0.0]).unwrap();
+        for x in [1e60, 1e80, 1e100, 1e150] {
+            match radial.undistort_weighted(Point2::new(x, 50.0)) {
+                Ok((n, w)) => assert!(n.x.is_finite() && w.is_finite()),
+                Err(e) => assert!(
+                    matches!(
+                        e,
+                        CameraError::OutOfRange { .. } | CameraError::NoConvergence { .. }
+                    ),
+                    "{e}"
+                ),
+            }
+        }
     }
 
     #[test]

@@ -636,11 +636,10 @@ impl Ransac {
         let mut image = Vec::with_capacity(world.len());
         let mut weights = Vec::with_capacity(world.len());
         for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
-            let Ok(nrm) = camera.undistort(*px) else {
+            let Ok((nrm, weight)) = camera.undistort_weighted(*px) else {
                 continue;
             };
-            let j = camera.project_jacobian(nrm);
-            weights.push(((j[0] * j[3] - j[1] * j[2]) / (fx * fy)).abs());
+            weights.push(weight);
             w.push(*x);
             image.push(nrm);
             used.push(i);

@@ -192,18 +192,22 @@ fn read_csv(name: &str, text: &str, camera: Camera) -> Result<Problem, Failure> 
         }
         let mut v = [0.0; 5];
         for (k, f) in fields.iter().enumerate() {
-            v[k] = f
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| {
-                    Failure::input(format!(
-                        "{name}:{line}: field {} ({}) is not a finite number: `{}`",
-                        k + 1,
-                        ["x", "y", "X", "Y", "Z"][k],
-                        truncate(f)
-                    ))
-                })?;
+            let what = format!(
+                "{name}:{line}: field {} ({})",
+                k + 1,
+                ["x", "y", "X", "Y", "Z"][k]
+            );
+            // Debug-escaped, so that invisible characters in the field show.
+            let shown = truncate(&f.escape_debug().to_string());
+            v[k] = match f.parse::<f64>() {
+                Ok(x) if x.is_finite() => x,
+                Ok(_) => {
+                    return Err(Failure::input(format!(
+                        "{what} is not finite (NaN, inf or beyond +-1.8e308): `{shown}`"
+                    )))
+                }
+                Err(_) => return Err(Failure::input(format!("{what} is not a number: `{shown}`"))),
+            };
         }
         pixels.push(Point2::new(v[0], v[1]));
         world.push(Point3::new(v[2], v[3], v[4]));
@@ -234,14 +238,9 @@ fn truncate(s: &str) -> String {
 pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
     // Undistortion failures are input errors here (`solve_pixels` would skip the point).
     for (k, px) in p.pixels.iter().enumerate() {
-        p.camera.undistort(*px).map_err(|e| {
-            Failure::input(format!(
-                "correspondence {}: pixel ({}, {}): {e}",
-                k + 1,
-                px.x,
-                px.y
-            ))
-        })?;
+        p.camera
+            .undistort_weighted(*px)
+            .map_err(|e| Failure::input(format!("correspondence {}: {e}", k + 1)))?;
     }
     let sol = crate::camera::solve_pixels(solver, &p.camera, &p.world, &p.pixels)
         .map_err(|e| Failure::solver(format!("no pose: {e}")))?
@@ -275,4 +274,57 @@ pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
     let mut out = serde_json::to_string_pretty(&v).unwrap_or_default();
     out.push('\n');
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn csv_error(body: &str) -> String {
+        let text = format!("x,y,X,Y,Z\n{body}\n");
+        match parse_problem(
+            "p.csv",
+            text.as_bytes(),
+            Some("csv"),
+            Some("PINHOLE 800 800 320 240"),
+        ) {
+            Err(f) => {
+                assert_eq!(f.code, 2);
+                f.message
+            }
+            Ok(_) => panic!("{body}: accepted"),
+        }
+    }
+
+    #[test]
+    fn csv_field_errors_say_which_field_and_why() {
+        let m = csv_error("1,2,abc,4,5");
+        assert_eq!(m, "p.csv:2: field 3 (X) is not a number: `abc`");
+        let m = csv_error("1,2\u{1},3,4,5");
+        assert_eq!(m, "p.csv:2: field 2 (y) is not a number: `2\\u{1}`");
+        let m = csv_error("1,2,3,inf,5");
+        assert!(m.starts_with("p.csv:2: field 4 (Y) is not finite"), "{m}");
+        let m = csv_error("1,2,3,4,1e400");
+        assert!(m.starts_with("p.csv:2: field 5 (Z) is not finite"), "{m}");
+    }
+
+    #[test]
+    fn unusable_pixels_name_the_correspondence() {
+        let text = "x,y,X,Y,Z\n1e300,2,0,0,1\n3,4,1,0,1\n5,6,0,1,1\n7,8,1,1,2\n";
+        let p = parse_problem(
+            "p.csv",
+            text.as_bytes(),
+            None,
+            Some("PINHOLE 1e-10 1e-10 5 5"),
+        )
+        .unwrap();
+        let f = solve(&p, &Solver::default()).unwrap_err();
+        assert_eq!(f.code, 2);
+        assert!(
+            f.message
+                .starts_with("correspondence 1: pixel (1e300, 2.0)"),
+            "{}",
+            f.message
+        );
+    }
 }
