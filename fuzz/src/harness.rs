@@ -99,6 +99,9 @@ pub struct Problem {
     pub image: Vec<Point2<f64>>,
     /// Per-point weights (`None`: unweighted).
     pub weights: Option<Vec<f64>>,
+    /// The generating pose when the image points are its exact projections (no noise, no
+    /// length change): a pose with zero reprojection error exists.
+    pub exact_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
 }
 
 /// Decodes a problem. Layout: a flags byte, a base count, a tiling count, then the base points
@@ -135,11 +138,13 @@ pub fn decode_problem(r: &mut Reader) -> Problem {
     } else {
         None
     };
+    let mut noiseless = true;
     for x in &world0 {
         let p = match &pose {
             Some((rot, t)) => {
                 let c = rot * x.coords + t;
                 let noise = (r.f64(), r.f64());
+                noiseless &= noise == (0.0, 0.0);
                 let scale = 1e-3;
                 Point2::new(c.x / c.z + scale * noise.0, c.y / c.z + scale * noise.1)
             }
@@ -164,6 +169,7 @@ pub fn decode_problem(r: &mut Reader) -> Problem {
         world.push(x);
         image.push(p);
     }
+    let exact_pose = pose.filter(|_| noiseless && !length_fuzz);
     if length_fuzz {
         match r.u8() % 3 {
             0 => {
@@ -189,6 +195,7 @@ pub fn decode_problem(r: &mut Reader) -> Problem {
         world,
         image,
         weights,
+        exact_pose,
     }
 }
 
@@ -308,16 +315,68 @@ fn check_result(p: &Problem, res: &Result<Solution, PnpError>) {
     }
 }
 
+/// The accuracy property on well-posed exact problems: when the image points are exact
+/// projections of a pose, every point is in front of it at a moderate depth, coordinates are
+/// moderate and N >= 6 points span 3D well (or lie exactly on a plane), the returned pose must
+/// reproject (nearly) exactly: a pose with a visible reprojection error while an exact one
+/// exists is a silently wrong answer. Near-degenerate inputs are excluded, where several poses
+/// fit and the conditioning, not the solver, limits the answer.
+fn check_exact(p: &Problem, s: &Solution) {
+    let Some((rot, t)) = &p.exact_pose else {
+        return;
+    };
+    if p.world.len() < 6 || p.weights.is_some() || s.degenerate {
+        return;
+    }
+    let moderate = p.world.iter().all(|x| x.coords.amax() <= 1e3)
+        && p.image.iter().all(|m| m.coords.amax() <= 2.0)
+        && t.amax() <= 1e3;
+    let depths: Vec<f64> = p.world.iter().map(|x| (rot * x.coords + t).z).collect();
+    let (zmin, zmax) = depths
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &z| (a.min(z), b.max(z)));
+    if !(moderate && zmin >= 0.1 && zmax <= 1e3) {
+        return;
+    }
+    // Spread of the world points: singular values of the centred cloud.
+    let n = p.world.len() as f64;
+    let c = p.world.iter().fold(Vector3::zeros(), |a, x| a + x.coords) / n;
+    let mut cov = Matrix3::zeros();
+    for x in &p.world {
+        let d = x.coords - c;
+        cov += d * d.transpose();
+    }
+    let mut ev: Vec<f64> = cov.symmetric_eigenvalues().iter().map(|v| v.max(0.0).sqrt()).collect();
+    ev.sort_by(|a, b| b.total_cmp(a));
+    let well_spread = ev[0] >= 0.1 && ev[1] >= 0.1 * ev[0] && (ev[2] >= 0.1 * ev[0] || ev[2] <= 1e-12 * ev[0]);
+    if !well_spread {
+        return;
+    }
+    assert!(
+        s.reprojection_rmse <= 1e-6,
+        "exact well-posed problem, but the pose reprojects with rmse {:e} (source {:?})",
+        s.reprojection_rmse,
+        s.source
+    );
+}
+
 /// `solve`, `solve_weighted` and `solve_all` on an arbitrary problem.
 pub fn solve(data: &[u8]) {
     let mut r = Reader::new(data);
-    let solver = decode_solver(r.u8());
+    let solver_byte = r.u8();
+    let solver = decode_solver(solver_byte);
+    let full_budget = solver_byte & 16 == 0;
     let p = decode_problem(&mut r);
     let res = match &p.weights {
         Some(w) => solver.solve_weighted(&p.world, &p.image, w),
         None => solver.solve(&p.world, &p.image),
     };
     check_result(&p, &res);
+    if let Ok(s) = &res {
+        if full_budget {
+            check_exact(&p, s);
+        }
+    }
     // solve_all on small problems: every minimum satisfies the same properties, the best
     // equals solve's answer in exhaustive mode, and the list is non-empty exactly when Ok.
     if p.weights.is_none() && p.world.len() <= 64 {
