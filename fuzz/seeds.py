@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the seed inputs of the fuzz corpus (fuzz/corpus/<target>/seed-*).
+"""Writes the seed inputs of the fuzz targets (fuzz/seeds/<target>/seed-*).
 
     python3 fuzz/seeds.py
 
@@ -14,7 +14,7 @@ import random
 import struct
 
 ROOT = os.path.dirname(os.path.abspath(__file__))
-CORPUS = os.path.join(ROOT, "corpus")
+CORPUS = os.path.join(ROOT, "seeds")
 
 
 def quarter(v):

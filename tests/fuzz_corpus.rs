@@ -1,7 +1,8 @@
 //! The fuzz harnesses on stable Rust, in every CI run:
 //! - every input the fuzzer found that once failed, as a named regression test
 //!   (`fuzz/regressions/<target>/<name>`);
-//! - the whole committed corpus (`fuzz/corpus/<target>/`), replayed through the same
+//! - the seeds (`fuzz/seeds/<target>/`, written by `fuzz/seeds.py`) and the whole committed
+//!   corpus the fuzzer grew from them (`fuzz/corpus/<target>/`), replayed through the same
 //!   properties the fuzzer checks;
 //! - the seeds reach the deep paths they are meant to start from (so a change of the input
 //!   layout that makes them decode to garbage is noticed).
@@ -45,7 +46,7 @@ fn corpus_and_regressions_replay() {
     for (target, run) in TARGETS {
         let t0 = Instant::now();
         let mut n = 0;
-        for sub in ["corpus", "regressions"] {
+        for sub in ["seeds", "corpus", "regressions"] {
             for f in files(&fuzz_dir().join(sub).join(target)) {
                 // A running fuzzer may remove a file between listing and reading.
                 let Ok(data) = std::fs::read(&f) else {
