@@ -70,7 +70,7 @@ fn corpus_and_regressions_replay() {
 fn seed(target: &str, name: &str) -> Vec<u8> {
     std::fs::read(
         fuzz_dir()
-            .join("corpus")
+            .join("seeds")
             .join(target)
             .join(format!("seed-{name}")),
     )
