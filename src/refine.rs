@@ -16,7 +16,10 @@
 //! Acceptance: `f' < f`, or `f' <= f + accept_floor * scale` and `|g'| < |g|` (the rounding
 //! floor of T5, needed to reach ~1e-13 deg on noise-free data). `mu` x10 after a rejected step
 //! (or a failed Cholesky), /10 (floor 1e-15) after an accepted one; stop when no step is
-//! accepted before `mu > mu_max`, when `|d| <= step_tolerance`, or at `max_iterations`.
+//! accepted before `mu > mu_max`, when `|d| <= step_tolerance`, when quadratic convergence
+//! predicts the next step at or below `step_tolerance / 1000` (`|d_k|^3 / |d_k-1|^2` for two
+//! consecutive undamped Newton steps (H positive definite, mu <= mu0), with
+//! `|d_k| < |d_k-1| / 10`: saves the last, confirming iteration), or at `max_iterations`.
 //! Every loop is bounded: at most `max_iterations` outer iterations, each with at most
 //! [`MAX_DAMPING_STEPS`] trial steps. Cost per trial step: one kernel call, O(1).
 
@@ -236,6 +239,7 @@ pub(crate) fn refine_so3_until(
     let mut iterations = 0u32;
     let mut hit_limit = true;
     let mut stopped_early = false;
+    let mut d_prev = f64::INFINITY;
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         // shift = max(0, -lambda_min(H)); a successful Cholesky of H proves lambda_min > 0
@@ -278,11 +282,26 @@ pub(crate) fn refine_so3_until(
         f = fnew;
         g = gnew;
         h = hnew;
+        // A Newton step: H positive definite and no damping escalation in this iteration.
+        let newton_step = shift == 0.0 && mu <= opts.mu0;
         mu = (mu / 10.0).max(1e-15);
-        if d.norm() <= opts.step_tolerance {
+        let dn = d.norm();
+        if dn <= opts.step_tolerance {
             hit_limit = false;
             break;
         }
+        // Quadratic convergence (|d_k+1| ~ C |d_k|^2, C estimated from the last two Newton
+        // steps): when the predicted next step is 1000x below the tolerance (below rounding at
+        // the default), it is not computed.
+        if newton_step
+            && d_prev.is_finite()
+            && dn < 0.1 * d_prev
+            && dn * (dn / d_prev) * (dn / d_prev) <= 1e-3 * opts.step_tolerance
+        {
+            hit_limit = false;
+            break;
+        }
+        d_prev = if newton_step { dn } else { f64::INFINITY };
         if stop(&r) {
             hit_limit = false;
             stopped_early = true;
