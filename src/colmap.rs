@@ -377,7 +377,7 @@ impl LineCtx<'_> {
 
     fn parse<T: std::str::FromStr>(&self, tok: &str, what: &str) -> Result<T, ModelError> {
         tok.parse()
-            .map_err(|_| self.err(format!("bad {what}: \"{}\"", truncate(tok))))
+            .map_err(|_| self.err(format!("bad {what}: {:?}", truncate(tok))))
     }
 
     fn float(&self, tok: &str, what: &str) -> Result<f64, ModelError> {
@@ -385,7 +385,7 @@ impl LineCtx<'_> {
         if v.is_finite() {
             Ok(v)
         } else {
-            Err(self.err(format!("{what} is not finite: \"{}\"", truncate(tok))))
+            Err(self.err(format!("{what} is not finite: {:?}", truncate(tok))))
         }
     }
 }
