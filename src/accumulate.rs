@@ -408,9 +408,20 @@ impl Accumulator {
         }
         let chol = wtw.cholesky()?;
         let g = chol.solve(&wtv);
-        let m = vtv - wtv.transpose() * g;
-        let m = (m + m.transpose()) * 0.5;
-        if !(m.iter().all(|x| x.is_finite()) && g.iter().all(|x| x.is_finite())) {
+        // M = V^T V - (W^T V)^T G, symmetric by construction: the upper triangle is computed
+        // and mirrored (45 of the 81 entries).
+        let mut m = vtv;
+        let mut finite = g.iter().all(|x| x.is_finite());
+        for i in 0..9 {
+            for j in i..9 {
+                let v = vtv[(i, j)]
+                    - (wtv[(0, i)] * g[(0, j)] + wtv[(1, i)] * g[(1, j)] + wtv[(2, i)] * g[(2, j)]);
+                finite &= v.is_finite();
+                m[(i, j)] = v;
+                m[(j, i)] = v;
+            }
+        }
+        if !finite {
             return None;
         }
         Some(System {
