@@ -129,7 +129,11 @@ pub(crate) fn svd3(a: &Matrix3<f64>) -> Option<Svd3> {
             let alpha = b.column(p).norm_squared();
             let beta = b.column(q).norm_squared();
             let gamma = b.column(p).dot(&b.column(q));
-            if gamma == 0.0 || gamma.abs() <= f64::EPSILON * alpha.sqrt() * beta.sqrt() {
+            // Rotate only when the columns' inner product exceeds its own rounding error
+            // (a length-3 dot product: about 3 eps |b_p| |b_q|); with a threshold of 1 eps, a
+            // pair whose computed gamma is rounding noise can be rotated forever (found: an
+            // ordinary matrix that used all SVD_MAX_SWEEPS sweeps).
+            if gamma == 0.0 || gamma.abs() <= 4.0 * f64::EPSILON * alpha.sqrt() * beta.sqrt() {
                 continue;
             }
             rotated = true;
@@ -392,6 +396,31 @@ mod tests {
             assert!(orth_err(&r) < 2e-15);
         }
         assert_eq!(exp_so3(&Vector3::zeros()), Matrix3::identity());
+    }
+
+    #[test]
+    fn svd3_converges_well_within_its_sweep_bound() {
+        // An ordinary matrix (a candidate of the case-1 start) on which a 1-eps rotation
+        // threshold kept rotating a pair whose inner product is rounding noise: all 40 sweeps.
+        let a = Matrix3::from_column_slice(&[
+            0.03165774668062224,
+            0.06537362588744486,
+            -0.0041840607448066815,
+            0.023226095764420775,
+            0.1598864994284672,
+            -0.027021008617450003,
+            -0.02359280146445423,
+            -0.1725975064488418,
+            0.05489997101597928,
+        ]);
+        use crate::bounds::{tests::with_limit, Bound};
+        let (out, hit) = with_limit(Bound::Svd3Sweeps, 8, || svd3(&a));
+        assert_eq!(hit, 0, "more than 8 sweeps");
+        let svd = out.unwrap();
+        let rec = svd.u * Matrix3::from_diagonal(&svd.s) * svd.v.transpose();
+        assert!((rec - a).amax() < 4.0 * f64::EPSILON * svd.s[0], "{:e}", (rec - a).amax());
+        assert!((svd.u.transpose() * svd.u - Matrix3::identity()).amax() < 1e-15);
+        assert!((svd.v.transpose() * svd.v - Matrix3::identity()).amax() < 1e-15);
     }
 
     #[test]
