@@ -3,13 +3,40 @@
 //! Minimises `E(R, t) = sum_i w_i (wx e_ix^2 + wy e_iy^2)`, `e_i = m_i - pi(R P_i + t)`,
 //! `pi(x, y, z) = (x / z, y / z)`, over the working-frame pose `(R, t)` with the update
 //! `R := Exp(w) R`, `t := t + tau`. Nielsen's damping rule; a step is accepted only if it lowers
-//! `E` and keeps the sign of every depth, so `E` never increases and no point crosses `z = 0`.
+//! `E` and keeps the sign of every depth, so `E` never increases and no point crosses `z = 0`
+//! (a tiny final step is accepted on proof of both instead of evaluation, see below).
 //! Reference: `shared/reference/reproj_refine.py`, function `refine`.
 //!
 //! The working-frame points `P_i = Rw (X_i - c) / d` (S1) are never materialised: every pass
 //! composes the frame into the pose, `p_i = A (X_i - c) + t` with `A = R Rw / d`, and
 //! `q_i = R P_i = A (X_i - c)` is the lever arm of the rotation Jacobian. Each pass is O(N)
 //! and allocation-free; the 6 x 6 normal equations keep their 21 unique entries.
+//!
+//! The final step is taken unverified when it is tiny and the run has converged to the point
+//! where the next step would be negligible anyway: a step `delta` with
+//! - `|delta| <= FINAL_STEP_REL (|t| + 1)` (`FINAL_STEP_REL = 1e-7`),
+//! - `|delta|^2 / |delta_prev| <= xtol (|t| + 1)`, where `delta_prev` is the step accepted in
+//!   the iteration just before (none after a rejected step or a failed factorisation): near the
+//!   minimum LM converges linearly with the ratio `|delta| / |delta_prev|`, so the left side
+//!   is the predicted size of the next step, the one that would end the run by the `xtol` test,
+//! - `|delta| (max_i |q_i| + 1) < min_i |z_i| / 2`,
+//!
+//! is applied without the O(N) pass that would evaluate it, and the refinement stops
+//! ([`ReprojStop::FinalStep`], converged). It saves the last of the (typically four) passes:
+//! that pass would only confirm the step and compute a next step below `xtol`. Why this is safe:
+//! - Depths keep their signs. With `delta = (w, tau)`, a depth moves by
+//!   `|z_i' - z_i| <= |Exp(w) q_i - q_i| + |tau| <= |w| |q_i| + |tau| <= |delta| (|q_i| + 1)`,
+//!   less than half the smallest `|z_i|`; the other half is the margin for rounding. `|q_i| =
+//!   |X_i - c| / d` does not depend on the pose: it is measured once, in the first pass.
+//! - The cost does not go up. The predicted decrease `pred = -(2 g.delta + delta.H.delta)` of
+//!   the damped Gauss-Newton model is positive, and the true decrease differs from it by the
+//!   residual-curvature term, a fraction of `pred` of the order of the linear convergence
+//!   ratio (below 1 here: the second condition with `|delta| > xtol (|t| + 1)` gives
+//!   `|delta| / |delta_prev| < 1`), plus `O(|delta|^3)`. The returned cost is the prediction,
+//!   `E - pred` clamped to `[0, E]`, so the reported `e` still never exceeds `e0`.
+//! - The accuracy is that of the `xtol` stop: that stop leaves the last (unapplied) step, at
+//!   most `xtol (|t| + 1)`, as the distance to the minimum; this one leaves the predicted next
+//!   step, bounded alike.
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
@@ -50,6 +77,8 @@ pub(crate) enum ReprojStop {
     Gradient,
     /// The step became negligible (converged).
     Step,
+    /// A tiny final step was applied without evaluating it (converged; see the module docs).
+    FinalStep,
     /// The damping grew beyond `1e16 max_k H_kk` without an acceptable step.
     Damping,
     /// The iteration cap was reached.
@@ -68,7 +97,8 @@ pub(crate) struct ReprojOutcome {
     /// Cost `E` at the start (NaN when skipped).
     #[cfg_attr(not(test), allow(dead_code))]
     pub e0: f64,
-    /// Cost `E` at the returned pose (NaN when skipped); never above `e0`.
+    /// Cost `E` at the returned pose (NaN when skipped); never above `e0`. After
+    /// [`ReprojStop::FinalStep`], the linear model's prediction of it.
     pub e: f64,
     /// Iterations performed (0 when skipped).
     pub iterations: u32,
@@ -80,6 +110,9 @@ pub(crate) struct ReprojOutcome {
 const ZERO_DEPTH_REL: f64 = 1e-12;
 /// Give up once the damping exceeds this multiple of the largest diagonal entry of `J^T J`.
 const DAMPING_LIMIT_REL: f64 = 1e16;
+/// Bound on a step taken without evaluating it: `|delta| <= FINAL_STEP_REL (|t| + 1)` (one of
+/// the three conditions of the module docs).
+const FINAL_STEP_REL: f64 = 1e-7;
 
 /// A pose with the working frame composed in: `p_i = a (X_i - c) + t`.
 #[derive(Clone, Copy)]
@@ -143,13 +176,16 @@ fn point_terms(xc: &Vector3<f64>, m: &Point2<f64>, pose: &Composed) -> PointTerm
 }
 
 /// Normal equations at one pose: `h = J^T W J` (upper triangle filled, then mirrored),
-/// `g = J^T W e`, `e = E`, and the extreme absolute depths.
+/// `g = J^T W e`, `e = E`, the extreme absolute depths and the largest lever arm `|q_i|`.
 struct Normal {
     h: [[f64; 6]; 6],
     g: [f64; 6],
     e: f64,
     min_abs_z: f64,
     max_abs_z: f64,
+    /// `max_i |q_i|` over the active points. Only the pass without reference pose computes it
+    /// (NaN otherwise): `|q_i| = |X_i - c| / d` does not depend on the pose.
+    max_abs_q: f64,
 }
 
 impl Normal {
@@ -220,6 +256,7 @@ impl Problem<'_> {
             e: 0.0,
             min_abs_z: f64::INFINITY,
             max_abs_z: 0.0,
+            max_abs_q: f64::NAN,
         };
         for i in 0..self.n {
             let wi = self.weights.map_or(1.0, |w| w[i]);
@@ -334,15 +371,18 @@ struct Partial {
     s: [[f64; LANES]; NSUMS],
     min_abs_z: [f64; LANES],
     max_abs_z: [f64; LANES],
+    /// Largest `|q_i|^2` of the lane (pass without reference pose only).
+    max_q2: [f64; LANES],
     /// Some depth of the lane differs in sign from its depth under the reference pose.
     flipped: [u64; LANES],
 }
 
 impl Partial {
-    /// Adds the lanes ((0 + 1) + (2 + 3)) and assembles the normal equations.
+    /// Adds the lanes ((0 + 1) + (2 + 3)) and assembles the normal equations. `CHECK`: the
+    /// pass had a reference pose (and so no `max_abs_q`).
     // Index loops fill the blocks of H by position.
     #[allow(clippy::needless_range_loop)]
-    fn normal(&self) -> Normal {
+    fn normal<const CHECK: bool>(&self) -> Normal {
         let s: [f64; NSUMS] = core::array::from_fn(|j| lane_sum(&self.s[j]));
         let (e, hrr, hrt, htt, gq, gb) = (
             s[0],
@@ -380,6 +420,11 @@ impl Partial {
             e,
             min_abs_z: self.min_abs_z.iter().fold(f64::INFINITY, |a, &z| a.min(z)),
             max_abs_z: self.max_abs_z.iter().fold(0.0f64, |a, &z| a.max(z)),
+            max_abs_q: if CHECK {
+                f64::NAN
+            } else {
+                self.max_q2.iter().fold(0.0f64, |a, &q| a.max(q)).sqrt()
+            },
         }
     }
 }
@@ -398,6 +443,7 @@ fn pass<const CHECK: bool>(
         s: [[0.0; LANES]; NSUMS],
         min_abs_z: [f64::INFINITY; LANES],
         max_abs_z: [0.0; LANES],
+        max_q2: [0.0; LANES],
         flipped: [0; LANES],
     };
     let flipped = |acc: &Partial| CHECK && acc.flipped.iter().any(|&f| f != 0);
@@ -460,7 +506,7 @@ fn pass<const CHECK: bool>(
     if flipped(&acc) {
         return None;
     }
-    Some(acc.normal())
+    Some(acc.normal::<CHECK>())
 }
 
 /// Adds point `l` of `blk` to lane `l` of `acc` (see [`Problem::accumulate`]).
@@ -478,6 +524,10 @@ fn lane<const CHECK: bool>(k: &PassConsts, blk: &Block, l: usize, acc: &mut Part
         let z_ref = dot(&k.ref_a) + k.ref_tz;
         let same_side = if z_ref > 0.0 { pz > 0.0 } else { pz < 0.0 };
         acc.flipped[l] |= u64::from(!same_side);
+    } else {
+        let q2 = qx * qx + qy * qy + qz * qz;
+        let mq = acc.max_q2[l];
+        acc.max_q2[l] = if q2 > mq { q2 } else { mq };
     }
     // `if a < b { a } else { b }` (not f64::min): one packed instruction; a NaN depth is
     // ignored as by f64::min, the partial extremes never being NaN.
@@ -631,6 +681,11 @@ pub(crate) fn refine_reprojection(
     }
 
     let e0 = nrm.e;
+    // Pose-independent (see Normal::max_abs_q): measured by this first pass only.
+    let max_abs_q = nrm.max_abs_q;
+    let mut e_final = None;
+    // Norm of the step accepted in the previous iteration (None after anything else).
+    let mut prev_step: Option<f64> = None;
     let mut lam = opts.tau * nrm.max_diag();
     let mut nu = 2.0;
     let mut stop = ReprojStop::MaxIterations;
@@ -645,10 +700,12 @@ pub(crate) fn refine_reprojection(
         let Some(delta) = solve_damped(&nrm.h, lam, &nrm.g) else {
             lam *= nu;
             nu *= 2.0;
+            prev_step = None;
             continue;
         };
         let step_norm = delta.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if step_norm <= opts.xtol * (t.norm() + 1.0) {
+        let scale = t.norm() + 1.0;
+        if step_norm <= opts.xtol * scale {
             stop = ReprojStop::Step;
             break;
         }
@@ -668,6 +725,24 @@ pub(crate) fn refine_reprojection(
         }
         let pred = -(2.0 * g_d + d_h_d);
 
+        // A tiny step after which the next one would be below xtol, and that cannot flip a
+        // depth sign, ends the run unverified (module docs).
+        if step_norm <= FINAL_STEP_REL * scale
+            && prev_step.is_some_and(|sp| step_norm * step_norm <= opts.xtol * scale * sp)
+            && step_norm * (max_abs_q + 1.0) < 0.5 * nrm.min_abs_z
+        {
+            r = r_new;
+            t = t_new;
+            // E - pred clamped to [0, E]; E itself if the prediction is not a decrease (or NaN).
+            e_final = Some(if pred > 0.0 {
+                (nrm.e - pred).max(0.0)
+            } else {
+                nrm.e
+            });
+            stop = ReprojStop::FinalStep;
+            break;
+        }
+
         match prob.accumulate(&cand, Some(&cur)) {
             Some(next) if next.e < nrm.e => {
                 let rho = if pred > 0.0 {
@@ -681,10 +756,12 @@ pub(crate) fn refine_reprojection(
                 nrm = next;
                 lam *= (1.0_f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 nu = 2.0;
+                prev_step = Some(step_norm);
             }
             _ => {
                 lam *= nu;
                 nu *= 2.0;
+                prev_step = None;
                 if lam > DAMPING_LIMIT_REL * nrm.max_diag() {
                     stop = ReprojStop::Damping;
                     break;
@@ -696,7 +773,7 @@ pub(crate) fn refine_reprojection(
         r,
         t,
         e0,
-        e: nrm.e,
+        e: e_final.unwrap_or(nrm.e),
         iterations,
         stop,
     }
@@ -1061,7 +1138,10 @@ mod tests {
             let out =
                 refine_reprojection(&s.world, &s.image, None, &s.c, s.d, &s.rw, &rk, &tk, &opts);
             assert!(
-                matches!(out.stop, ReprojStop::Gradient | ReprojStop::Step),
+                matches!(
+                    out.stop,
+                    ReprojStop::Gradient | ReprojStop::Step | ReprojStop::FinalStep
+                ),
                 "seed {seed}: {:?}",
                 out.stop
             );
@@ -1116,7 +1196,10 @@ mod tests {
                 "seed {seed}: {} iterations",
                 out.iterations
             );
-            assert!(matches!(out.stop, ReprojStop::Gradient | ReprojStop::Step));
+            assert!(matches!(
+                out.stop,
+                ReprojStop::Gradient | ReprojStop::Step | ReprojStop::FinalStep
+            ));
         }
     }
 
@@ -1153,7 +1236,10 @@ mod tests {
             &tk,
             &ReprojOptions::default(),
         );
-        assert!(matches!(full.stop, ReprojStop::Gradient | ReprojStop::Step));
+        assert!(matches!(
+            full.stop,
+            ReprojStop::Gradient | ReprojStop::Step | ReprojStop::FinalStep
+        ));
         assert!(full.iterations < 50);
     }
 
