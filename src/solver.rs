@@ -88,7 +88,9 @@ pub struct Solution {
     /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (ALGORITHM.md S7).
     pub algebraic_cost: f64,
     /// Root-mean-square normalised reprojection residual (weighted), in units of the focal
-    /// length: multiply by `f` for pixels.
+    /// length: multiply by `f` for pixels. `f64::INFINITY` if a point lies in the focal plane
+    /// (depth 0) of the returned pose, which can happen only in [`Refinement::Algebraic`] mode
+    /// (in the default mode such a pose is never returned).
     pub reprojection_rmse: f64,
     /// More than half of the points (with non-zero weight) are in front of the camera.
     pub cheirality_ok: bool,
@@ -624,10 +626,12 @@ impl Ctx<'_> {
                 e
             },
             algebraic_cost: f / self.scale,
-            reprojection_rmse: if wsum > 0.0 {
+            // Infinite (not NaN) when a point lies in the focal plane (depth 0) of the pose,
+            // which only an algebraic-mode pose can do (see below).
+            reprojection_rmse: if e.is_finite() && wsum > 0.0 {
                 (e / wsum).sqrt()
             } else {
-                f64::NAN
+                f64::INFINITY
             },
             cheirality_ok: cheirality,
             degenerate: self.degenerate,
@@ -636,6 +640,12 @@ impl Ctx<'_> {
             newton_iterations: m.iterations,
             reprojection_iterations: iters,
         };
+        // Reprojection mode promises the maximum-likelihood pose; a pose with a point at depth
+        // 0 has an infinite reprojection error and is not one (found by fuzzing, with an image
+        // coordinate of 3.5e16).
+        if mode == Refinement::Reprojection && !e.is_finite() {
+            return Err(PnpError::NoSolution);
+        }
         let finite = sol.rotation.iter().all(|x| x.is_finite())
             && sol.pose.translation.vector.iter().all(|x| x.is_finite())
             && sol.pose.rotation.coords.iter().all(|x| x.is_finite());

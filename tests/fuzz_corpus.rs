@@ -174,3 +174,24 @@ fn negative_algebraic_cost_huge_image_coordinate() {
         "../fuzz/regressions/solve/negative-algebraic-cost-huge-image-coordinate"
     ));
 }
+
+/// An image coordinate of 3.5e16 and repeated world points: in algebraic mode `solve_all`
+/// returned minima whose reprojection rmse was +inf (a point in the focal plane of the pose),
+/// which the harness then rejected as non-finite. Now documented: the rmse is +inf (never
+/// NaN) in that case, and the default mode never returns such a pose (`NoSolution`).
+#[test]
+fn infinite_rmse_point_in_focal_plane() {
+    harness::solve(include_bytes!(
+        "../fuzz/regressions/solve/infinite-rmse-point-in-focal-plane"
+    ));
+}
+
+/// A binary COLMAP model with a pixel at 4.4e142 and a point at depth 1.8e-307: registration
+/// reported an infinite cost (seen while the S9 rewrite was in progress; kept as a
+/// regression input for the registration path).
+#[test]
+fn huge_pixel_registration_has_finite_cost() {
+    harness::colmap_binary(include_bytes!(
+        "../fuzz/regressions/colmap_binary/huge-pixel-infinite-cost"
+    ));
+}

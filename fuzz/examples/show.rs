@@ -21,4 +21,9 @@ fn main() {
         println!("{k:3}: world [{:e}, {:e}, {:e}]  image [{:e}, {:e}]", x.x, x.y, x.z, u.x, u.y);
     }
     println!("solve: {:#?}", solver.solve(&p.world, &p.image));
+    if let Ok(all) = solver.solve_all(&p.world, &p.image) {
+        for s in &all {
+            println!("solve_all: cost {:e} alg {:e} rmse {:e} source {:?}", s.cost, s.algebraic_cost, s.reprojection_rmse, s.source);
+        }
+    }
 }
