@@ -229,9 +229,7 @@ fn read_file(path: &Path) -> Result<Vec<u8>, ModelError> {
 /// # Errors
 /// As [`read_model`].
 pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    let paths = TEXT_FILES.map(|n| dir.as_ref().join(n));
-    let [c, i, p] = [0, 1, 2].map(|k| read_file(&paths[k]));
-    parse_text(&paths, [&c?, &i?, &p?])
+    read_with(&TEXT, dir.as_ref())
 }
 
 /// Reads a binary-format model (`cameras.bin`, `images.bin`, `points3D.bin`) from `dir`.
@@ -239,9 +237,7 @@ pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
 /// # Errors
 /// As [`read_model`].
 pub fn read_model_binary(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    let paths = BIN_FILES.map(|n| dir.as_ref().join(n));
-    let [c, i, p] = [0, 1, 2].map(|k| read_file(&paths[k]));
-    parse_binary(&paths, [&c?, &i?, &p?])
+    read_with(&BINARY, dir.as_ref())
 }
 
 /// Parses a text-format model from the contents of its three files (e.g. read from an
@@ -254,7 +250,11 @@ pub fn parse_model_text(
     images: &[u8],
     points3d: &[u8],
 ) -> Result<Model, ModelError> {
-    parse_text(&TEXT_FILES.map(PathBuf::from), [cameras, images, points3d])
+    parse_with(
+        &TEXT,
+        &TEXT.files.map(PathBuf::from),
+        [cameras, images, points3d],
+    )
 }
 
 /// Parses a binary-format model from the contents of its three files. Errors name the files
@@ -267,29 +267,53 @@ pub fn parse_model_binary(
     images: &[u8],
     points3d: &[u8],
 ) -> Result<Model, ModelError> {
-    parse_binary(&BIN_FILES.map(PathBuf::from), [cameras, images, points3d])
+    parse_with(
+        &BINARY,
+        &BINARY.files.map(PathBuf::from),
+        [cameras, images, points3d],
+    )
 }
 
-fn parse_text(paths: &[PathBuf; 3], [c, i, p]: [&[u8]; 3]) -> Result<Model, ModelError> {
-    let mut model = Model {
-        cameras: parse_cameras_text(&paths[0], c)?,
-        ..Model::default()
-    };
-    let (images, locs) = parse_images_text(&paths[1], i)?;
-    model.images = images;
-    model.points = parse_points_text(&paths[2], p)?;
-    check_references(&model, &paths[1], &locs)?;
-    Ok(model)
+/// A model format: its file names and the parser of each file.
+struct Format {
+    files: [&'static str; 3],
+    cameras: fn(&Path, &[u8]) -> Result<BTreeMap<u32, Camera>, ModelError>,
+    images: fn(&Path, &[u8]) -> Result<Images, ModelError>,
+    points: fn(&Path, &[u8]) -> Result<BTreeMap<u64, Point3D>, ModelError>,
 }
 
-fn parse_binary(paths: &[PathBuf; 3], [c, i, p]: [&[u8]; 3]) -> Result<Model, ModelError> {
+const TEXT: Format = Format {
+    files: TEXT_FILES,
+    cameras: parse_cameras_text,
+    images: parse_images_text,
+    points: parse_points_text,
+};
+
+const BINARY: Format = Format {
+    files: BIN_FILES,
+    cameras: parse_cameras_bin,
+    images: parse_images_bin,
+    points: parse_points_bin,
+};
+
+fn read_with(format: &Format, dir: &Path) -> Result<Model, ModelError> {
+    let paths = format.files.map(|n| dir.join(n));
+    let [c, i, p] = [0, 1, 2].map(|k| read_file(&paths[k]));
+    parse_with(format, &paths, [&c?, &i?, &p?])
+}
+
+fn parse_with(
+    format: &Format,
+    paths: &[PathBuf; 3],
+    [c, i, p]: [&[u8]; 3],
+) -> Result<Model, ModelError> {
     let mut model = Model {
-        cameras: parse_cameras_bin(&paths[0], c)?,
+        cameras: (format.cameras)(&paths[0], c)?,
         ..Model::default()
     };
-    let (images, locs) = parse_images_bin(&paths[1], i)?;
+    let (images, locs) = (format.images)(&paths[1], i)?;
     model.images = images;
-    model.points = parse_points_bin(&paths[2], p)?;
+    model.points = (format.points)(&paths[2], p)?;
     check_references(&model, &paths[1], &locs)?;
     Ok(model)
 }
