@@ -274,12 +274,15 @@ pub fn parse_model_binary(
     )
 }
 
+/// A file parser: the file's path (for messages) and its bytes.
+type Parser<T> = fn(&Path, &[u8]) -> Result<T, ModelError>;
+
 /// A model format: its file names and the parser of each file.
 struct Format {
     files: [&'static str; 3],
-    cameras: fn(&Path, &[u8]) -> Result<BTreeMap<u32, Camera>, ModelError>,
-    images: fn(&Path, &[u8]) -> Result<Images, ModelError>,
-    points: fn(&Path, &[u8]) -> Result<BTreeMap<u64, Point3D>, ModelError>,
+    cameras: Parser<BTreeMap<u32, Camera>>,
+    images: Parser<Images>,
+    points: Parser<BTreeMap<u64, Point3D>>,
 }
 
 const TEXT: Format = Format {

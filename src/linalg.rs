@@ -307,6 +307,7 @@ mod tests {
         };
         let tiny = [0.0, 1e-16, 1e-14, 1e-12, 3e-11, 3e-10, 1e-9];
         let mut fast = [0usize; 7];
+        #[allow(clippy::needless_range_loop)]
         for k in 0..=6usize {
             for trial in 0..300 {
                 let q = random_orthogonal(&mut next);
