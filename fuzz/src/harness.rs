@@ -7,9 +7,12 @@
 //! Properties (any input whatsoever):
 //! - no panic, no hang (every call is bounded);
 //! - `Ok` only for finite input, with a finite pose, an orthonormal rotation (det +1) equal to
-//!   the quaternion's, and finite, non-negative costs;
+//!   the quaternion's, finite non-negative costs, and a reprojection rmse that is finite or
+//!   (algebraic mode, a point in the focal plane) +inf, never NaN;
 //! - `Err` for every input with a NaN or infinity, with the matching typed error;
-//! - the RANSAC inlier mask has one entry per point and agrees with the inlier count;
+//! - on well-posed exact problems the pose reprojects exactly ([`check_exact`]);
+//! - RANSAC options out of range give `InvalidOption`; the inlier mask has one entry per point
+//!   and agrees with the inlier count;
 //! - parsers return a typed error with a message, never a panic; a parsed model or problem is
 //!   then solved under the same properties.
 
