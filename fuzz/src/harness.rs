@@ -10,7 +10,7 @@
 //!   the quaternion's, finite non-negative costs, and a reprojection rmse that is finite or
 //!   (algebraic mode, a point in the focal plane) +inf, never NaN;
 //! - `Err` for every input with a NaN or infinity, with the matching typed error;
-//! - on well-posed exact problems the pose reprojects exactly ([`check_exact`]);
+//! - on well-posed exact problems the pose reprojects exactly (`check_exact`);
 //! - RANSAC options out of range give `InvalidOption`; the inlier mask has one entry per point
 //!   and agrees with the inlier count;
 //! - parsers return a typed error with a message, never a panic; a parsed model or problem is
