@@ -418,7 +418,11 @@ mod tests {
         assert_eq!(hit, 0, "more than 8 sweeps");
         let svd = out.unwrap();
         let rec = svd.u * Matrix3::from_diagonal(&svd.s) * svd.v.transpose();
-        assert!((rec - a).amax() < 4.0 * f64::EPSILON * svd.s[0], "{:e}", (rec - a).amax());
+        assert!(
+            (rec - a).amax() < 4.0 * f64::EPSILON * svd.s[0],
+            "{:e}",
+            (rec - a).amax()
+        );
         assert!((svd.u.transpose() * svd.u - Matrix3::identity()).amax() < 1e-15);
         assert!((svd.v.transpose() * svd.v - Matrix3::identity()).amax() < 1e-15);
     }

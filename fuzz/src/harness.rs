@@ -356,9 +356,14 @@ fn check_exact(p: &Problem, s: &Solution) {
         let d = x.coords - c;
         cov += d * d.transpose();
     }
-    let mut ev: Vec<f64> = cov.symmetric_eigenvalues().iter().map(|v| v.max(0.0).sqrt()).collect();
+    let mut ev: Vec<f64> = cov
+        .symmetric_eigenvalues()
+        .iter()
+        .map(|v| v.max(0.0).sqrt())
+        .collect();
     ev.sort_by(|a, b| b.total_cmp(a));
-    let well_spread = ev[0] >= 0.1 && ev[1] >= 0.1 * ev[0] && (ev[2] >= 0.1 * ev[0] || ev[2] <= 1e-12 * ev[0]);
+    let well_spread =
+        ev[0] >= 0.1 && ev[1] >= 0.1 * ev[0] && (ev[2] >= 0.1 * ev[0] || ev[2] <= 1e-12 * ev[0]);
     if !well_spread {
         return;
     }
