@@ -436,20 +436,17 @@ pub(crate) fn working_frame(
     frame_impl(world, image, weights, align, false)
 }
 
-/// [`working_frame`]; `force_pass3` takes the rotated third pass even when the scatter alone
-/// would do (tests compare both paths).
-fn frame_impl(
-    world: &[Point3<f64>],
-    image: &[Point2<f64>],
+/// The first input checks, in the documented order: equal slice lengths, one weight per point,
+/// at least [`MIN_POINTS`] points.
+pub(crate) fn check_lengths(
+    n: usize,
+    image_len: usize,
     weights: Option<&[f64]>,
-    align: bool,
-    force_pass3: bool,
-) -> Result<WorkingFrame, PnpError> {
-    let n = world.len();
-    if image.len() != n {
+) -> Result<(), PnpError> {
+    if image_len != n {
         return Err(PnpError::LengthMismatch {
             world: n,
-            image: image.len(),
+            image: image_len,
         });
     }
     if let Some(w) = weights {
@@ -466,6 +463,20 @@ fn frame_impl(
             need: MIN_POINTS,
         });
     }
+    Ok(())
+}
+
+/// [`working_frame`]; `force_pass3` takes the rotated third pass even when the scatter alone
+/// would do (tests compare both paths).
+fn frame_impl(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    align: bool,
+    force_pass3: bool,
+) -> Result<WorkingFrame, PnpError> {
+    check_lengths(world.len(), image.len(), weights)?;
+    let n = world.len();
 
     // Pass 1: validation, ranges, raw weighted sums.
     let sc = match weights {

@@ -428,23 +428,7 @@ impl Ransac {
         let start = Instant::now();
         self.check()?;
         let n = world.len();
-        if image.len() != n {
-            return Err(PnpError::LengthMismatch {
-                world: n,
-                image: image.len(),
-            });
-        }
-        if let Some(w) = weights {
-            if w.len() != n {
-                return Err(PnpError::WeightsLength {
-                    weights: w.len(),
-                    points: n,
-                });
-            }
-        }
-        if n < 4 {
-            return Err(PnpError::TooFewPoints { got: n, need: 4 });
-        }
+        crate::frame::check_lengths(n, image.len(), weights)?;
         let (fx, fy) = focal;
         if !(fx.is_finite() && fy.is_finite() && fx > 0.0 && fy > 0.0) {
             return Err(PnpError::InvalidIntrinsics);
