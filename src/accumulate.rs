@@ -23,6 +23,7 @@
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector2, Vector3};
 
 use crate::frame::WorkingFrame;
+use crate::lanes::{lane_sum, Block, LANES};
 
 /// The weighted sums of S2 (symmetric matrices stored in full).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -170,10 +171,6 @@ pub(crate) struct CentredSums {
     pub spread: f64,
 }
 
-/// Points per block of the vectorised centred pass ([`centred_pass`]): two SSE2 registers per
-/// quantity on the baseline x86-64 target.
-const LANES: usize = 4;
-
 /// The S2 sums of [`accumulate_centred`] as a flat array: row `k` holds the monomial `k` of
 /// `p` = `1, x, y, z, xx, xy, xz, yy, yz, zz` times `[w, w u, w v, w q]`.
 type Sums = [[f64; 4]; 10];
@@ -194,13 +191,6 @@ const fn ordered_index(k: usize, j: usize) -> Option<usize> {
     }
 }
 
-/// Sum of the lanes, pairwise: `(0 + 1) + (2 + 3)`.
-#[inline(always)]
-fn lane_sum(v: &[f64; LANES]) -> f64 {
-    const _: () = assert!(LANES == 4);
-    (v[0] + v[1]) + (v[2] + v[3])
-}
-
 /// What the centred pass needs of [`CentredMap`] and `A`, as plain scalars.
 struct PassConsts {
     /// `1 / sx`.
@@ -213,36 +203,6 @@ struct PassConsts {
     ism: f64,
     /// The image mean (image units of `sm`).
     mm: [f64; 2],
-}
-
-/// Up to [`LANES`] active points, transposed: world coordinates, image coordinates and the
-/// weight. Aligned (every field is a multiple of 16 bytes) so that SSE2 can use its operands
-/// in place.
-#[repr(C, align(16))]
-struct Block {
-    x: [[f64; LANES]; 3],
-    m: [[f64; LANES]; 2],
-    w: [f64; LANES],
-}
-
-impl Block {
-    #[inline(always)]
-    fn set(&mut self, l: usize, x: &Point3<f64>, m: &Point2<f64>) {
-        self.x[0][l] = x.x;
-        self.x[1][l] = x.y;
-        self.x[2][l] = x.z;
-        self.m[0][l] = m.x;
-        self.m[1][l] = m.y;
-    }
-
-    #[inline(always)]
-    fn point(&self, l: usize) -> ([f64; 3], [f64; 2], f64) {
-        (
-            [self.x[0][l], self.x[1][l], self.x[2][l]],
-            [self.m[0][l], self.m[1][l]],
-            self.w[l],
-        )
-    }
 }
 
 /// Partial sums of the centred pass. Lane `l` of `s` and `spread` sums the points
@@ -388,11 +348,7 @@ fn centred_pass<const W: bool, const R: bool>(
         t: [[0.0; ORDERED_PAD]; LANES],
         ordered: [0.0; ORDERED_PAD],
     };
-    let mut blk = Block {
-        x: [[0.0; LANES]; 3],
-        m: [[0.0; LANES]; 2],
-        w: [1.0; LANES],
-    };
+    let mut blk = Block::new();
     let n = world.len().min(image.len());
     let (world, image) = (&world[..n], &image[..n]);
     let mut filled = 0;

@@ -58,6 +58,7 @@ pub mod colmap;
 mod error;
 mod frame;
 pub mod kernels;
+mod lanes;
 mod linalg;
 mod nullspace;
 pub mod p3p;

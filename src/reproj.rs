@@ -40,6 +40,7 @@
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
+use crate::lanes::{lane_sum, Block, LANES};
 use crate::rotation::exp_so3;
 
 /// Options of the reprojection refinement (S9). The defaults are ALGORITHM.md's values.
@@ -296,21 +297,11 @@ impl Problem<'_> {
     }
 }
 
-/// Points per block of the vectorised pass ([`Problem::accumulate`]): two SSE2 registers per
-/// quantity on the baseline x86-64 target.
-const LANES: usize = 4;
 /// Number of sums of one pass: `E` (1), `H_rr` (6, upper triangle, row-major), `H_rt = sum K`
 /// (9, row-major, the third column negated), `H_tt` (`kx`, `ky`, `fx`, `fy`, `n22`: 5),
 /// `sum [q]x b` (3), `sum b` (3, the third entry negated). The two negations are undone in
 /// [`Partial::normal`] (exactly: negation does not round).
 const NSUMS: usize = 27;
-
-/// Sum of the lanes, pairwise: `(0 + 1) + (2 + 3)`.
-#[inline]
-fn lane_sum(v: &[f64; LANES]) -> f64 {
-    const _: () = assert!(LANES == 4);
-    (v[0] + v[1]) + (v[2] + v[3])
-}
 
 /// What one pass needs of the problem and the poses, as plain scalars.
 struct PassConsts {
@@ -339,26 +330,6 @@ impl PassConsts {
             wx: prob.row_weights.0,
             wy: prob.row_weights.1,
         }
-    }
-}
-
-/// Up to [`LANES`] active points, transposed: world coordinates, image coordinates, weight.
-/// Aligned (every field is a multiple of 16 bytes) so that SSE2 can use its operands in place.
-#[repr(C, align(16))]
-struct Block {
-    x: [[f64; LANES]; 3],
-    m: [[f64; LANES]; 2],
-    w: [f64; LANES],
-}
-
-impl Block {
-    #[inline(always)]
-    fn set(&mut self, l: usize, x: &Point3<f64>, m: &Point2<f64>) {
-        self.x[0][l] = x.x;
-        self.x[1][l] = x.y;
-        self.x[2][l] = x.z;
-        self.m[0][l] = m.x;
-        self.m[1][l] = m.y;
     }
 }
 
@@ -447,11 +418,7 @@ fn pass<const CHECK: bool>(
         flipped: [0; LANES],
     };
     let flipped = |acc: &Partial| CHECK && acc.flipped.iter().any(|&f| f != 0);
-    let mut blk = Block {
-        x: [[0.0; LANES]; 3],
-        m: [[0.0; LANES]; 2],
-        w: [1.0; LANES],
-    };
+    let mut blk = Block::new();
     let mut filled = 0;
     match weights {
         None => {
