@@ -620,9 +620,7 @@ impl Camera {
             Ok(Point2::new(u, v))
         }
     }
-}
 
-impl Camera {
     /// [`Camera::undistort`] and the weight of the point in [`solve_pixels`]:
     /// `|det J| / (fx fy)`, `J` the Jacobian of [`Camera::project`] at the normalised point (to
     /// first order, the squared scale of a pixel error in normalised units relative to the

@@ -647,27 +647,8 @@ pub(crate) fn working_frame_qr(
     weights: Option<&[f64]>,
     align: bool,
 ) -> Result<WorkingFrame, PnpError> {
+    check_lengths(world.len(), image.len(), weights)?;
     let n = world.len();
-    if image.len() != n {
-        return Err(PnpError::LengthMismatch {
-            world: n,
-            image: image.len(),
-        });
-    }
-    if let Some(w) = weights {
-        if w.len() != n {
-            return Err(PnpError::WeightsLength {
-                weights: w.len(),
-                points: n,
-            });
-        }
-    }
-    if n < MIN_POINTS {
-        return Err(PnpError::TooFewPoints {
-            got: n,
-            need: MIN_POINTS,
-        });
-    }
 
     // Pass 1: finiteness, weight signs, active count, ranges (over active points).
     let mut first_negative: Option<usize> = None;
