@@ -63,7 +63,16 @@ pub(crate) fn smallest_eigenvector<const D: usize>(
     for i in 0..D {
         a[(i, i)] += delta;
     }
-    let l = cholesky(&a)?;
+    inverse_iteration(m, &cholesky(&a)?)
+}
+
+/// [`INVERSE_ITERATIONS`] steps of inverse iteration with the Cholesky factor `l` of
+/// `m - sigma I` (any shift `sigma` below the smallest eigenvalue): the unit eigenvector of the
+/// smallest eigenvalue of `m`, approximately, or `None` for non-finite iterates.
+pub(crate) fn inverse_iteration<const D: usize>(
+    m: &SMatrix<f64, D, D>,
+    l: &SMatrix<f64, D, D>,
+) -> Option<SVector<f64, D>> {
     // Start from the coordinate axis with the smallest diagonal entry (the direction along
     // which M is smallest among the axes), plus a small all-ones component so no eigenvector is
     // exactly missed.
@@ -73,7 +82,7 @@ pub(crate) fn smallest_eigenvector<const D: usize>(
     let mut x = SVector::<f64, D>::from_element(1e-3);
     x[kmin] = 1.0;
     for _ in 0..INVERSE_ITERATIONS {
-        cholesky_solve(&l, &mut x);
+        cholesky_solve(l, &mut x);
         let n = x.norm();
         if !(n > 0.0 && n.is_finite()) {
             return None;

@@ -341,10 +341,12 @@ impl Solver {
             PlanarDetection::Planar => (false, true),
             PlanarDetection::NonPlanar => (true, false),
         };
-        // More than four eigenvalues of M at or below DEGENERATE_EIG trace(M).
-        let degenerate =
-            linalg::count_eigenvalues_below(&sys.m, DEGENERATE_EIG * scale * (1.0 + f64::EPSILON))
-                > 4;
+        // More than four eigenvalues of M at or below DEGENERATE_EIG trace(M). A Cholesky
+        // factorisation of M - tau I proves that there are none (the common case from N = 6 on)
+        // and is reused by the fast path's inverse iteration; the inertia count runs otherwise.
+        let tau = DEGENERATE_EIG * scale * (1.0 + f64::EPSILON);
+        let shifted = linalg::cholesky(&(sys.m - SMatrix::<f64, 9, 9>::identity() * tau));
+        let degenerate = shifted.is_none() && linalg::count_eigenvalues_below(&sys.m, tau) > 4;
 
         let n_active = fr.n_active;
         let ctx = Ctx {
@@ -401,7 +403,11 @@ impl Solver {
         };
         if early_exit {
             let start = if nonplanar && !planar {
-                linalg::smallest_eigenvector(&sys.m, scale).and_then(|v1| {
+                match &shifted {
+                    Some(l) => linalg::inverse_iteration(&sys.m, l),
+                    None => linalg::smallest_eigenvector(&sys.m, scale),
+                }
+                .and_then(|v1| {
                     crate::rotation::candidate_to_rotation(&v1.into())
                         .map(|r| (r, CandidateSource::Case1))
                 })
