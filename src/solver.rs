@@ -137,6 +137,10 @@ impl Default for Solver {
 /// Relative eigenvalue level below which an eigenvalue of `M` counts as zero for the
 /// `degenerate` diagnostic (ALGORITHM.md S0).
 const DEGENERATE_EIG: f64 = 1e-10;
+/// S6 step tolerance in reprojection mode (CGR units, ~ radians / 2): S6 stops when a step is
+/// this small, or when quadratic convergence predicts the next step below a thousandth of it,
+/// so the minimum of f is located to ~1e-9 before S9 takes over.
+const S6_TOLERANCE_BEFORE_S9: f64 = 1e-6;
 /// Planarity thresholds (ALGORITHM.md S3).
 const NONPLANAR_MIN_RATIO: f64 = 1e-6;
 const PLANAR_MAX_RATIO: f64 = 1e-3;
@@ -359,6 +363,16 @@ impl Solver {
             scale,
         };
         let planar_sys = if planar { acc.system(true) } else { None };
+        // When S9 follows, S6 only has to identify and certify the minimum of f: S9 moves the
+        // pose on by the algebraic-vs-reprojection difference (~noise level) and converges to
+        // its own tolerance from anywhere in the basin.
+        let newton = match self.refinement {
+            Refinement::Reprojection => NewtonOptions {
+                step_tolerance: self.newton.step_tolerance.max(S6_TOLERANCE_BEFORE_S9),
+                ..self.newton
+            },
+            Refinement::Algebraic => self.newton,
+        };
         let mut minima: ArrayVec<Minimum, MAX_CANDIDATES> = ArrayVec::new();
         let refine_start = |r0: &Matrix3<f64>,
                             source: CandidateSource,
@@ -366,7 +380,7 @@ impl Solver {
          -> Option<Minimum> {
             let known: ArrayVec<Matrix3<f64>, MAX_CANDIDATES> =
                 minima.iter().map(|m| m.r).collect();
-            let refined = refine::refine_so3_until(&m45, scale, r0, &self.newton, &mut |r| {
+            let refined = refine::refine_so3_until(&m45, scale, r0, &newton, &mut |r| {
                 !self.exhaustive && known.iter().any(|k| (k - r).norm() <= IN_BASIN)
             });
             if refined.stopped_early
