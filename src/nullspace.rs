@@ -12,7 +12,7 @@
 
 use crate::kernels;
 use crate::roots::{self, Roots};
-use crate::rotation::svd3;
+use crate::rotation::{singular_values3, svd3};
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
@@ -208,10 +208,10 @@ pub(crate) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidate
 }
 
 /// Reciprocal condition number of a 3x3 matrix (smallest / largest singular value; 0 for a
-/// zero or non-finite matrix). Uses `svd3`: nalgebra's 3x3 SVD squares the singular values.
+/// zero or non-finite matrix). Uses `svd3`'s singular values: nalgebra's 3x3 SVD squares the singular values.
 fn rcond3(m: &Matrix3<f64>) -> f64 {
-    match svd3(m) {
-        Some(s) if s.s[0] > 0.0 => s.s[2] / s.s[0],
+    match singular_values3(m) {
+        Some(s) if s[0] > 0.0 => s[2] / s[0],
         _ => 0.0,
     }
 }

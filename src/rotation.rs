@@ -108,69 +108,145 @@ pub(crate) const SVD_MAX_SWEEPS: usize = 40;
 /// the data), so `u` is orthogonal even when singular values are zero. Returns `None` if an
 /// entry is not finite. The zero matrix gives `s = 0`, `u = v = I`.
 pub(crate) fn svd3(a: &Matrix3<f64>) -> Option<Svd3> {
-    if !a.iter().all(|x| x.is_finite()) {
-        return None;
-    }
-    let amax = a.amax();
-    if amax == 0.0 {
+    let (cols, vcols, nrm, scale) = jacobi3::<true>(a)?;
+    let Some(scale) = scale else {
         return Some(Svd3 {
             u: Matrix3::identity(),
             s: Vector3::zeros(),
             v: Matrix3::identity(),
         });
-    }
-    let scale = pow2_scale(amax);
-    let mut b = a / scale;
-    let mut v = Matrix3::<f64>::identity();
-    let mut sweeps = crate::bounds::Budget::new(crate::bounds::Bound::Svd3Sweeps);
-    while sweeps.next() {
-        let mut rotated = false;
-        for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
-            let alpha = b.column(p).norm_squared();
-            let beta = b.column(q).norm_squared();
-            let gamma = b.column(p).dot(&b.column(q));
-            // Rotate only when the columns' inner product exceeds its own rounding error
-            // (a length-3 dot product: about 3 eps |b_p| |b_q|); with a threshold of 1 eps, a
-            // pair whose computed gamma is rounding noise can be rotated forever (found: an
-            // ordinary matrix that used all SVD_MAX_SWEEPS sweeps).
-            if gamma == 0.0 || gamma.abs() <= 4.0 * f64::EPSILON * alpha.sqrt() * beta.sqrt() {
-                continue;
-            }
-            rotated = true;
-            let zeta = (beta - alpha) / (2.0 * gamma);
-            let t = if zeta.abs() > 1e150 {
-                0.5 / zeta
-            } else {
-                zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt())
-            };
-            let c = 1.0 / (1.0 + t * t).sqrt();
-            let s = c * t;
-            for m in [&mut b, &mut v] {
-                for i in 0..3 {
-                    let xp = m[(i, p)];
-                    let xq = m[(i, q)];
-                    m[(i, p)] = c * xp - s * xq;
-                    m[(i, q)] = s * xp + c * xq;
-                }
-            }
-        }
-        if !rotated {
-            break;
-        }
-    }
-    // Sort the columns by norm, descending (3 elements: a fixed sorting network).
+    };
+    Some(finish_svd3(&cols, &vcols, &nrm, scale))
+}
+
+/// The singular values of `a` (descending), bit for bit those of [`svd3`] (the same column
+/// rotations, without accumulating `v` or forming `u`). `None` if an entry is not finite.
+pub(crate) fn singular_values3(a: &Matrix3<f64>) -> Option<Vector3<f64>> {
+    let (_, _, nrm, scale) = jacobi3::<false>(a)?;
+    let Some(scale) = scale else {
+        return Some(Vector3::zeros());
+    };
+    let norms = nrm.map(f64::sqrt);
+    let idx = sort_desc(&norms);
+    Some(Vector3::new(norms[idx[0]], norms[idx[1]], norms[idx[2]]) * scale)
+}
+
+/// `a . b` for 3-vectors, summed left to right (as nalgebra's `dot` of a `Vector3`).
+#[inline(always)]
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Indices of `norms` in descending order (a fixed 3-element sorting network).
+#[inline(always)]
+fn sort_desc(norms: &[f64; 3]) -> [usize; 3] {
     let mut idx = [0usize, 1, 2];
-    let norms = Vector3::new(b.column(0).norm(), b.column(1).norm(), b.column(2).norm());
     for &(i, j) in &[(0usize, 1usize), (1, 2), (0, 1)] {
         if norms[idx[i]] < norms[idx[j]] {
             idx.swap(i, j);
         }
     }
+    idx
+}
+
+/// One Jacobi rotation of the column pair (p, q) of `b` (and of `v` if `WANT_V`), if their inner
+/// product exceeds its rounding error. `nrm` holds the squared column norms of `b` and is kept
+/// current. Returns whether a rotation was applied.
+#[inline(always)]
+fn jacobi_pair<const WANT_V: bool>(
+    b: &mut [[f64; 3]; 3],
+    v: &mut [[f64; 3]; 3],
+    nrm: &mut [f64; 3],
+    p: usize,
+    q: usize,
+) -> bool {
+    let alpha = nrm[p];
+    let beta = nrm[q];
+    let gamma = dot3(&b[p], &b[q]);
+    // Rotate only when the columns' inner product exceeds its own rounding error
+    // (a length-3 dot product: about 3 eps |b_p| |b_q|); with a threshold of 1 eps, a
+    // pair whose computed gamma is rounding noise can be rotated forever (found: an
+    // ordinary matrix that used all SVD_MAX_SWEEPS sweeps).
+    if gamma == 0.0 || gamma.abs() <= 4.0 * f64::EPSILON * alpha.sqrt() * beta.sqrt() {
+        return false;
+    }
+    let zeta = (beta - alpha) / (2.0 * gamma);
+    let t = if zeta.abs() > 1e150 {
+        0.5 / zeta
+    } else {
+        zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt())
+    };
+    let c = 1.0 / (1.0 + t * t).sqrt();
+    let s = c * t;
+    let (bp, bq) = (b[p], b[q]);
+    for i in 0..3 {
+        b[p][i] = c * bp[i] - s * bq[i];
+        b[q][i] = s * bp[i] + c * bq[i];
+    }
+    if WANT_V {
+        let (vp, vq) = (v[p], v[q]);
+        for i in 0..3 {
+            v[p][i] = c * vp[i] - s * vq[i];
+            v[q][i] = s * vp[i] + c * vq[i];
+        }
+    }
+    nrm[p] = dot3(&b[p], &b[p]);
+    nrm[q] = dot3(&b[q], &b[q]);
+    true
+}
+
+/// Column arrays of `b` (the scaled input after the rotations) and of `v` (identity if not
+/// `WANT_V`), the squared column norms of `b`, and the power-of-two scale (`None` for the zero
+/// matrix). `None` if an entry is not finite.
+///
+/// The sweeps: see [`svd3`]. Squared column norms are cached and recomputed only for rotated
+/// columns (the same expression, so the same values as recomputing them at every pair).
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn jacobi3<const WANT_V: bool>(
+    a: &Matrix3<f64>,
+) -> Option<([[f64; 3]; 3], [[f64; 3]; 3], [f64; 3], Option<f64>)> {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let mut amax: f64 = 0.0;
+    for x in a.iter() {
+        if !x.is_finite() {
+            return None;
+        }
+        amax = amax.max(x.abs());
+    }
+    if amax == 0.0 {
+        return Some(([[0.0; 3]; 3], v, [0.0; 3], None));
+    }
+    let scale = pow2_scale(amax);
+    let mut b: [[f64; 3]; 3] = std::array::from_fn(|j| std::array::from_fn(|i| a[(i, j)] / scale));
+    let mut nrm = [dot3(&b[0], &b[0]), dot3(&b[1], &b[1]), dot3(&b[2], &b[2])];
+    let mut sweeps = crate::bounds::Budget::new(crate::bounds::Bound::Svd3Sweeps);
+    while sweeps.next() {
+        let r01 = jacobi_pair::<WANT_V>(&mut b, &mut v, &mut nrm, 0, 1);
+        let r02 = jacobi_pair::<WANT_V>(&mut b, &mut v, &mut nrm, 0, 2);
+        let r12 = jacobi_pair::<WANT_V>(&mut b, &mut v, &mut nrm, 1, 2);
+        if !(r01 || r02 || r12) {
+            break;
+        }
+    }
+    Some((b, v, nrm, Some(scale)))
+}
+
+/// `u`, sorted `s` and `v` from the converged columns (see [`svd3`]).
+#[inline(always)]
+fn finish_svd3(b: &[[f64; 3]; 3], v: &[[f64; 3]; 3], nrm: &[f64; 3], scale: f64) -> Svd3 {
+    // Sort the columns by norm, descending.
+    let norms = nrm.map(f64::sqrt);
+    let idx = sort_desc(&norms);
     let s = Vector3::new(norms[idx[0]], norms[idx[1]], norms[idx[2]]);
-    let vs = Matrix3::from_columns(&[v.column(idx[0]), v.column(idx[1]), v.column(idx[2])]);
-    let b0 = b.column(idx[0]).into_owned();
-    let b1 = b.column(idx[1]).into_owned();
-    let b2 = b.column(idx[2]).into_owned();
+    let vs = Matrix3::from_columns(&[
+        Vector3::from(v[idx[0]]),
+        Vector3::from(v[idx[1]]),
+        Vector3::from(v[idx[2]]),
+    ]);
+    let b0 = Vector3::from(b[idx[0]]);
+    let b1 = Vector3::from(b[idx[1]]);
+    let b2 = Vector3::from(b[idx[2]]);
     // s[0] > 0 because amax > 0 and the rotations preserve the Frobenius norm.
     let u0 = b0 / s[0];
     let u1 = {
@@ -184,11 +260,11 @@ pub(crate) fn svd3(a: &Matrix3<f64>) -> Option<Svd3> {
     };
     let c = u0.cross(&u1);
     let u2 = if c.dot(&b2) < 0.0 { -c } else { c };
-    Some(Svd3 {
+    Svd3 {
         u: Matrix3::from_columns(&[u0, u1, u2]),
         s: s * scale,
         v: vs,
-    })
+    }
 }
 
 /// A unit vector orthogonal to the unit vector `u`.
@@ -207,22 +283,13 @@ fn any_orthogonal(u: &Vector3<f64>) -> Vector3<f64> {
 /// The power of two `2^k <= x < 2^(k+1)` for finite `x > 0` (exact scaling factor).
 pub(crate) fn pow2_scale(x: f64) -> f64 {
     debug_assert!(x > 0.0 && x.is_finite());
-    let e = x.log2().floor() as i32;
-    // log2 may round up for x just below a power of two; correct by one step.
-    let mut p = pow2(e);
-    if p > x {
-        p = pow2(e - 1);
-    }
-    p
-}
-
-/// `2^e` for `e` in the f64 exponent range, including subnormal powers.
-fn pow2(e: i32) -> f64 {
-    if e >= -1022 {
-        f64::from_bits(((e + 1023) as u64) << 52)
+    let bits = x.to_bits();
+    if x >= f64::MIN_POSITIVE {
+        // Normal: keep the exponent, clear the mantissa.
+        f64::from_bits(bits & 0x7ff0_0000_0000_0000)
     } else {
-        // Subnormal: 2^e = 2^(e + 52) * 2^-52, both factors exact.
-        f64::from_bits(((e + 52 + 1023) as u64) << 52) * f64::EPSILON
+        // Subnormal: x = m 2^-1074; keep the highest set bit of m.
+        f64::from_bits(1u64 << (63 - (bits & 0x000f_ffff_ffff_ffff).leading_zeros()))
     }
 }
 
@@ -468,6 +535,57 @@ mod tests {
             assert!((d.s[0] / scale - 1.0).abs() < 1e-14, "{scale}");
         }
         assert!(svd3(&Matrix3::from_element(f64::NAN)).is_none());
+    }
+
+    #[test]
+    fn singular_values3_match_svd3_bitwise() {
+        let mut rng = Pcg64::seed_from_u64(6);
+        for k in 0..300 {
+            let mut a = Matrix3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            if k % 3 == 1 {
+                // rank 2
+                let c = a.column(0) * 0.3 - a.column(1) * 1.7;
+                a.set_column(2, &c);
+            }
+            if k % 3 == 2 {
+                a *= 1e-310;
+            }
+            let s = singular_values3(&a).unwrap();
+            let d = svd3(&a).unwrap();
+            for i in 0..3 {
+                assert_eq!(s[i].to_bits(), d.s[i].to_bits(), "{k} {i}");
+            }
+        }
+        assert_eq!(
+            singular_values3(&Matrix3::zeros()).unwrap(),
+            Vector3::zeros()
+        );
+        assert!(singular_values3(&Matrix3::from_element(f64::NAN)).is_none());
+    }
+
+    #[test]
+    fn pow2_scale_brackets() {
+        for x in [
+            1.0,
+            1.5,
+            2.0,
+            3.999,
+            1e-300,
+            5e-324,
+            1e-310,
+            3e-320,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+        ] {
+            let p = pow2_scale(x);
+            assert!(p <= x && x < 2.0 * p, "{x} {p}");
+            // A power of two: no mantissa bits (normal) or a single bit (subnormal).
+            if p >= f64::MIN_POSITIVE {
+                assert_eq!(p.to_bits() & 0x000f_ffff_ffff_ffff, 0, "{x}");
+            } else {
+                assert_eq!(p.to_bits().count_ones(), 1, "{x}");
+            }
+        }
     }
 
     #[test]
