@@ -115,11 +115,14 @@ fn basis() -> [[f64; 9]; 8] {
     ]
 }
 
+/// `([T_1..T_5], [C_1..C_5])`, see [`coupling`].
+type Coupling = ([Matrix3<f64>; 5], [SMatrix<f64, 3, 5>; 5]);
+
 /// The traceless symmetric basis matrices `T_p` and the skew-symmetric block `C_p` of
 /// `ad(T_p)` in the basis of [`basis`] (rows `K_1..K_3`, columns `T_1..T_5`): constants,
 /// computed on first use.
-fn coupling() -> &'static ([Matrix3<f64>; 5], [SMatrix<f64, 3, 5>; 5]) {
-    static TABLE: OnceLock<([Matrix3<f64>; 5], [SMatrix<f64, 3, 5>; 5])> = OnceLock::new();
+fn coupling() -> &'static Coupling {
+    static TABLE: OnceLock<Coupling> = OnceLock::new();
     TABLE.get_or_init(|| {
         let b = basis();
         let bm = SMatrix::<f64, 9, 8>::from_fn(|r, c| b[c][r]);
@@ -156,9 +159,9 @@ fn commutator(lam: &Matrix3<f64>) -> SMatrix<f64, 9, 9> {
 /// `Q0 = M' - I3 (x) U` and `ad(Lambda) X = Lambda X - X Lambda`. `ad(Lambda)` maps symmetric
 /// matrices to skew ones and back, so in the basis of [`basis`] `Q(Lambda) = [[Q_tt, Q_kt^T -
 /// C^T], [Q_kt - C, Q_kk]]` with `C` linear in the traceless part of `Lambda` (5 parameters).
-/// `Q >= 0` needs `Q_tt > 0` and the Schur complement `Q_kk - (Q_kt - C) Q_tt^-1 (Q_kt - C)^T
-/// >= 0`; the `Lambda` that minimises the trace of the subtracted term is a 5-parameter linear
-/// least-squares problem. Whatever the choice, the Cholesky test of `Q(Lambda) + eps I` is the
+/// `Q >= 0` needs `Q_tt > 0` and a positive semidefinite Schur complement
+/// `Q_kk - (Q_kt - C) Q_tt^-1 (Q_kt - C)^T`; the `Lambda` that minimises the trace of the
+/// subtracted term is a 5-parameter linear least-squares problem. Whatever the choice, the Cholesky test of `Q(Lambda) + eps I` is the
 /// proof, exactly as for the splits.
 fn least_squares_multiplier(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, eps: f64) -> bool {
     // M' block by block: M'_ik = A M_ik A^T.
