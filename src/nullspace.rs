@@ -12,7 +12,7 @@
 
 use crate::kernels;
 use crate::roots::{self, Roots};
-use crate::rotation::{singular_values3, svd3};
+use crate::rotation::{singular_values3, smallest_right_singular_vector};
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
@@ -65,6 +65,22 @@ fn quad_form<const M: usize, const D: usize>(
     let bj: [Vector3<f64>; M] = std::array::from_fn(|a| block(&v[a], j));
     let bk: [Vector3<f64>; M] = std::array::from_fn(|a| block(&v[a], k));
     SMatrix::<f64, M, M>::from_fn(|a, b| 0.5 * (bj[a].dot(&bk[b]) + bj[b].dot(&bk[a])))
+}
+
+/// [`quad_form`] for the four non-planar basis vectors and row blocks: the upper triangle by
+/// the same expression, mirrored (the expression is symmetric in a, b: the same values).
+fn quad_form4(v: &[SVector<f64, 9>; 4], j: usize, k: usize) -> SMatrix<f64, 4, 4> {
+    let bj: [Vector3<f64>; 4] = std::array::from_fn(|a| row_block(&v[a], j));
+    let bk: [Vector3<f64>; 4] = std::array::from_fn(|a| row_block(&v[a], k));
+    let mut q = SMatrix::<f64, 4, 4>::zeros();
+    for a in 0..4 {
+        for b in a..4 {
+            let x = 0.5 * (bj[a].dot(&bk[b]) + bj[b].dot(&bk[a]));
+            q[(a, b)] = x;
+            q[(b, a)] = x;
+        }
+    }
+    q
 }
 
 fn row_block(v: &SVector<f64, 9>, j: usize) -> Vector3<f64> {
@@ -153,18 +169,21 @@ pub(crate) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidate
     // Case 1.
     push(v[0], CandidateSource::Case1);
 
+    // The forms of all six pairs over (v1..v4), once: the forms over (v1, v2) and (v1, v2, v3)
+    // of cases 2 and 3 are their leading blocks (the same expressions, the same values).
+    let q4: [SMatrix<f64, 4, 4>; 6] =
+        std::array::from_fn(|p| quad_form4(v, PAIRS[p].0, PAIRS[p].1));
+
     // Case 2.
-    let v2 = [v[0], v[1]];
     let qs: [SMatrix<f64, 2, 2>; 6] =
-        std::array::from_fn(|p| quad_form(&v2, PAIRS[p].0, PAIRS[p].1, row_block));
+        std::array::from_fn(|p| q4[p].fixed_view::<2, 2>(0, 0).into_owned());
     case2_solutions(&qs, &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0], |x, y| {
         push(v[0] * x + v[1] * y, CandidateSource::Case2)
     });
 
     // Case 3: five equations g1 = f1 - f2, g2 = f1 - f3, f4, f5, f6 over (v1, v2, v3).
-    let v3 = [v[0], v[1], v[2]];
     let q3: [Matrix3<f64>; 6] =
-        std::array::from_fn(|p| quad_form(&v3, PAIRS[p].0, PAIRS[p].1, row_block));
+        std::array::from_fn(|p| q4[p].fixed_view::<3, 3>(0, 0).into_owned());
     let forms = [q3[0] - q3[1], q3[0] - q3[2], q3[3], q3[4], q3[5]];
     // row = [F11, F22, 2 F12, 2 F01, 2 F02, F00] for k = [k1^2, k2^2, k1 k2, k1, k2, 1]
     let bm = SMatrix::<f64, 5, 6>::from_fn(|e, c| {
@@ -204,7 +223,9 @@ pub(crate) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidate
     }
 
     // Case 4.
-    case4(v, |r| push(r, CandidateSource::Case4));
+    case4(v, &[q4[3], q4[4], q4[5]], |r| {
+        push(r, CandidateSource::Case4)
+    });
 }
 
 /// Reciprocal condition number of a 3x3 matrix (smallest / largest singular value; 0 for a
@@ -219,10 +240,13 @@ fn rcond3(m: &Matrix3<f64>) -> f64 {
 /// S4.4 with the hidden variable chosen at run time: each of k1, k2, k3 is tried as the hidden
 /// one and the choice whose constant matrix `Mm` is best conditioned is used (ALGORITHM.md S4.4,
 /// "Robustness"); skipped if even that one is numerically singular.
-fn case4(v: &[SVector<f64, 9>; 4], mut emit: impl FnMut(SVector<f64, 9>)) {
+/// `q4` are the forms of f4, f5, f6 over (v1..v4).
+fn case4(
+    v: &[SVector<f64, 9>; 4],
+    q4: &[SMatrix<f64, 4, 4>; 3],
+    mut emit: impl FnMut(SVector<f64, 9>),
+) {
     const RCOND_MIN: f64 = 1e-10;
-    let q4: [SMatrix<f64, 4, 4>; 3] =
-        std::array::from_fn(|p| quad_form(v, PAIRS[3 + p].0, PAIRS[3 + p].1, row_block));
     // perm[h] = order of the basis (1, hidden, a, b) in terms of the original indices 0..3.
     let perms = [[0usize, 1, 2, 3], [0, 2, 1, 3], [0, 3, 1, 2]];
     let mm_of = |perm: &[usize; 4]| {
@@ -280,8 +304,9 @@ fn case4(v: &[SVector<f64, 9>; 4], mut emit: impl FnMut(SVector<f64, 9>)) {
             let c = &mat[(3 * i + j) * 5..(3 * i + j) * 5 + 5];
             c.iter().rev().fold(0.0, |acc, x| acc * k + x)
         });
-        let Some(svd) = svd3(&mk) else { continue };
-        let y = svd.v.column(2).into_owned();
+        let Some(y) = smallest_right_singular_vector(&mk) else {
+            continue;
+        };
         if !(y[2].abs() >= 1e-12 * y.norm()) {
             continue;
         }

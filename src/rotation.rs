@@ -131,6 +131,17 @@ pub(crate) fn singular_values3(a: &Matrix3<f64>) -> Option<Vector3<f64>> {
     Some(Vector3::new(norms[idx[0]], norms[idx[1]], norms[idx[2]]) * scale)
 }
 
+/// The right singular vector of the smallest singular value of `a`, bit for bit `svd3(a)`'s
+/// `v.column(2)` (without forming `u`). `None` if an entry is not finite.
+pub(crate) fn smallest_right_singular_vector(a: &Matrix3<f64>) -> Option<Vector3<f64>> {
+    let (_, v, nrm, scale) = jacobi3::<true>(a)?;
+    if scale.is_none() {
+        return Some(Vector3::z());
+    }
+    let idx = sort_desc(&nrm.map(f64::sqrt));
+    Some(Vector3::from(v[idx[2]]))
+}
+
 /// `a . b` for 3-vectors, summed left to right (as nalgebra's `dot` of a `Vector3`).
 #[inline(always)]
 fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
@@ -538,7 +549,7 @@ mod tests {
     }
 
     #[test]
-    fn singular_values3_match_svd3_bitwise() {
+    fn singular_values3_and_null_vector_match_svd3_bitwise() {
         let mut rng = Pcg64::seed_from_u64(6);
         for k in 0..300 {
             let mut a = Matrix3::from_fn(|_, _| rng.random_range(-1.0..1.0));
@@ -552,6 +563,10 @@ mod tests {
             }
             let s = singular_values3(&a).unwrap();
             let d = svd3(&a).unwrap();
+            let y = smallest_right_singular_vector(&a).unwrap();
+            for i in 0..3 {
+                assert_eq!(y[i].to_bits(), d.v[(i, 2)].to_bits(), "{k} {i}");
+            }
             for i in 0..3 {
                 assert_eq!(s[i].to_bits(), d.s[i].to_bits(), "{k} {i}");
             }
@@ -561,6 +576,11 @@ mod tests {
             Vector3::zeros()
         );
         assert!(singular_values3(&Matrix3::from_element(f64::NAN)).is_none());
+        assert_eq!(
+            smallest_right_singular_vector(&Matrix3::zeros()).unwrap(),
+            svd3(&Matrix3::zeros()).unwrap().v.column(2)
+        );
+        assert!(smallest_right_singular_vector(&Matrix3::from_element(f64::NAN)).is_none());
     }
 
     #[test]
