@@ -12,6 +12,8 @@
 
 use crate::kernels;
 use crate::roots::{self, Roots};
+#[cfg(test)]
+use crate::rotation::svd3;
 use crate::rotation::{singular_values3, smallest_right_singular_vector};
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -237,6 +239,39 @@ fn rcond3(m: &Matrix3<f64>) -> f64 {
     }
 }
 
+/// The right singular vector of the smallest singular value of `m` (any scale and sign), for
+/// an `m` that is singular up to rounding (case 4 at a root of det M(k1)).
+///
+/// For rank 2, the cross product `c` of two rows is that vector; the pair with the largest
+/// `|c|` is used. It is accepted only when a residual bound certifies it: with `y = c / |c|`,
+/// `|M y|^2 >= s2^2 sin^2(angle(y, v3))` and `s2 >= |c| / s1 >= |c| / |M|_F` give
+/// `sin(angle) <= |M c| |M|_F / |c|^2` (plus the rounding of `M c`, `4 eps |M|_F |c|`), which
+/// must be below `NULL_VECTOR_TOL`, i.e. the cross product agrees with the singular vector to
+/// rounding level. Otherwise (rank below 2, or `s3` not negligible against `s2`) the SVD
+/// decides ([`smallest_right_singular_vector`]). `None` if an entry is not finite.
+fn null_vector3(m: &Matrix3<f64>) -> Option<Vector3<f64>> {
+    const NULL_VECTOR_TOL: f64 = 1e-13;
+    let r: [Vector3<f64>; 3] = std::array::from_fn(|i| m.row(i).transpose());
+    let cs = [r[0].cross(&r[1]), r[0].cross(&r[2]), r[1].cross(&r[2])];
+    let mut best = 0;
+    let mut best_n2 = cs[0].norm_squared();
+    for (i, c) in cs.iter().enumerate().skip(1) {
+        let n2 = c.norm_squared();
+        if n2 > best_n2 {
+            best = i;
+            best_n2 = n2;
+        }
+    }
+    let c = cs[best];
+    let fro = m.norm();
+    let lhs = ((m * c).norm() + 4.0 * f64::EPSILON * fro * best_n2.sqrt()) * fro;
+    let rhs = NULL_VECTOR_TOL * best_n2;
+    if best_n2 > 0.0 && lhs.is_finite() && rhs.is_finite() && lhs <= rhs {
+        return Some(c);
+    }
+    smallest_right_singular_vector(m)
+}
+
 /// S4.4 with the hidden variable chosen at run time: each of k1, k2, k3 is tried as the hidden
 /// one and the choice whose constant matrix `Mm` is best conditioned is used (ALGORITHM.md S4.4,
 /// "Robustness"); skipped if even that one is numerically singular.
@@ -304,7 +339,7 @@ fn case4(
             let c = &mat[(3 * i + j) * 5..(3 * i + j) * 5 + 5];
             c.iter().rev().fold(0.0, |acc, x| acc * k + x)
         });
-        let Some(y) = smallest_right_singular_vector(&mk) else {
+        let Some(y) = null_vector3(&mk) else {
             continue;
         };
         if !(y[2].abs() >= 1e-12 * y.norm()) {
@@ -347,4 +382,50 @@ pub(crate) fn planar_rotation(r6: &SVector<f64, 6>) -> Option<Matrix3<f64>> {
     let (c1, c2) = (c.column(0).into_owned(), c.column(1).into_owned());
     let r = Matrix3::from_columns(&[c1, c2, c1.cross(&c2)]);
     r.iter().all(|x| x.is_finite()).then_some(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64;
+
+    /// The certified cross product agrees with the SVD's singular vector to rounding level, and
+    /// a matrix it cannot certify (rank 1, or clearly nonsingular) gets the SVD's vector.
+    #[test]
+    fn null_vector3_matches_the_smallest_singular_vector() {
+        let mut rng = Pcg64::seed_from_u64(11);
+        let mut crossed = 0;
+        for k in 0..3000 {
+            let mut m = Matrix3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            let (a, b) = (rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0));
+            let row = m.row(0) * a + m.row(1) * b;
+            m.set_row(2, &row);
+            match k % 4 {
+                1 => m *= 10f64.powi(rng.random_range(-100..100)),
+                2 => m[(2, 2)] += 1e-3, // nonsingular: s3 not negligible
+                3 => {
+                    // rank 1
+                    let (r1, r2) = (m.row(0) * 0.5, m.row(0) * -1.3);
+                    m.set_row(1, &r1);
+                    m.set_row(2, &r2);
+                }
+                _ => {}
+            }
+            let y = null_vector3(&m).unwrap();
+            let v = svd3(&m).unwrap().v.column(2).into_owned();
+            let sin = y.normalize().cross(&v).norm();
+            let certified = y != v;
+            if certified {
+                crossed += 1;
+                assert!(k % 4 < 2, "{k}: certified a matrix that is not rank 2");
+                assert!(sin <= 1e-13, "{k}: {sin:e}");
+            } else {
+                assert_eq!(y, smallest_right_singular_vector(&m).unwrap());
+            }
+        }
+        assert!(crossed > 1000, "{crossed}");
+        assert!(null_vector3(&Matrix3::from_element(f64::NAN)).is_none());
+        assert!(null_vector3(&Matrix3::zeros()).is_some());
+    }
 }
