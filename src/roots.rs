@@ -661,11 +661,13 @@ fn cubic_closed(p: &Poly, out: &mut Roots) {
         let sq = q.sqrt();
         let cs = (r / (sq * sq * sq)).clamp(-1.0, 1.0);
         let th = cs.acos();
-        let tp = 2.0 * core::f64::consts::PI;
-        let mut x = [0.0; 3];
-        for (k, xk) in x.iter_mut().enumerate() {
-            *xk = -2.0 * sq * ((th + tp * k as f64) / 3.0).cos() - a3;
-        }
+        // cos((th + 2 pi k) / 3), k = 0, 1, 2, from one sin_cos of phi = th / 3 in [0, pi/3]
+        // by angle addition: cos(phi + 2 pi/3) = -c/2 - s sqrt(3)/2, cos(phi + 4 pi/3) =
+        // -c/2 + s sqrt(3)/2; absolute error a few eps, as for cos of the rounded angle.
+        let (sn, cn) = (th / 3.0).sin_cos();
+        let h = 0.5 * 3f64.sqrt() * sn;
+        let cosk = [cn, -0.5 * cn - h, -0.5 * cn + h];
+        let mut x = cosk.map(|ck| -2.0 * sq * ck - a3);
         // The smallest-magnitude root suffers cancellation against a/3: recompute it from the
         // product of the roots (x0 x1 x2 = -c) when that is better.
         let mut im = 0;
