@@ -53,14 +53,17 @@ const SPLITS: [f64; 5] = [1.0, 0.0, 0.5, 0.9, 0.25];
 /// `trace(Lambda') = f(A)`), `Lambda = alpha Lambda'` and `Gamma = (1 - alpha) A^T Lambda' A`,
 /// `Q vec(A) = 0` at a stationary point and `Q >= 0` proves `f(R) >= f(A) - 3 eps`.
 ///
-/// Tried in order: the row split (`alpha = 1`, enough for most general scenes), the
-/// least-squares multiplier of [`least_squares_multiplier`] (most N = 4, 5 and quasi-singular
-/// minima), then the other splits.
+/// Tried in order: the row split (`alpha = 1`, enough for most general scenes), the column
+/// split (`alpha = 0`, most planar ones), the least-squares multiplier of
+/// [`least_squares_multiplier`] (most N = 4, 5 and quasi-singular minima), then the mixed
+/// splits.
 pub(crate) fn global_minimum(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, scale: f64) -> bool {
     let eps = CERT_EPS * scale;
     let (lam, lam_cols) = split_multipliers(m, a);
     let split = |alpha: f64| split_holds(m, &lam, &lam_cols, alpha, eps);
-    split(SPLITS[0]) || least_squares_multiplier(m, a, eps) || SPLITS[1..].iter().any(|&x| split(x))
+    SPLITS[..2].iter().any(|&x| split(x))
+        || least_squares_multiplier(m, a, eps)
+        || SPLITS[2..].iter().any(|&x| split(x))
 }
 
 /// `Lambda' = sym(mat(M vec(A)) A^T)` and `A^T Lambda' A`.
