@@ -179,7 +179,10 @@ impl Solver {
         self
     }
 
-    /// S6 stops when the step norm (radians, roughly) falls to this. Default: `1e-12`.
+    /// S6 stops when the step norm (radians, roughly) falls to this. Default: `1e-12`. When S9
+    /// follows (the default [`Refinement::Reprojection`]), S6 uses at least `1e-6` (the minimum
+    /// of the algebraic cost located to ~1e-9): S9 then moves the pose on to the
+    /// maximum-likelihood one and converges to its own tolerance.
     #[must_use]
     pub fn newton_step_tolerance(mut self, tol: f64) -> Self {
         self.newton.step_tolerance = tol;
