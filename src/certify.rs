@@ -204,20 +204,6 @@ fn least_squares_multiplier(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, eps: f64) 
     let Some(l) = crate::linalg::cholesky(&qtt) else {
         return false; // Q_tt does not depend on Lambda: no multiplier of this family works
     };
-    // E = X L^-T for a 3x5 X: row by row, L y = x^T.
-    let whiten = |x: &SMatrix<f64, 3, 5>| {
-        let mut e = SMatrix::<f64, 3, 5>::zeros();
-        for row in 0..3 {
-            for i in 0..5 {
-                let mut s = x[(row, i)];
-                for k in 0..i {
-                    s -= l[(i, k)] * e[(row, k)];
-                }
-                e[(row, i)] = s / l[(i, i)];
-            }
-        }
-        e
-    };
     // Left: Q_kk + eps I = K K^T, so that the Schur condition reads ||F(Lambda)||_2 <= 1 with
     // F = K^-1 (Q_kt - C) L^-T.
     let mut qkk = qb.fixed_view::<3, 3>(5, 5).into_owned();
@@ -227,22 +213,15 @@ fn least_squares_multiplier(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, eps: f64) 
     let Some(kf) = crate::linalg::cholesky(&qkk) else {
         return false; // Q_kk does not depend on Lambda either
     };
-    let left = |x: &SMatrix<f64, 3, 5>| {
-        let mut e = *x;
-        for col in 0..5 {
-            for i in 0..3 {
-                let mut s = e[(i, col)];
-                for k in 0..i {
-                    s -= kf[(i, k)] * e[(k, col)];
-                }
-                e[(i, col)] = s / kf[(i, i)];
-            }
-        }
-        e
+    // K^-1 X L^-T by two forward substitutions (the factors have positive diagonals).
+    let whiten = |x: &SMatrix<f64, 3, 5>| {
+        l.solve_lower_triangular(&x.transpose())
+            .and_then(|y| kf.solve_lower_triangular(&y.transpose()))
+            .unwrap_or_else(SMatrix::zeros)
     };
-    let f0 = left(&whiten(&qb.fixed_view::<3, 5>(5, 0).into_owned()));
+    let f0 = whiten(&qb.fixed_view::<3, 5>(5, 0).into_owned());
     let (t_mats, c_blocks) = coupling();
-    let fa: [SMatrix<f64, 3, 5>; 5] = core::array::from_fn(|p| left(&whiten(&c_blocks[p])));
+    let fa: [SMatrix<f64, 3, 5>; 5] = core::array::from_fn(|p| whiten(&c_blocks[p]));
     // Minimise ||W^1/2 F(x)||_F, first with W = I, then (one reweighting, the iteratively
     // reweighted least squares step towards the spectral norm) with W = F F^T of the first fit.
     let mut w_half = Matrix3::identity();
