@@ -1,6 +1,8 @@
-//! Small fixed-size linear algebra for the fast path: the smallest eigenvector of the 9x9
-//! positive semidefinite `M` by inverse iteration, and its numerical rank by pivoted Cholesky.
-//! No allocation; every loop has a fixed bound.
+//! Small fixed-size linear algebra for the fast path: Cholesky factorisation (also the
+//! positive-definiteness test of the certificates and of `M - tau I`), the smallest
+//! eigenvector of the 9x9 positive semidefinite `M` by inverse iteration, and the number of
+//! eigenvalues below a threshold (LDL^T inertia with diagonal pivoting, Sturm count as the
+//! fallback). No allocation; every loop has a fixed bound.
 
 use nalgebra::{SMatrix, SVector};
 
