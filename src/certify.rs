@@ -84,26 +84,30 @@ fn split_holds(
     alpha: f64,
     eps: f64,
 ) -> bool {
-    let mut q = *m;
+    psd_with_slack(
+        m - rows_cols(&(lam * alpha), &(lam_cols * (1.0 - alpha))),
+        eps,
+    )
+}
+
+/// `Lambda (x) I3 + I3 (x) Gamma` on row-major `vec(R)`: the quadratic form
+/// `sum_jk Lambda_jk row_j . row_k + sum_jk Gamma_jk col_j . col_k`.
+fn rows_cols(lam: &Matrix3<f64>, gamma: &Matrix3<f64>) -> SMatrix<f64, 9, 9> {
+    let mut c = SMatrix::<f64, 9, 9>::zeros();
     for j in 0..3 {
         for k in 0..3 {
             for i in 0..3 {
-                // rows: sum_jk Lambda_jk row_j . row_k = vec(R)^T (Lambda (x) I3) vec(R)
-                q[(3 * j + i, 3 * k + i)] -= alpha * lam[(j, k)];
-                // columns: sum_jk Gamma_jk col_j . col_k = vec(R)^T (I3 (x) Gamma) vec(R)
-                q[(3 * i + j, 3 * i + k)] -= (1.0 - alpha) * lam_cols[(j, k)];
+                c[(3 * j + i, 3 * k + i)] += lam[(j, k)];
+                c[(3 * i + j, 3 * i + k)] += gamma[(j, k)];
             }
         }
     }
-    psd_with_slack(q, eps)
+    c
 }
 
 /// Whether `q + eps I` is positive definite (a Cholesky factorisation exists).
-fn psd_with_slack(mut q: SMatrix<f64, 9, 9>, eps: f64) -> bool {
-    for i in 0..9 {
-        q[(i, i)] += eps;
-    }
-    crate::linalg::cholesky(&q).is_some()
+fn psd_with_slack(q: SMatrix<f64, 9, 9>, eps: f64) -> bool {
+    crate::linalg::cholesky(&(q + SMatrix::<f64, 9, 9>::identity() * eps)).is_some()
 }
 
 /// Orthonormal basis (Frobenius) of the 3x3 matrices orthogonal to `I`: five traceless
@@ -123,40 +127,32 @@ fn basis() -> [[f64; 9]; 8] {
     ]
 }
 
-/// `([T_1..T_5], [C_1..C_5])`, see [`coupling`].
-type Coupling = ([Matrix3<f64>; 5], [SMatrix<f64, 3, 5>; 5]);
+/// The constants of [`least_squares_multiplier`], see [`coupling`].
+struct Coupling {
+    /// [`basis`] as the columns of a 9x8 matrix.
+    basis: SMatrix<f64, 9, 8>,
+    /// `T_1..T_5` as matrices.
+    t: [Matrix3<f64>; 5],
+    /// `C_1..C_5`.
+    c: [SMatrix<f64, 3, 5>; 5],
+}
 
-/// The traceless symmetric basis matrices `T_p` and the skew-symmetric block `C_p` of
-/// `ad(T_p)` in the basis of [`basis`] (rows `K_1..K_3`, columns `T_1..T_5`): constants,
-/// computed on first use.
+/// The basis of [`basis`], its traceless symmetric matrices `T_p`, and the block `C_p` of
+/// `ad(T_p) = T_p (x) I3 - I3 (x) T_p` in that basis (rows `K_1..K_3`, columns `T_1..T_5`):
+/// constants, computed on first use.
 fn coupling() -> &'static Coupling {
     static TABLE: OnceLock<Coupling> = OnceLock::new();
     TABLE.get_or_init(|| {
         let b = basis();
         let bm = SMatrix::<f64, 9, 8>::from_fn(|r, c| b[c][r]);
-        let t_mats: [Matrix3<f64>; 5] = core::array::from_fn(|p| Matrix3::from_row_slice(&b[p]));
-        let c_blocks = core::array::from_fn(|p| {
-            (bm.transpose() * commutator(&t_mats[p]) * bm)
+        let t: [Matrix3<f64>; 5] = core::array::from_fn(|p| Matrix3::from_row_slice(&b[p]));
+        let c = core::array::from_fn(|p| {
+            (bm.transpose() * rows_cols(&t[p], &-t[p]) * bm)
                 .fixed_view::<3, 5>(5, 0)
                 .into_owned()
         });
-        (t_mats, c_blocks)
+        Coupling { basis: bm, t, c }
     })
-}
-
-/// `X -> Lambda X - X Lambda` for symmetric `Lambda`, as a 9x9 matrix on row-major `vec(X)`:
-/// `Lambda (x) I3 - I3 (x) Lambda`.
-fn commutator(lam: &Matrix3<f64>) -> SMatrix<f64, 9, 9> {
-    let mut c = SMatrix::<f64, 9, 9>::zeros();
-    for j in 0..3 {
-        for k in 0..3 {
-            for i in 0..3 {
-                c[(3 * j + i, 3 * k + i)] += lam[(j, k)];
-                c[(3 * i + j, 3 * i + k)] -= lam[(j, k)];
-            }
-        }
-    }
-    c
 }
 
 /// The certificate with a multiplier chosen for the problem instead of a fixed split.
@@ -169,8 +165,8 @@ fn commutator(lam: &Matrix3<f64>) -> SMatrix<f64, 9, 9> {
 /// C^T], [Q_kt - C, Q_kk]]` with `C` linear in the traceless part of `Lambda` (5 parameters).
 /// `Q >= 0` needs `Q_tt > 0` and a positive semidefinite Schur complement
 /// `Q_kk - (Q_kt - C) Q_tt^-1 (Q_kt - C)^T`; the `Lambda` that minimises the trace of the
-/// subtracted term is a 5-parameter linear least-squares problem. Whatever the choice, the Cholesky test of `Q(Lambda) + eps I` is the
-/// proof, exactly as for the splits.
+/// subtracted term is a 5-parameter linear least-squares problem. Whatever the choice, the
+/// Cholesky test of `Q(Lambda) + eps I` is the proof, exactly as for the splits.
 fn least_squares_multiplier(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, eps: f64) -> bool {
     // M' block by block: M'_ik = A M_ik A^T.
     let mut mp = SMatrix::<f64, 9, 9>::zeros();
@@ -186,30 +182,16 @@ fn least_squares_multiplier(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, eps: f64) 
         um[(r / 3, r % 3)] = mp[(r, 0)] + mp[(r, 4)] + mp[(r, 8)];
     }
     let um = (um + um.transpose()) * 0.5;
-    let mut q0 = mp;
-    for i in 0..3 {
-        for j in 0..3 {
-            for k in 0..3 {
-                q0[(3 * i + j, 3 * i + k)] -= um[(j, k)];
-            }
-        }
-    }
-    let b = basis();
-    let bm = SMatrix::<f64, 9, 8>::from_fn(|r, c| b[c][r]);
-    let qb = bm.transpose() * q0 * bm;
-    let mut qtt = qb.fixed_view::<5, 5>(0, 0).into_owned();
-    for i in 0..5 {
-        qtt[(i, i)] += eps;
-    }
+    let q0 = mp - rows_cols(&Matrix3::zeros(), &um);
+    let cpl = coupling();
+    let qb = cpl.basis.transpose() * q0 * cpl.basis;
+    let qtt = qb.fixed_view::<5, 5>(0, 0) + SMatrix::<f64, 5, 5>::identity() * eps;
     let Some(l) = crate::linalg::cholesky(&qtt) else {
         return false; // Q_tt does not depend on Lambda: no multiplier of this family works
     };
     // Left: Q_kk + eps I = K K^T, so that the Schur condition reads ||F(Lambda)||_2 <= 1 with
     // F = K^-1 (Q_kt - C) L^-T.
-    let mut qkk = qb.fixed_view::<3, 3>(5, 5).into_owned();
-    for i in 0..3 {
-        qkk[(i, i)] += eps;
-    }
+    let qkk = qb.fixed_view::<3, 3>(5, 5) + Matrix3::identity() * eps;
     let Some(kf) = crate::linalg::cholesky(&qkk) else {
         return false; // Q_kk does not depend on Lambda either
     };
@@ -220,8 +202,7 @@ fn least_squares_multiplier(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, eps: f64) 
             .unwrap_or_else(SMatrix::zeros)
     };
     let f0 = whiten(&qb.fixed_view::<3, 5>(5, 0).into_owned());
-    let (t_mats, c_blocks) = coupling();
-    let fa: [SMatrix<f64, 3, 5>; 5] = core::array::from_fn(|p| whiten(&c_blocks[p]));
+    let fa: [SMatrix<f64, 3, 5>; 5] = core::array::from_fn(|p| whiten(&cpl.c[p]));
     // Minimise ||W^1/2 F(x)||_F, first with W = I, then (one reweighting, the iteratively
     // reweighted least squares step towards the spectral norm) with W = F F^T of the first fit.
     let mut w_half = Matrix3::identity();
@@ -239,19 +220,16 @@ fn least_squares_multiplier(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, eps: f64) 
         let Some(x) = g.cholesky().map(|c| c.solve(&rhs)) else {
             return false;
         };
-        let lam = (0..5).fold(Matrix3::zeros(), |acc, p| acc + t_mats[p] * x[p]);
-        if psd_with_slack(q0 - commutator(&lam), eps) {
+        let lam = (0..5).fold(Matrix3::zeros(), |acc, p| acc + cpl.t[p] * x[p]);
+        if psd_with_slack(q0 - rows_cols(&lam, &-lam), eps) {
             return true;
         }
         if round == MULTIPLIER_REWEIGHTINGS {
             break;
         }
         let f = (0..5).fold(f0, |acc, p| acc - fa[p] * x[p]);
-        let mut w = f * f.transpose();
-        let ridge = 1e-12 * w.trace();
-        for i in 0..3 {
-            w[(i, i)] += ridge;
-        }
+        let ff = f * f.transpose();
+        let w = ff + Matrix3::identity() * (1e-12 * ff.trace());
         // tr(W F F^T) = ||L_W^T F||_F^2 with W = L_W L_W^T.
         let Some(lw) = crate::linalg::cholesky(&w) else {
             return false;
