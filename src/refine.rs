@@ -93,8 +93,9 @@ fn row_major(r: &Matrix3<f64>) -> [f64; 9] {
 }
 
 /// `f(R) = vec(R)^T M vec(R)` from the upper triangle `m45` (row-major `vec`, order of
-/// `COST_M_UPPER`): a quarter of the work of the local model, for trial steps.
-fn cost_at(m45: &[f64; 45], r: &Matrix3<f64>) -> f64 {
+/// `COST_M_UPPER`): a quarter of the work of the local model; the trial steps, and the
+/// solver's values of f.
+pub(crate) fn cost_at(m45: &[f64; 45], r: &Matrix3<f64>) -> f64 {
     let v = row_major(r);
     let mut k = 0;
     let mut f = 0.0;

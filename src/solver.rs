@@ -361,7 +361,7 @@ impl Solver {
             image,
             weights,
             fr: &fr,
-            sys: &sys,
+            m45: &m45,
             degenerate,
             scale,
         };
@@ -483,10 +483,7 @@ impl Solver {
         }
 
         // S6: refine every candidate, in order of increasing initial cost.
-        let f_of = |r: &Matrix3<f64>| {
-            let v = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
-            (v.transpose() * sys.m * v)[(0, 0)]
-        };
+        let f_of = |r: &Matrix3<f64>| refine::cost_at(&m45, r);
         let mut init: ArrayVec<(f64, usize), MAX_CANDIDATES> = cands
             .iter()
             .enumerate()
@@ -574,13 +571,13 @@ struct Ctx<'a> {
     image: &'a [Point2<f64>],
     weights: Option<&'a [f64]>,
     fr: &'a WorkingFrame,
-    sys: &'a System,
+    /// Upper triangle of M (`accumulate::m_upper`).
+    m45: &'a [f64; 45],
     degenerate: bool,
     scale: f64,
 }
 
 impl Ctx<'_> {
-    /// S9 (optional) and S8 for one minimum.
     /// S9 (optional) and S8 for one minimum. The only way out of the solver: a pose that is not
     /// finite in the world frame (e.g. a translation that overflows when the working-frame
     /// scale is undone) is [`PnpError::NoSolution`], never an `Ok`.
@@ -621,11 +618,10 @@ impl Ctx<'_> {
             }
             iters = out.iterations;
         }
-        let rv = SVector::<f64, 9>::from_row_slice(r.transpose().as_slice());
         // M is positive semi-definite, so f >= 0 in exact arithmetic. With wildly scaled input
         // (found by fuzzing: an image coordinate of 3e9) the accumulated M is not PSD to
         // working precision and r^T M r comes out negative; the nearest admissible value is 0.
-        let f = (rv.transpose() * self.sys.m * rv)[(0, 0)].max(0.0);
+        let f = refine::cost_at(self.m45, &r).max(0.0);
         let cheirality = match m.cheirality {
             Some(c) if mode == Refinement::Algebraic || depth_signs_kept => c,
             _ => in_front(self.world, self.weights, self.fr, &r, &t, self.fr.n_active),
