@@ -172,7 +172,7 @@ fn run_arrsac(
     };
     let w: Vec<Point3<f64>> = inliers.iter().map(|&i| world[i]).collect();
     let p: Vec<Point2<f64>> = inliers.iter().map(|&i| pixels[i]).collect();
-    let sol = eopnp::camera::solve_pixels(solver, cam, &w, &p).ok()?;
+    let sol = solver.solve_camera(cam, &w, &p).ok()?;
     Some((sol.solution.rotation, sol.solution.pose.translation.vector))
 }
 

@@ -30,12 +30,12 @@
 //! an error, never a silently wrong point.
 
 use core::fmt;
-use nalgebra::{Point2, Point3};
+use nalgebra::Point2;
 
-use crate::{Intrinsics, PnpError, Solution, Solver};
+use crate::numeric::bounds::{Bound, Budget};
 
 /// Hard bound on the Newton iterations of [`Camera::undistort`].
-pub const UNDISTORT_MAX_ITERATIONS: u32 = 100;
+pub const UNDISTORT_MAX_ITERATIONS: u32 = crate::numeric::bounds::UNDISTORT_MAX_ITERATIONS;
 /// Newton stops when the step is below this (relative to `max(1, |x|)`).
 const STEP_TOL: f64 = 1e-14;
 /// Convergence check: the distortion equation must hold to this (relative to `max(1, |x0|)`),
@@ -312,6 +312,40 @@ impl fmt::Display for CameraError {
 }
 
 impl std::error::Error for CameraError {}
+
+/// Pinhole intrinsics: `px = fx x + skew y + cx`, `py = fy y + cy` for normalised `(x, y)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    /// Focal length in x, pixels.
+    pub fx: f64,
+    /// Focal length in y, pixels.
+    pub fy: f64,
+    /// Principal point x, pixels.
+    pub cx: f64,
+    /// Principal point y, pixels.
+    pub cy: f64,
+    /// Skew, pixels (0 for almost every camera).
+    pub skew: f64,
+}
+
+impl Intrinsics {
+    /// Normalised image coordinates of a pixel.
+    #[must_use]
+    pub fn normalize(&self, px: &Point2<f64>) -> Point2<f64> {
+        let y = (px.y - self.cy) / self.fy;
+        let x = (px.x - self.cx - self.skew * y) / self.fx;
+        Point2::new(x, y)
+    }
+
+    /// Pixel of a normalised image point.
+    #[must_use]
+    pub fn project(&self, p: &Point2<f64>) -> Point2<f64> {
+        Point2::new(
+            self.fx * p.x + self.skew * p.y + self.cx,
+            self.fy * p.y + self.cy,
+        )
+    }
+}
 
 /// A camera: model, image size and parameters (validated on construction).
 #[derive(Clone, Debug, PartialEq)]
@@ -646,66 +680,6 @@ impl Camera {
     }
 }
 
-/// The result of [`solve_pixels`].
-#[derive(Clone, Copy, Debug)]
-#[non_exhaustive]
-pub struct CameraSolution {
-    /// The pose (world to camera).
-    pub solution: Solution,
-    /// Correspondences used.
-    pub used: usize,
-    /// Correspondences skipped because their pixel could not be undistorted
-    /// ([`Camera::undistort_weighted`] failed).
-    pub skipped: usize,
-}
-
-/// The pose from observed (distorted) pixels and a camera model.
-///
-/// The pixels are undistorted to normalised coordinates ([`Camera::undistort`]; a pixel that
-/// cannot be undistorted is skipped and counted) and solved there. In the default
-/// (reprojection) mode the residual of point `i` is weighted by `|det J_i| / (fx fy)`, `J_i`
-/// the Jacobian of [`Camera::project`] at the point ([`Camera::project_jacobian`]), and the x
-/// and y rows by `fx^2` and `fy^2` (normalised, as [`Solver::solve_pixels`]): to first order
-/// the minimised error is the pixel reprojection error through the lens distortion (exactly,
-/// for models without distortion; isotropically approximated per point otherwise).
-///
-/// # Errors
-/// [`PnpError::LengthMismatch`] if the slices differ in length, otherwise as
-/// [`Solver::solve_weighted`] on the undistorted points.
-pub fn solve_pixels(
-    solver: &Solver,
-    camera: &Camera,
-    world: &[Point3<f64>],
-    pixels: &[Point2<f64>],
-) -> Result<CameraSolution, PnpError> {
-    if world.len() != pixels.len() {
-        return Err(PnpError::LengthMismatch {
-            world: world.len(),
-            image: pixels.len(),
-        });
-    }
-    let mut w = Vec::with_capacity(world.len());
-    let mut image = Vec::with_capacity(world.len());
-    let mut weights = Vec::with_capacity(world.len());
-    let (fx, fy) = camera.intrinsics_scale();
-    for (x, px) in world.iter().zip(pixels) {
-        let Ok((n, weight)) = camera.undistort_weighted(*px) else {
-            continue;
-        };
-        weights.push(weight);
-        w.push(*x);
-        image.push(n);
-    }
-    let fmax = fx.max(fy);
-    let rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
-    let solution = solver.solve_with_row_weights(&w, &image, Some(&weights), rows)?;
-    Ok(CameraSolution {
-        solution,
-        used: w.len(),
-        skipped: world.len() - w.len(),
-    })
-}
-
 /// Solves `x + D(x) = x0` for `x` (COLMAP's `IterativeUndistortion`, with a tighter stopping
 /// rule and an explicit convergence check). `None` if it does not converge.
 fn iterative_undistortion(d: &Distortion, x0: (f64, f64)) -> Option<(f64, f64)> {
@@ -714,7 +688,7 @@ fn iterative_undistortion(d: &Distortion, x0: (f64, f64)) -> Option<(f64, f64)> 
     const RADIUS: f64 = 0.1;
     let scale0 = 1f64.max(x0.0.hypot(x0.1));
     let (mut u, mut v) = x0;
-    let mut steps = crate::bounds::Budget::new(crate::bounds::Bound::Undistort);
+    let mut steps = Budget::new(Bound::Undistort);
     while steps.next() {
         let ((xu, xv), j) = d.apply(u, v);
         let (fu, fv) = (xu - x0.0, xv - x0.1);
@@ -747,201 +721,4 @@ fn iterative_undistortion(d: &Distortion, x0: (f64, f64)) -> Option<(f64, f64)> 
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Realistic parameters for every model (a 1200 x 1600 image, about 55 x 70 degrees).
-    fn cameras() -> Vec<Camera> {
-        let (w, h) = (1200, 1600);
-        let spec: Vec<(&str, Vec<f64>)> = vec![
-            ("SIMPLE_PINHOLE", vec![1245.65, 600.0, 800.0]),
-            ("PINHOLE", vec![1245.0, 1251.0, 601.5, 797.25]),
-            ("SIMPLE_RADIAL", vec![1245.65, 600.0, 800.0, 0.0577095]),
-            ("SIMPLE_RADIAL", vec![1245.65, 600.0, 800.0, -0.08]),
-            ("RADIAL", vec![1245.65, 600.0, 800.0, -0.05, 0.01]),
-            (
-                "OPENCV",
-                vec![1245.0, 1251.0, 601.5, 797.25, -0.1, 0.02, 0.001, -0.0007],
-            ),
-            (
-                "OPENCV_FISHEYE",
-                vec![700.0, 702.0, 600.0, 800.0, 0.05, -0.01, 0.002, -0.0005],
-            ),
-            (
-                "FULL_OPENCV",
-                vec![
-                    1245.0, 1251.0, 601.5, 797.25, -0.1, 0.02, 0.001, -0.0007, 0.001, 0.05, -0.01,
-                    0.002,
-                ],
-            ),
-            ("SIMPLE_RADIAL_FISHEYE", vec![700.0, 600.0, 800.0, 0.03]),
-            ("RADIAL_FISHEYE", vec![700.0, 600.0, 800.0, 0.03, -0.004]),
-        ];
-        spec.into_iter()
-            .map(|(m, p)| Camera::from_colmap(m, w, h, p).unwrap())
-            .collect()
-    }
-
-    #[test]
-    fn undistort_then_project_is_identity_over_the_image() {
-        for cam in cameras() {
-            let mut worst = 0.0f64;
-            // A 41 x 41 grid over the whole image, corners included.
-            for i in 0..=40 {
-                for j in 0..=40 {
-                    let p = Point2::new(
-                        cam.width() as f64 * f64::from(i) / 40.0,
-                        cam.height() as f64 * f64::from(j) / 40.0,
-                    );
-                    let n = cam
-                        .undistort(p)
-                        .unwrap_or_else(|e| panic!("{}: {e}", cam.model()));
-                    let q = cam.project(n);
-                    worst = worst.max((q - p).norm());
-                }
-            }
-            // 1e-9 px: the pixels are ~1e3, so this is ~1e-12 relative, a few hundred ulps;
-            // Newton converges to the rounding level of the distortion evaluation.
-            assert!(
-                worst <= 1e-9,
-                "{}: worst round trip {worst:e} px",
-                cam.model()
-            );
-        }
-    }
-
-    #[test]
-    fn project_then_undistort_is_identity() {
-        for cam in cameras() {
-            for i in -5..=5 {
-                for j in -5..=5 {
-                    let n = Point2::new(f64::from(i) * 0.08, f64::from(j) * 0.1);
-                    let back = cam.undistort(cam.project(n)).unwrap();
-                    // 1e-12 in normalised units is ~1e-9 px at f ~ 1000 (see above).
-                    assert!((back - n).norm() <= 1e-12, "{}: {n} -> {back}", cam.model());
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn jacobian_matches_finite_differences() {
-        for cam in cameras() {
-            let n = Point2::new(0.31, -0.42);
-            let j = cam.project_jacobian(n);
-            let h = 1e-6;
-            let dx = (cam.project(n + nalgebra::Vector2::new(h, 0.0))
-                - cam.project(n - nalgebra::Vector2::new(h, 0.0)))
-                / (2.0 * h);
-            let dy = (cam.project(n + nalgebra::Vector2::new(0.0, h))
-                - cam.project(n - nalgebra::Vector2::new(0.0, h)))
-                / (2.0 * h);
-            let fd = [dx.x, dy.x, dx.y, dy.y];
-            for k in 0..4 {
-                // Central differences with h = 1e-6: truncation ~h^2 f ~ 1e-9 and rounding
-                // ~eps |p| / h ~ 1e-16 * 1e3 / 1e-6 = 1e-7 (entries ~1e3 px per unit): 1e-5.
-                assert!(
-                    (j[k] - fd[k]).abs() <= 1e-5,
-                    "{}: J[{k}] = {} vs {}",
-                    cam.model(),
-                    j[k],
-                    fd[k]
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn simple_radial_matches_colmap_formula() {
-        let cam = Camera::from_colmap("SIMPLE_RADIAL", 1200, 1600, vec![1000.0, 600.0, 800.0, 0.1])
-            .unwrap();
-        let p = cam.project(Point2::new(0.3, -0.4));
-        // r2 = 0.25, factor 1 + 0.1 * 0.25 = 1.025.
-        assert!((p.x - (1000.0 * 0.3 * 1.025 + 600.0)).abs() < 1e-12);
-        assert!((p.y - (1000.0 * -0.4 * 1.025 + 800.0)).abs() < 1e-12);
-    }
-
-    #[test]
-    fn pixels_beyond_f64_range_are_out_of_range() {
-        // A pinhole camera with a tiny focal length: (px - cx) / fx overflows.
-        let cam = Camera::from_colmap("PINHOLE", 10, 10, vec![1e-10, 1e-10, 5.0, 5.0]).unwrap();
-        let px = Point2::new(1e300, 5.0);
-        let e = cam.undistort(px).unwrap_err();
-        assert_eq!(
-            e,
-            CameraError::OutOfRange {
-                pixel: (1e300, 5.0)
-            }
-        );
-        assert!(e.to_string().contains("1e300"), "{e}");
-        // A radial camera far outside the image: the undistortion converges (the model is
-        // monotone) but the local scale of the distortion overflows.
-        let cam =
-            Camera::from_colmap("SIMPLE_RADIAL", 100, 100, vec![1.0, 50.0, 50.0, 0.0]).unwrap();
-        assert!(cam.undistort_weighted(Point2::new(60.0, 40.0)).is_ok());
-        let radial =
-            Camera::from_colmap("RADIAL", 100, 100, vec![1.0, 50.0, 50.0, 0.1, 0.0]).unwrap();
-        for x in [1e60, 1e80, 1e100, 1e150] {
-            match radial.undistort_weighted(Point2::new(x, 50.0)) {
-                Ok((n, w)) => assert!(n.x.is_finite() && w.is_finite()),
-                Err(e) => assert!(
-                    matches!(
-                        e,
-                        CameraError::OutOfRange { .. } | CameraError::NoConvergence { .. }
-                    ),
-                    "{e}"
-                ),
-            }
-        }
-    }
-
-    #[test]
-    fn unsupported_model_is_named() {
-        let e = Camera::from_colmap("THIN_PRISM_FISHEYE", 10, 10, vec![1.0; 12]).unwrap_err();
-        assert_eq!(
-            e,
-            CameraError::UnsupportedModel("THIN_PRISM_FISHEYE".into())
-        );
-        assert!(e.to_string().contains("THIN_PRISM_FISHEYE"));
-        let e = CameraModel::from_colmap_id(7).unwrap_err();
-        assert!(e.to_string().contains("FOV"), "{e}");
-        let e = CameraModel::from_colmap_id(99).unwrap_err();
-        assert!(e.to_string().contains("99"), "{e}");
-    }
-
-    #[test]
-    fn bad_params_are_errors() {
-        assert!(matches!(
-            Camera::from_colmap("PINHOLE", 10, 10, vec![1.0, 2.0, 3.0]),
-            Err(CameraError::ParamCount {
-                expected: 4,
-                got: 3,
-                ..
-            })
-        ));
-        assert!(Camera::from_colmap("PINHOLE", 10, 10, vec![1.0, f64::NAN, 3.0, 4.0]).is_err());
-        assert!(Camera::from_colmap("SIMPLE_PINHOLE", 10, 10, vec![0.0, 3.0, 4.0]).is_err());
-        let cam = &cameras()[2];
-        assert_eq!(
-            cam.undistort(Point2::new(f64::NAN, 1.0)),
-            Err(CameraError::NonFinite)
-        );
-    }
-
-    #[test]
-    fn non_invertible_region_is_an_error() {
-        // k = -0.5: x (1 - 0.5 x^2) peaks at x = sqrt(2/3) ~ 0.816, distorted radius ~0.544.
-        // A pixel at distorted radius 0.6 has no preimage.
-        let cam = Camera::from_colmap(
-            "SIMPLE_RADIAL",
-            2000,
-            2000,
-            vec![1000.0, 1000.0, 1000.0, -0.5],
-        )
-        .unwrap();
-        let e = cam.undistort(Point2::new(1600.0, 1000.0)).unwrap_err();
-        assert!(matches!(e, CameraError::NoConvergence { .. }), "{e}");
-        // Inside the fold: fine.
-        assert!(cam.undistort(Point2::new(1500.0, 1000.0)).is_ok());
-    }
-}
+mod tests;

@@ -43,12 +43,7 @@
 // `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-mod accumulate;
-#[doc(hidden)]
-pub mod bench_hooks;
-mod bounds;
 pub mod camera;
-mod certify;
 /// The `eopnp` command line (the binary is a thin `main` around [`cli::run`]). Public so that
 /// the fuzz targets can drive the input parsers; not a stable API.
 #[cfg(feature = "cli")]
@@ -56,28 +51,26 @@ mod certify;
 pub mod cli;
 pub mod colmap;
 mod error;
-mod frame;
 pub mod kernels;
-mod lanes;
-mod linalg;
-mod nullspace;
+mod numeric;
 pub mod p3p;
+mod pipeline;
 pub mod ransac;
-mod refine;
-mod reproj;
-pub mod roots;
-mod rotation;
 mod solver;
 #[cfg(test)]
 mod test_data;
 
+pub use camera::Intrinsics;
 pub use error::{DegenerateKind, InputKind, PnpError};
-pub use nullspace::CandidateSource;
-pub use solver::{solve, Intrinsics, PlanarDetection, Refinement, Solution, Solutions, Solver};
+pub use numeric::roots;
+#[doc(hidden)]
+pub use pipeline::bench_hooks;
+pub use pipeline::{CandidateSource, PlanarDetection, Refinement, Solution, Solutions};
+pub use solver::{solve, CameraSolution, Solver};
 
 /// Error metrics of ALGORITHM.md section 1 (the paper's).
 pub mod metrics {
-    pub use crate::rotation::{rotation_error_deg, translation_error_pct};
+    pub use crate::numeric::rotation::{rotation_error_deg, translation_error_pct};
 }
 
 /// Internal intermediates exposed for tests against the reference prototype. Not a stable API.
@@ -92,9 +85,6 @@ pub mod __internal {
     /// input.
     #[must_use]
     pub fn intermediates(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Intermediates> {
-        let fr = crate::frame::working_frame(world, image, None, true).ok()?;
-        let acc = fr.sums;
-        let sys = acc.system(false)?;
-        Some((sys.m, sys.g, fr.rw, fr.ratio))
+        crate::pipeline::intermediates(world, image)
     }
 }

@@ -428,7 +428,7 @@ impl Ransac {
         let start = Instant::now();
         self.check()?;
         let n = world.len();
-        crate::frame::check_lengths(n, image.len(), weights)?;
+        crate::pipeline::check_lengths(n, image.len(), weights)?;
         let (fx, fy) = focal;
         if !(fx.is_finite() && fy.is_finite() && fx > 0.0 && fy > 0.0) {
             return Err(PnpError::InvalidIntrinsics);
@@ -859,7 +859,7 @@ pub fn floor(
         }
     }
     let start = Instant::now();
-    let sol = crate::camera::solve_pixels(solver, cam, &w, &p)?;
+    let sol = solver.solve_camera(cam, &w, &p)?;
     let micros = start.elapsed().as_secs_f64() * 1e6;
     let mut reg = registration(model, image_id, problem, &sol.solution, sol.used)?;
     reg.micros = micros;

@@ -118,7 +118,7 @@ fn plain_on_problem(
     let mut sol = None;
     for _ in 0..3 {
         let start = Instant::now();
-        let s = crate::camera::solve_pixels(solver, cam, &problem.world, &problem.pixels)?;
+        let s = solver.solve_camera(cam, &problem.world, &problem.pixels)?;
         best = best.min(start.elapsed().as_secs_f64() * 1e6);
         sol = Some(s);
     }

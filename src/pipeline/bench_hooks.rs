@@ -4,15 +4,15 @@
 //! Each hook does exactly one stage so that a bench measures that stage alone; the inputs of a
 //! stage are produced once, outside the timed closure, by [`prepare`].
 
-use crate::accumulate::{self, System};
-use crate::frame::{self, WorkingFrame};
-use crate::nullspace::{self, Candidates};
-use crate::refine::{self, NewtonOptions};
-use crate::reproj::{self, ReprojOptions};
+use super::frame::{self, WorkingFrame};
+use super::moments::{self, System};
+use super::newton::{self, NewtonOptions};
+use super::nullspace::{self, Candidates};
+use super::reprojection::{self, ReprojOptions};
+use crate::numeric::bounds::M_EIGEN_MAX_ITER;
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, SVector, Vector3};
 
 /// Hard bound on the symmetric eigen-decomposition sweeps (as in the solver).
-const EIGEN_MAX_ITER: usize = 1000;
 
 /// The intermediates of one problem that the later stages take as input.
 #[derive(Clone, Debug)]
@@ -38,22 +38,22 @@ pub fn accumulate(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<SMatri
 /// calls it.
 #[must_use]
 pub fn eigen9(m: &SMatrix<f64, 9, 9>) -> Option<(SVector<f64, 9>, SMatrix<f64, 9, 9>)> {
-    nalgebra::SymmetricEigen::try_new(*m, f64::EPSILON, EIGEN_MAX_ITER)
+    nalgebra::SymmetricEigen::try_new(*m, f64::EPSILON, M_EIGEN_MAX_ITER)
         .map(|e| (e.eigenvalues, e.eigenvectors))
 }
 
 /// The fast path's eigenvector of the smallest eigenvalue of `M` (inverse iteration,
-/// `crate::linalg::smallest_eigenvector`), as the solver calls it with `scale = trace(M)`.
+/// `crate::numeric::linalg::smallest_eigenvector`), as the solver calls it with `scale = trace(M)`.
 #[must_use]
 pub fn smallest_eigenvector9(m: &SMatrix<f64, 9, 9>, scale: f64) -> Option<SVector<f64, 9>> {
-    crate::linalg::smallest_eigenvector(m, scale)
+    crate::numeric::linalg::smallest_eigenvector(m, scale)
 }
 
 /// The degeneracy test's count of eigenvalues of `M` below `tau` (Sturm count,
-/// `crate::linalg::count_eigenvalues_below`).
+/// `crate::numeric::linalg::count_eigenvalues_below`).
 #[must_use]
 pub fn count_eigenvalues_below9(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
-    crate::linalg::count_eigenvalues_below(m, tau)
+    crate::numeric::linalg::count_eigenvalues_below(m, tau)
 }
 
 /// Every intermediate of one problem (S1-S6, non-planar branch): computed once, outside the
@@ -67,9 +67,9 @@ pub fn prepare(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Prepared>
     order.sort_by(|&a, &b| vals[a].total_cmp(&vals[b]));
     let v4: [SVector<f64, 9>; 4] = std::array::from_fn(|i| vecs.column(order[i]).into_owned());
     let v1: [f64; 9] = v4[0].into();
-    let start = crate::rotation::candidate_to_rotation(&v1)?;
-    let m45 = accumulate::m_upper(&sys.m);
-    let refined = refine::refine_so3(&m45, sys.trace, &start, &NewtonOptions::default()).r;
+    let start = crate::numeric::rotation::candidate_to_rotation(&v1)?;
+    let m45 = moments::m_upper(&sys.m);
+    let refined = newton::refine_so3(&m45, sys.trace, &start, &NewtonOptions::default()).r;
     let rv = SVector::<f64, 9>::from_row_slice(refined.transpose().as_slice());
     let t = sys.g * rv;
     Some(Prepared {
@@ -109,14 +109,14 @@ pub fn nonplanar_candidates(p: &Prepared) -> usize {
 /// S6: damped Newton on SO(3) from the case-1 start (default options); returns f.
 #[must_use]
 pub fn newton(p: &Prepared) -> f64 {
-    refine::refine_so3(&p.m45, p.sys.trace, &p.start, &NewtonOptions::default()).f
+    newton::refine_so3(&p.m45, p.sys.trace, &p.start, &NewtonOptions::default()).f
 }
 
 /// S9: Levenberg-Marquardt on the reprojection error from the refined case-1 minimum (default
 /// options); returns the final cost.
 #[must_use]
 pub fn reprojection(world: &[Point3<f64>], image: &[Point2<f64>], p: &Prepared) -> f64 {
-    reproj::refine_reprojection(
+    reprojection::refine_reprojection(
         world,
         image,
         None,

@@ -56,6 +56,8 @@
 //! tiny (see its documentation), so that noise turning a double real root into a close complex
 //! pair does not lose it.
 
+use crate::numeric::bounds::{Bound, Budget, ROOT_POLISH_STEPS};
+
 /// Largest supported polynomial degree (the eopnp resultants have degree 8 and 9).
 pub const MAX_DEGREE: usize = 9;
 
@@ -68,12 +70,6 @@ const NC: usize = MAX_DEGREE + 1;
 /// S0: normalised leading coefficients below this are dropped.
 const DROP_TOL: f64 = 1e-14;
 const EPS: f64 = f64::EPSILON;
-/// Hard bound on safeguarded Newton/bisection iterations per root. Geometric bisection needs at
-/// most ~11 steps to get from the root bound (< 2^48) down to one binade anywhere in the f64 range,
-/// arithmetic bisection then at most 53: 160 is never reached in practice.
-pub(crate) const MAX_BRACKET_ITERS: usize = 160;
-/// Newton polishing steps for the closed forms (each accepted only if it reduces |p|).
-pub(crate) const POLISH_STEPS: usize = 4;
 
 /// A list of at most [`MAX_DEGREE`] real roots, sorted ascending, without duplicates.
 ///
@@ -281,7 +277,7 @@ impl Poly {
         }
     }
 
-    /// Newton polishing: at most `POLISH_STEPS` steps, each accepted only if it reduces |p|.
+    /// Newton polishing: at most `ROOT_POLISH_STEPS` steps, each accepted only if it reduces |p|.
     fn polish(&self, x0: f64) -> f64 {
         self.polish_f(x0).0
     }
@@ -290,7 +286,7 @@ impl Poly {
     fn polish_f(&self, x0: f64) -> (f64, f64) {
         let mut x = x0;
         let (mut f, mut d) = self.eval_d(x);
-        let mut steps = crate::bounds::Budget::new(crate::bounds::Bound::RootPolish);
+        let mut steps = Budget::new(Bound::RootPolish);
         while steps.next() {
             if f == 0.0 || d == 0.0 {
                 break;
@@ -398,7 +394,7 @@ fn bracket(q: &Poly, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f64 {
     let mut best_f = f64::INFINITY;
     let mut step_old = f64::INFINITY;
     let mut step = f64::INFINITY;
-    let mut iters = crate::bounds::Budget::new(crate::bounds::Bound::RootBracket);
+    let mut iters = Budget::new(Bound::RootBracket);
     while iters.next() {
         let (f, d, h, s) = q.eval_d2_abs(x);
         if f.abs() < best_f {
@@ -626,7 +622,7 @@ fn quadratic_closed(p: &Poly, out: &mut Roots) {
 fn double_candidate(p: &Poly, x0: f64, out: &mut Roots) {
     let mut x = x0;
     let (_, mut d, mut h) = p.eval_d2(x);
-    for _ in 0..POLISH_STEPS {
+    for _ in 0..ROOT_POLISH_STEPS {
         if d == 0.0 || h == 0.0 {
             break;
         }
@@ -893,145 +889,4 @@ pub fn quartic_real_roots(c: &[f64; 5]) -> Roots {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
-        a.len() == b.len()
-            && a.iter()
-                .zip(b)
-                .all(|(x, y)| (x - y).abs() <= tol * (1.0 + y.abs()))
-    }
-
-    /// Ascending coefficients of prod (x - r_i).
-    fn from_roots(r: &[f64]) -> Vec<f64> {
-        let mut c = vec![1.0];
-        for &ri in r {
-            let mut n = vec![0.0; c.len() + 1];
-            for (i, &ci) in c.iter().enumerate() {
-                n[i + 1] += ci;
-                n[i] -= ri * ci;
-            }
-            c = n;
-        }
-        c
-    }
-
-    #[test]
-    fn known_simple_roots() {
-        let r = [-3.0, -1.0, 0.5, 2.0, 7.0];
-        let c = from_roots(&r);
-        assert!(close(real_roots(&c).as_slice(), &r, 1e-14));
-        let c4 = from_roots(&r[..4]);
-        let q = quartic_real_roots(&[c4[0], c4[1], c4[2], c4[3], c4[4]]);
-        assert!(close(q.as_slice(), &r[..4], 1e-14), "{q:?}");
-        let c3 = from_roots(&r[1..4]);
-        let q = cubic_real_roots(&[c3[0], c3[1], c3[2], c3[3]]);
-        assert!(close(q.as_slice(), &r[1..4], 1e-14), "{q:?}");
-        // degree 9
-        let r9 = [-4.0, -3.0, -2.0, -1.0, 0.25, 1.0, 2.0, 3.0, 4.0];
-        assert!(close(real_roots(&from_roots(&r9)).as_slice(), &r9, 1e-12));
-    }
-
-    #[test]
-    fn double_and_triple_roots() {
-        let c = from_roots(&[1.0, 1.0, 3.0]);
-        let r = real_roots(&c);
-        assert!(close(r.as_slice(), &[1.0, 3.0], 1e-14), "{r:?}");
-        let r = cubic_real_roots(&[c[0], c[1], c[2], c[3]]);
-        assert!(close(r.as_slice(), &[1.0, 3.0], 1e-14), "{r:?}");
-        let c = from_roots(&[2.0, 2.0, 2.0, -1.0]);
-        let r = real_roots(&c);
-        assert!(close(r.as_slice(), &[-1.0, 2.0], 1e-14), "{r:?}");
-        let c = from_roots(&[0.3, 0.3, -0.7, -0.7]);
-        let r = quartic_real_roots(&[c[0], c[1], c[2], c[3], c[4]]);
-        assert!(close(r.as_slice(), &[-0.7, 0.3], 1e-14), "{r:?}");
-        assert!(close(real_roots(&c).as_slice(), &[-0.7, 0.3], 1e-14));
-        // (x^2 + 1)^2 has no real roots
-        assert!(real_roots(&[1.0, 0.0, 2.0, 0.0, 1.0]).is_empty());
-        assert!(quartic_real_roots(&[1.0, 0.0, 2.0, 0.0, 1.0]).is_empty());
-    }
-
-    #[test]
-    fn zero_roots_and_degree_0() {
-        assert!(close(real_roots(&[0.0, 0.0, 1.0]).as_slice(), &[0.0], 0.0));
-        assert!(close(
-            real_roots(&[0.0, -4.0, 0.0, 1.0]).as_slice(),
-            &[-2.0, 0.0, 2.0],
-            1e-15
-        ));
-        assert!(real_roots(&[5.0]).is_empty());
-        assert!(real_roots(&[]).is_empty());
-        assert!(real_roots(&[0.0, 0.0]).is_empty());
-        assert!(cubic_real_roots(&[0.0; 4]).is_empty());
-        assert!(close(
-            cubic_real_roots(&[0.0, 0.0, 0.0, 2.0]).as_slice(),
-            &[0.0],
-            0.0
-        ));
-    }
-
-    #[test]
-    fn leading_zeros_degrade() {
-        // 1e-20 x^3 + x^2 - 1: leading coefficient dropped.
-        let r = real_roots(&[-1.0, 0.0, 1.0, 1e-20]);
-        assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15), "{r:?}");
-        let r = cubic_real_roots(&[-1.0, 0.0, 1.0, 1e-20]);
-        assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15), "{r:?}");
-        let r = quartic_real_roots(&[-2.0, 1.0, 0.0, 0.0, 0.0]);
-        assert!(close(r.as_slice(), &[2.0], 0.0), "{r:?}");
-        // 1e-12 is kept: a far root near -1e12.
-        let r = real_roots(&[-1.0, 0.0, 1.0, 1e-12]);
-        assert_eq!(r.len(), 3);
-        assert!((r.as_slice()[0] + 1e12).abs() < 1e-3 * 1e12);
-    }
-
-    #[test]
-    fn non_finite_and_extreme() {
-        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            assert!(real_roots(&[1.0, bad, 1.0]).is_empty());
-            assert!(cubic_real_roots(&[1.0, bad, 1.0, 1.0]).is_empty());
-            assert!(quartic_real_roots(&[bad, 0.0, 1.0, 1.0, 1.0]).is_empty());
-            assert!(real_roots_near(&[1.0, 0.0, bad], 1e-6).is_empty());
-        }
-        let r = real_roots(&[-1e300, 0.0, 1e300]);
-        assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15));
-        let r = real_roots(&[-5e-324, 0.0, 5e-324]);
-        assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15));
-        let r = real_roots(&[-f64::MAX, f64::MAX]);
-        assert!(close(r.as_slice(), &[1.0], 1e-15));
-        // Too long but negligible high part: fine; genuinely degree 10: empty.
-        let mut c = [0.0; 12];
-        c[0] = -1.0;
-        c[1] = 1.0;
-        c[11] = 1e-20;
-        assert!(close(real_roots(&c).as_slice(), &[1.0], 1e-15));
-        c[11] = 1.0;
-        assert!(real_roots(&c).is_empty());
-    }
-
-    #[test]
-    fn near_real_pairs() {
-        // (x - 1)^2 + 1e-14: complex pair 1 +- 1e-7 i.
-        let c = [1.0 + 1e-14, -2.0, 1.0];
-        assert!(real_roots(&c).is_empty());
-        let r = real_roots_near(&c, DEFAULT_IMAG_TOL);
-        assert!(close(r.as_slice(), &[1.0], 1e-15), "{r:?}");
-        // (x - 1)^2 + 1e-4: Im = 1e-2: not near-real.
-        assert!(real_roots_near(&[1.0 + 1e-4, -2.0, 1.0], DEFAULT_IMAG_TOL).is_empty());
-        // Real roots unaffected, no duplicates.
-        let c = from_roots(&[1.0, 1.0 + 1e-9, 3.0]);
-        let r = real_roots_near(&c, DEFAULT_IMAG_TOL);
-        assert!(!r.is_empty() && r.len() <= 3);
-        assert!((r.as_slice()[r.len() - 1] - 3.0).abs() < 1e-14);
-        assert!(real_roots_near(&c, f64::NAN).len() == real_roots(&c).len());
-    }
-
-    #[test]
-    fn iterators() {
-        let r = real_roots(&[-1.0, 0.0, 1.0]);
-        let v: Vec<f64> = (&r).into_iter().copied().collect();
-        assert_eq!(v, r.iter().copied().collect::<Vec<_>>());
-        assert_eq!(Roots::default().len(), 0);
-    }
-}
+mod tests;

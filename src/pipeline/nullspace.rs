@@ -1,4 +1,5 @@
-//! S4 and S4': candidate rotations from the (approximate) null space of M.
+//! S4 of ALGORITHM.md: candidate rotations from the (approximate) null space of M, and the
+//! algebra of constrained null-space combinations that the planar branch (S4') shares.
 //!
 //! Non-planar branch (ALGORITHM.md S4): `r` is sought in the span of the eigenvectors of the four
 //! smallest eigenvalues of `M`, with the orthonormality constraints of a rotation:
@@ -10,13 +11,16 @@
 //!
 //! Every function appends to a fixed-capacity list: no allocation.
 
-use crate::kernels;
-use crate::roots::{self, Roots};
-#[cfg(test)]
-use crate::rotation::svd3;
-use crate::rotation::{singular_values3, smallest_right_singular_vector};
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+
+use crate::error::PnpError;
+use crate::kernels;
+use crate::numeric::bounds::{converged, limit, Bound};
+use crate::numeric::linalg;
+use crate::numeric::mat3::{null_vector3, rcond3};
+use crate::numeric::roots::{self, Roots};
+use crate::numeric::rotation::candidate_to_rotation;
 
 /// Which generator produced a candidate (reported in [`crate::Solution`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -50,6 +54,79 @@ pub(crate) struct Candidate {
 
 pub(crate) type Candidates = ArrayVec<Candidate, MAX_CANDIDATES>;
 
+/// Relative eigenvalue level below which an eigenvalue of `M` counts as zero for the
+/// `degenerate` diagnostic (ALGORITHM.md S0).
+const DEGENERATE_EIG: f64 = 1e-10;
+
+/// The four fixed extra starting rotations of S4'' (working frame).
+const EXTRA_STARTS: [[f64; 3]; 4] = [
+    [1.0, 1.0, 1.0],
+    [1.0, -1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+];
+
+/// How large the null space of `M` is, as far as the solver needs to know.
+pub(crate) struct Probe {
+    /// More than four eigenvalues of `M` at or below `DEGENERATE_EIG trace(M)`.
+    pub degenerate: bool,
+    /// The Cholesky factor of `M - tau I` when it exists (no eigenvalue below `tau`); the
+    /// case-1 inverse iteration reuses it.
+    shifted: Option<SMatrix<f64, 9, 9>>,
+}
+
+/// A Cholesky factorisation of `M - tau I` proves that no eigenvalue is below `tau` (the
+/// common case from N = 6 on) and is reused by the fast path's inverse iteration; the
+/// inertia count runs otherwise.
+pub(crate) fn probe(m: &SMatrix<f64, 9, 9>, scale: f64) -> Probe {
+    let tau = DEGENERATE_EIG * scale * (1.0 + f64::EPSILON);
+    let shifted = linalg::cholesky(&(m - SMatrix::<f64, 9, 9>::identity() * tau));
+    let degenerate = shifted.is_none() && linalg::count_eigenvalues_below(m, tau) > 4;
+    Probe {
+        degenerate,
+        shifted,
+    }
+}
+
+/// The case-1 start of the certified fast path: the rotation nearest to the eigenvector of the
+/// smallest eigenvalue of `M`.
+pub(crate) fn first_start(
+    m: &SMatrix<f64, 9, 9>,
+    probe: &Probe,
+    scale: f64,
+) -> Option<Matrix3<f64>> {
+    let v1 = match &probe.shifted {
+        Some(l) => linalg::inverse_iteration(m, l),
+        None => linalg::smallest_eigenvector(m, scale),
+    }?;
+    candidate_to_rotation(&v1.into())
+}
+
+/// S4: the candidates of cases 1-4 from the eigenvectors of the four smallest eigenvalues of
+/// `M`, appended to `out`.
+pub(crate) fn candidates(m: &SMatrix<f64, 9, 9>, out: &mut Candidates) -> Result<(), PnpError> {
+    let eig = nalgebra::SymmetricEigen::try_new(*m, f64::EPSILON, limit(Bound::MEigen));
+    let eig = converged(eig, Bound::MEigen).ok_or(PnpError::NoSolution)?;
+    let mut order: [usize; 9] = std::array::from_fn(|i| i);
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let v: [SVector<f64, 9>; 4] =
+        std::array::from_fn(|i| eig.eigenvectors.column(order[i]).into_owned());
+    nonplanar_candidates(&v, out);
+    Ok(())
+}
+
+/// S4'': the four fixed extra starting rotations, appended to `out` while there is room.
+pub(crate) fn extra_starts(out: &mut Candidates) {
+    for d in EXTRA_STARTS {
+        if !out.is_full() {
+            out.push(Candidate {
+                r: Matrix3::from_diagonal(&Vector3::from(d)),
+                source: CandidateSource::ExtraStart,
+            });
+        }
+    }
+}
+
 /// The row pairs (j, k) of R whose dot products are the constraints f1..f6 (ALGORITHM.md S0).
 const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
@@ -58,7 +135,7 @@ const IMAG_TOL: f64 = 1e-6;
 
 /// `Q^{jk}[a][b]` for basis vectors `v` (ALGORITHM.md S4): `row_j(r) . row_k(r) = alpha^T Q alpha`.
 /// `block(v, j)` returns the j-th 3-block (a row of R, or a column in the planar case).
-fn quad_form<const M: usize, const D: usize>(
+pub(super) fn quad_form<const M: usize, const D: usize>(
     v: &[SVector<f64, D>; M],
     j: usize,
     k: usize,
@@ -90,7 +167,7 @@ fn row_block(v: &SVector<f64, 9>, j: usize) -> Vector3<f64> {
 }
 
 /// Columns of R in the planar 6-vector `[R11, R12, R21, R22, R31, R32]`.
-fn col_block(v: &SVector<f64, 6>, j: usize) -> Vector3<f64> {
+pub(super) fn col_block(v: &SVector<f64, 6>, j: usize) -> Vector3<f64> {
     Vector3::new(v[j], v[2 + j], v[4 + j])
 }
 
@@ -125,7 +202,7 @@ fn best_x(cubics: &[f64; 8], cost: impl Fn(f64) -> f64) -> Option<f64> {
 /// S4.2 / S4' p2: stationary points of `C2(x, y) = |A a - b|^2`, `a = [x^2, x y, y^2]`, for the
 /// given constraint forms `qs` (rows of `A` are `[Q00, 2 Q01, Q11]`) and right-hand sides `b`.
 /// Calls `emit(x, y)` for each (at most 4, `y > 0`).
-fn case2_solutions<const P: usize>(
+pub(super) fn case2_solutions<const P: usize>(
     qs: &[SMatrix<f64, 2, 2>; P],
     b: &[f64; P],
     mut emit: impl FnMut(f64, f64),
@@ -159,10 +236,10 @@ fn case2_solutions<const P: usize>(
 
 /// S4 (non-planar branch): cases 1-4 from the eigenvectors `v[0..4]` of the four smallest
 /// eigenvalues of M (ascending). Appends the candidate rotations.
-pub(crate) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidates) {
+pub(super) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidates) {
     let mut push = |r: SVector<f64, 9>, source: CandidateSource| {
         let arr: [f64; 9] = r.into();
-        if let Some(rot) = crate::rotation::candidate_to_rotation(&arr) {
+        if let Some(rot) = candidate_to_rotation(&arr) {
             if !out.is_full() {
                 out.push(Candidate { r: rot, source });
             }
@@ -228,48 +305,6 @@ pub(crate) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidate
     case4(v, &[q4[3], q4[4], q4[5]], |r| {
         push(r, CandidateSource::Case4)
     });
-}
-
-/// Reciprocal condition number of a 3x3 matrix (smallest / largest singular value; 0 for a
-/// zero or non-finite matrix). Uses `svd3`'s singular values: nalgebra's 3x3 SVD squares the singular values.
-fn rcond3(m: &Matrix3<f64>) -> f64 {
-    match singular_values3(m) {
-        Some(s) if s[0] > 0.0 => s[2] / s[0],
-        _ => 0.0,
-    }
-}
-
-/// The right singular vector of the smallest singular value of `m` (any scale and sign), for
-/// an `m` that is singular up to rounding (case 4 at a root of det M(k1)).
-///
-/// For rank 2, the cross product `c` of two rows is that vector; the pair with the largest
-/// `|c|` is used. It is accepted only when a residual bound certifies it: with `y = c / |c|`,
-/// `|M y|^2 >= s2^2 sin^2(angle(y, v3))` and `s2 >= |c| / s1 >= |c| / |M|_F` give
-/// `sin(angle) <= |M c| |M|_F / |c|^2` (plus the rounding of `M c`, `4 eps |M|_F |c|`), which
-/// must be below `NULL_VECTOR_TOL`, i.e. the cross product agrees with the singular vector to
-/// rounding level. Otherwise (rank below 2, or `s3` not negligible against `s2`) the SVD
-/// decides ([`smallest_right_singular_vector`]). `None` if an entry is not finite.
-fn null_vector3(m: &Matrix3<f64>) -> Option<Vector3<f64>> {
-    const NULL_VECTOR_TOL: f64 = 1e-13;
-    let r: [Vector3<f64>; 3] = std::array::from_fn(|i| m.row(i).transpose());
-    let cs = [r[0].cross(&r[1]), r[0].cross(&r[2]), r[1].cross(&r[2])];
-    let mut best = 0;
-    let mut best_n2 = cs[0].norm_squared();
-    for (i, c) in cs.iter().enumerate().skip(1) {
-        let n2 = c.norm_squared();
-        if n2 > best_n2 {
-            best = i;
-            best_n2 = n2;
-        }
-    }
-    let c = cs[best];
-    let fro = m.norm();
-    let lhs = ((m * c).norm() + 4.0 * f64::EPSILON * fro * best_n2.sqrt()) * fro;
-    let rhs = NULL_VECTOR_TOL * best_n2;
-    if best_n2 > 0.0 && lhs.is_finite() && rhs.is_finite() && lhs <= rhs {
-        return Some(c);
-    }
-    smallest_right_singular_vector(m)
 }
 
 /// S4.4 with the hidden variable chosen at run time: each of k1, k2, k3 is tried as the hidden
@@ -355,77 +390,5 @@ fn case4(
     }
 }
 
-/// S4' cases p1 and p2: candidate first-two-columns vectors `r6 = [R11, R12, R21, R22, R31, R32]`
-/// from the two smallest eigenvectors of the 6x6 planar `M_p`. Calls `emit(r6, source)`.
-pub(crate) fn planar_vectors(
-    v: &[SVector<f64, 6>; 2],
-    mut emit: impl FnMut(SVector<f64, 6>, CandidateSource),
-) {
-    emit(v[0], CandidateSource::Planar1);
-    let pairs = [(0, 0), (1, 1), (0, 1)];
-    let qs: [SMatrix<f64, 2, 2>; 3] =
-        std::array::from_fn(|p| quad_form(v, pairs[p].0, pairs[p].1, col_block));
-    case2_solutions(&qs, &[1.0, 1.0, 0.0], |x, y| {
-        emit(v[0] * x + v[1] * y, CandidateSource::Planar2)
-    });
-}
-
-/// The rotation of a planar candidate (ALGORITHM.md S4' step 5, without the depth test):
-/// `[c1 c2] = U V^T` of the 3x2 matrix of the two columns, `R = [c1, c2, c1 x c2]`.
-pub(crate) fn planar_rotation(r6: &SVector<f64, 6>) -> Option<Matrix3<f64>> {
-    if !r6.iter().all(|x| x.is_finite()) || r6.norm() == 0.0 {
-        return None;
-    }
-    let a = SMatrix::<f64, 3, 2>::new(r6[0], r6[1], r6[2], r6[3], r6[4], r6[5]);
-    let svd = a.svd(true, true);
-    let c = svd.u? * svd.v_t?;
-    let (c1, c2) = (c.column(0).into_owned(), c.column(1).into_owned());
-    let r = Matrix3::from_columns(&[c1, c2, c1.cross(&c2)]);
-    r.iter().all(|x| x.is_finite()).then_some(r)
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use rand::{Rng, SeedableRng};
-    use rand_pcg::Pcg64;
-
-    /// The certified cross product agrees with the SVD's singular vector to rounding level, and
-    /// a matrix it cannot certify (rank 1, or clearly nonsingular) gets the SVD's vector.
-    #[test]
-    fn null_vector3_matches_the_smallest_singular_vector() {
-        let mut rng = Pcg64::seed_from_u64(11);
-        let mut crossed = 0;
-        for k in 0..3000 {
-            let mut m = Matrix3::from_fn(|_, _| rng.random_range(-1.0..1.0));
-            let (a, b) = (rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0));
-            let row = m.row(0) * a + m.row(1) * b;
-            m.set_row(2, &row);
-            match k % 4 {
-                1 => m *= 10f64.powi(rng.random_range(-100..100)),
-                2 => m[(2, 2)] += 1e-3, // nonsingular: s3 not negligible
-                3 => {
-                    // rank 1
-                    let (r1, r2) = (m.row(0) * 0.5, m.row(0) * -1.3);
-                    m.set_row(1, &r1);
-                    m.set_row(2, &r2);
-                }
-                _ => {}
-            }
-            let y = null_vector3(&m).unwrap();
-            let v = svd3(&m).unwrap().v.column(2).into_owned();
-            let sin = y.normalize().cross(&v).norm();
-            let certified = y != v;
-            if certified {
-                crossed += 1;
-                assert!(k % 4 < 2, "{k}: certified a matrix that is not rank 2");
-                assert!(sin <= 1e-13, "{k}: {sin:e}");
-            } else {
-                assert_eq!(y, smallest_right_singular_vector(&m).unwrap());
-            }
-        }
-        assert!(crossed > 1000, "{crossed}");
-        assert!(null_vector3(&Matrix3::from_element(f64::NAN)).is_none());
-        assert!(null_vector3(&Matrix3::zeros()).is_some());
-    }
-}
+mod tests;

@@ -1,0 +1,194 @@
+use super::*;
+
+/// Realistic parameters for every model (a 1200 x 1600 image, about 55 x 70 degrees).
+fn cameras() -> Vec<Camera> {
+    let (w, h) = (1200, 1600);
+    let spec: Vec<(&str, Vec<f64>)> = vec![
+        ("SIMPLE_PINHOLE", vec![1245.65, 600.0, 800.0]),
+        ("PINHOLE", vec![1245.0, 1251.0, 601.5, 797.25]),
+        ("SIMPLE_RADIAL", vec![1245.65, 600.0, 800.0, 0.0577095]),
+        ("SIMPLE_RADIAL", vec![1245.65, 600.0, 800.0, -0.08]),
+        ("RADIAL", vec![1245.65, 600.0, 800.0, -0.05, 0.01]),
+        (
+            "OPENCV",
+            vec![1245.0, 1251.0, 601.5, 797.25, -0.1, 0.02, 0.001, -0.0007],
+        ),
+        (
+            "OPENCV_FISHEYE",
+            vec![700.0, 702.0, 600.0, 800.0, 0.05, -0.01, 0.002, -0.0005],
+        ),
+        (
+            "FULL_OPENCV",
+            vec![
+                1245.0, 1251.0, 601.5, 797.25, -0.1, 0.02, 0.001, -0.0007, 0.001, 0.05, -0.01,
+                0.002,
+            ],
+        ),
+        ("SIMPLE_RADIAL_FISHEYE", vec![700.0, 600.0, 800.0, 0.03]),
+        ("RADIAL_FISHEYE", vec![700.0, 600.0, 800.0, 0.03, -0.004]),
+    ];
+    spec.into_iter()
+        .map(|(m, p)| Camera::from_colmap(m, w, h, p).unwrap())
+        .collect()
+}
+
+#[test]
+fn undistort_then_project_is_identity_over_the_image() {
+    for cam in cameras() {
+        let mut worst = 0.0f64;
+        // A 41 x 41 grid over the whole image, corners included.
+        for i in 0..=40 {
+            for j in 0..=40 {
+                let p = Point2::new(
+                    cam.width() as f64 * f64::from(i) / 40.0,
+                    cam.height() as f64 * f64::from(j) / 40.0,
+                );
+                let n = cam
+                    .undistort(p)
+                    .unwrap_or_else(|e| panic!("{}: {e}", cam.model()));
+                let q = cam.project(n);
+                worst = worst.max((q - p).norm());
+            }
+        }
+        // 1e-9 px: the pixels are ~1e3, so this is ~1e-12 relative, a few hundred ulps;
+        // Newton converges to the rounding level of the distortion evaluation.
+        assert!(
+            worst <= 1e-9,
+            "{}: worst round trip {worst:e} px",
+            cam.model()
+        );
+    }
+}
+
+#[test]
+fn project_then_undistort_is_identity() {
+    for cam in cameras() {
+        for i in -5..=5 {
+            for j in -5..=5 {
+                let n = Point2::new(f64::from(i) * 0.08, f64::from(j) * 0.1);
+                let back = cam.undistort(cam.project(n)).unwrap();
+                // 1e-12 in normalised units is ~1e-9 px at f ~ 1000 (see above).
+                assert!((back - n).norm() <= 1e-12, "{}: {n} -> {back}", cam.model());
+            }
+        }
+    }
+}
+
+#[test]
+fn jacobian_matches_finite_differences() {
+    for cam in cameras() {
+        let n = Point2::new(0.31, -0.42);
+        let j = cam.project_jacobian(n);
+        let h = 1e-6;
+        let dx = (cam.project(n + nalgebra::Vector2::new(h, 0.0))
+            - cam.project(n - nalgebra::Vector2::new(h, 0.0)))
+            / (2.0 * h);
+        let dy = (cam.project(n + nalgebra::Vector2::new(0.0, h))
+            - cam.project(n - nalgebra::Vector2::new(0.0, h)))
+            / (2.0 * h);
+        let fd = [dx.x, dy.x, dx.y, dy.y];
+        for k in 0..4 {
+            // Central differences with h = 1e-6: truncation ~h^2 f ~ 1e-9 and rounding
+            // ~eps |p| / h ~ 1e-16 * 1e3 / 1e-6 = 1e-7 (entries ~1e3 px per unit): 1e-5.
+            assert!(
+                (j[k] - fd[k]).abs() <= 1e-5,
+                "{}: J[{k}] = {} vs {}",
+                cam.model(),
+                j[k],
+                fd[k]
+            );
+        }
+    }
+}
+
+#[test]
+fn simple_radial_matches_colmap_formula() {
+    let cam =
+        Camera::from_colmap("SIMPLE_RADIAL", 1200, 1600, vec![1000.0, 600.0, 800.0, 0.1]).unwrap();
+    let p = cam.project(Point2::new(0.3, -0.4));
+    // r2 = 0.25, factor 1 + 0.1 * 0.25 = 1.025.
+    assert!((p.x - (1000.0 * 0.3 * 1.025 + 600.0)).abs() < 1e-12);
+    assert!((p.y - (1000.0 * -0.4 * 1.025 + 800.0)).abs() < 1e-12);
+}
+
+#[test]
+fn pixels_beyond_f64_range_are_out_of_range() {
+    // A pinhole camera with a tiny focal length: (px - cx) / fx overflows.
+    let cam = Camera::from_colmap("PINHOLE", 10, 10, vec![1e-10, 1e-10, 5.0, 5.0]).unwrap();
+    let px = Point2::new(1e300, 5.0);
+    let e = cam.undistort(px).unwrap_err();
+    assert_eq!(
+        e,
+        CameraError::OutOfRange {
+            pixel: (1e300, 5.0)
+        }
+    );
+    assert!(e.to_string().contains("1e300"), "{e}");
+    // A radial camera far outside the image: the undistortion converges (the model is
+    // monotone) but the local scale of the distortion overflows.
+    let cam = Camera::from_colmap("SIMPLE_RADIAL", 100, 100, vec![1.0, 50.0, 50.0, 0.0]).unwrap();
+    assert!(cam.undistort_weighted(Point2::new(60.0, 40.0)).is_ok());
+    let radial = Camera::from_colmap("RADIAL", 100, 100, vec![1.0, 50.0, 50.0, 0.1, 0.0]).unwrap();
+    for x in [1e60, 1e80, 1e100, 1e150] {
+        match radial.undistort_weighted(Point2::new(x, 50.0)) {
+            Ok((n, w)) => assert!(n.x.is_finite() && w.is_finite()),
+            Err(e) => assert!(
+                matches!(
+                    e,
+                    CameraError::OutOfRange { .. } | CameraError::NoConvergence { .. }
+                ),
+                "{e}"
+            ),
+        }
+    }
+}
+
+#[test]
+fn unsupported_model_is_named() {
+    let e = Camera::from_colmap("THIN_PRISM_FISHEYE", 10, 10, vec![1.0; 12]).unwrap_err();
+    assert_eq!(
+        e,
+        CameraError::UnsupportedModel("THIN_PRISM_FISHEYE".into())
+    );
+    assert!(e.to_string().contains("THIN_PRISM_FISHEYE"));
+    let e = CameraModel::from_colmap_id(7).unwrap_err();
+    assert!(e.to_string().contains("FOV"), "{e}");
+    let e = CameraModel::from_colmap_id(99).unwrap_err();
+    assert!(e.to_string().contains("99"), "{e}");
+}
+
+#[test]
+fn bad_params_are_errors() {
+    assert!(matches!(
+        Camera::from_colmap("PINHOLE", 10, 10, vec![1.0, 2.0, 3.0]),
+        Err(CameraError::ParamCount {
+            expected: 4,
+            got: 3,
+            ..
+        })
+    ));
+    assert!(Camera::from_colmap("PINHOLE", 10, 10, vec![1.0, f64::NAN, 3.0, 4.0]).is_err());
+    assert!(Camera::from_colmap("SIMPLE_PINHOLE", 10, 10, vec![0.0, 3.0, 4.0]).is_err());
+    let cam = &cameras()[2];
+    assert_eq!(
+        cam.undistort(Point2::new(f64::NAN, 1.0)),
+        Err(CameraError::NonFinite)
+    );
+}
+
+#[test]
+fn non_invertible_region_is_an_error() {
+    // k = -0.5: x (1 - 0.5 x^2) peaks at x = sqrt(2/3) ~ 0.816, distorted radius ~0.544.
+    // A pixel at distorted radius 0.6 has no preimage.
+    let cam = Camera::from_colmap(
+        "SIMPLE_RADIAL",
+        2000,
+        2000,
+        vec![1000.0, 1000.0, 1000.0, -0.5],
+    )
+    .unwrap();
+    let e = cam.undistort(Point2::new(1600.0, 1000.0)).unwrap_err();
+    assert!(matches!(e, CameraError::NoConvergence { .. }), "{e}");
+    // Inside the fold: fine.
+    assert!(cam.undistort(Point2::new(1500.0, 1000.0)).is_ok());
+}

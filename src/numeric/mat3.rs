@@ -1,0 +1,462 @@
+//! Small dense linear algebra on 3 x 3 matrices, each routine with a hard iteration bound and
+//! exact power-of-two scaling where a square could over- or underflow: the one-sided Jacobi SVD
+//! ([`svd3`] and its parts), the cyclic Jacobi symmetric eigen-decomposition ([`sym_eigen3`]),
+//! the smallest eigenvalue of a symmetric matrix ([`min_eigenvalue_sym3`]), a Cholesky
+//! factorisation and solve ([`cholesky3`]), the reciprocal condition number ([`rcond3`]) and
+//! the null vector of a rank-2 matrix ([`null_vector3`]).
+//!
+//! Why a hand-written SVD: nalgebra 0.35 computes the SVD of a `Matrix3` through the symmetric
+//! eigen-decomposition of `A^T A`, which squares the singular values: for singular values
+//! (1, 1e-8, 3e-9) it returns the second one 5-25 % off. [`svd3`] is a one-sided Jacobi SVD
+//! with a hard sweep bound, accurate to about `eps * sigma_max` in every singular value.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::numeric::bounds::{Bound, Budget};
+
+/// Thin result of [`svd3`]: `A = u * diag(s) * v^T`, `s` descending and >= 0, `u` and `v`
+/// orthogonal (`det u = +-1`, `det v = +-1`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Svd3 {
+    /// Left singular vectors (columns).
+    pub u: Matrix3<f64>,
+    /// Singular values, descending.
+    pub s: Vector3<f64>,
+    /// Right singular vectors (columns).
+    pub v: Matrix3<f64>,
+}
+
+/// Singular value decomposition of a 3 x 3 matrix by one-sided (Hestenes) Jacobi rotations.
+///
+/// The matrix is first divided by a power of two near its largest absolute entry (exact), so
+/// no intermediate overflows or underflows for any finite input. Every singular value is
+/// accurate to about `eps * s[0]`. `u`'s third column is `+-(u0 x u1)` (sign chosen to match
+/// the data), so `u` is orthogonal even when singular values are zero. Returns `None` if an
+/// entry is not finite. The zero matrix gives `s = 0`, `u = v = I`.
+pub(crate) fn svd3(a: &Matrix3<f64>) -> Option<Svd3> {
+    let (cols, vcols, nrm, scale) = jacobi3::<true>(a)?;
+    let Some(scale) = scale else {
+        return Some(Svd3 {
+            u: Matrix3::identity(),
+            s: Vector3::zeros(),
+            v: Matrix3::identity(),
+        });
+    };
+    Some(finish_svd3(&cols, &vcols, &nrm, scale))
+}
+
+/// The singular values of `a` (descending), bit for bit those of [`svd3`] (the same column
+/// rotations, without accumulating `v` or forming `u`). `None` if an entry is not finite.
+pub(crate) fn singular_values3(a: &Matrix3<f64>) -> Option<Vector3<f64>> {
+    let (_, _, nrm, scale) = jacobi3::<false>(a)?;
+    let Some(scale) = scale else {
+        return Some(Vector3::zeros());
+    };
+    let norms = nrm.map(f64::sqrt);
+    let idx = sort_desc(&norms);
+    Some(Vector3::new(norms[idx[0]], norms[idx[1]], norms[idx[2]]) * scale)
+}
+
+/// The right singular vector of the smallest singular value of `a`, bit for bit `svd3(a)`'s
+/// `v.column(2)` (without forming `u`). `None` if an entry is not finite.
+pub(crate) fn smallest_right_singular_vector(a: &Matrix3<f64>) -> Option<Vector3<f64>> {
+    let (_, v, nrm, scale) = jacobi3::<true>(a)?;
+    if scale.is_none() {
+        return Some(Vector3::z());
+    }
+    let idx = sort_desc(&nrm.map(f64::sqrt));
+    Some(Vector3::from(v[idx[2]]))
+}
+
+/// `a . b` for 3-vectors, summed left to right (as nalgebra's `dot` of a `Vector3`).
+#[inline(always)]
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Indices of `norms` in descending order (a fixed 3-element sorting network).
+#[inline(always)]
+fn sort_desc(norms: &[f64; 3]) -> [usize; 3] {
+    let mut idx = [0usize, 1, 2];
+    for &(i, j) in &[(0usize, 1usize), (1, 2), (0, 1)] {
+        if norms[idx[i]] < norms[idx[j]] {
+            idx.swap(i, j);
+        }
+    }
+    idx
+}
+
+/// One Jacobi rotation of the column pair (p, q) of `b` (and of `v` if `WANT_V`), if their inner
+/// product exceeds its rounding error. `nrm` holds the squared column norms of `b` and is kept
+/// current. Returns whether a rotation was applied.
+#[inline(always)]
+fn jacobi_pair<const WANT_V: bool>(
+    b: &mut [[f64; 3]; 3],
+    v: &mut [[f64; 3]; 3],
+    nrm: &mut [f64; 3],
+    p: usize,
+    q: usize,
+) -> bool {
+    let alpha = nrm[p];
+    let beta = nrm[q];
+    let gamma = dot3(&b[p], &b[q]);
+    // Rotate only when the columns' inner product exceeds its own rounding error
+    // (a length-3 dot product: about 3 eps |b_p| |b_q|); with a threshold of 1 eps, a
+    // pair whose computed gamma is rounding noise can be rotated forever (found: an
+    // ordinary matrix that used all its sweeps).
+    if gamma == 0.0 || gamma.abs() <= 4.0 * f64::EPSILON * alpha.sqrt() * beta.sqrt() {
+        return false;
+    }
+    let zeta = (beta - alpha) / (2.0 * gamma);
+    let t = if zeta.abs() > 1e150 {
+        0.5 / zeta
+    } else {
+        zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt())
+    };
+    let c = 1.0 / (1.0 + t * t).sqrt();
+    let s = c * t;
+    let (bp, bq) = (b[p], b[q]);
+    for i in 0..3 {
+        b[p][i] = c * bp[i] - s * bq[i];
+        b[q][i] = s * bp[i] + c * bq[i];
+    }
+    if WANT_V {
+        let (vp, vq) = (v[p], v[q]);
+        for i in 0..3 {
+            v[p][i] = c * vp[i] - s * vq[i];
+            v[q][i] = s * vp[i] + c * vq[i];
+        }
+    }
+    nrm[p] = dot3(&b[p], &b[p]);
+    nrm[q] = dot3(&b[q], &b[q]);
+    true
+}
+
+/// Column arrays of `b` (the scaled input after the rotations) and of `v` (identity if not
+/// `WANT_V`), the squared column norms of `b`, and the power-of-two scale (`None` for the zero
+/// matrix). `None` if an entry is not finite.
+///
+/// The sweeps: see [`svd3`]. Squared column norms are cached and recomputed only for rotated
+/// columns (the same expression, so the same values as recomputing them at every pair).
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn jacobi3<const WANT_V: bool>(
+    a: &Matrix3<f64>,
+) -> Option<([[f64; 3]; 3], [[f64; 3]; 3], [f64; 3], Option<f64>)> {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let mut amax: f64 = 0.0;
+    for x in a.iter() {
+        if !x.is_finite() {
+            return None;
+        }
+        amax = amax.max(x.abs());
+    }
+    if amax == 0.0 {
+        return Some(([[0.0; 3]; 3], v, [0.0; 3], None));
+    }
+    let scale = pow2_scale(amax);
+    let mut b: [[f64; 3]; 3] = std::array::from_fn(|j| std::array::from_fn(|i| a[(i, j)] / scale));
+    let mut nrm = [dot3(&b[0], &b[0]), dot3(&b[1], &b[1]), dot3(&b[2], &b[2])];
+    let mut sweeps = Budget::new(Bound::Svd3Sweeps);
+    while sweeps.next() {
+        let r01 = jacobi_pair::<WANT_V>(&mut b, &mut v, &mut nrm, 0, 1);
+        let r02 = jacobi_pair::<WANT_V>(&mut b, &mut v, &mut nrm, 0, 2);
+        let r12 = jacobi_pair::<WANT_V>(&mut b, &mut v, &mut nrm, 1, 2);
+        if !(r01 || r02 || r12) {
+            break;
+        }
+    }
+    Some((b, v, nrm, Some(scale)))
+}
+
+/// `u`, sorted `s` and `v` from the converged columns (see [`svd3`]).
+#[inline(always)]
+fn finish_svd3(b: &[[f64; 3]; 3], v: &[[f64; 3]; 3], nrm: &[f64; 3], scale: f64) -> Svd3 {
+    // Sort the columns by norm, descending.
+    let norms = nrm.map(f64::sqrt);
+    let idx = sort_desc(&norms);
+    let s = Vector3::new(norms[idx[0]], norms[idx[1]], norms[idx[2]]);
+    let vs = Matrix3::from_columns(&[
+        Vector3::from(v[idx[0]]),
+        Vector3::from(v[idx[1]]),
+        Vector3::from(v[idx[2]]),
+    ]);
+    let b0 = Vector3::from(b[idx[0]]);
+    let b1 = Vector3::from(b[idx[1]]);
+    let b2 = Vector3::from(b[idx[2]]);
+    // s[0] > 0 because amax > 0 and the rotations preserve the Frobenius norm.
+    let u0 = b0 / s[0];
+    let u1 = {
+        let g = b1 - u0 * u0.dot(&b1);
+        let gn = g.norm();
+        if s[1] > f64::EPSILON * s[0] && gn > 0.0 {
+            g / gn
+        } else {
+            any_orthogonal(&u0)
+        }
+    };
+    let c = u0.cross(&u1);
+    let u2 = if c.dot(&b2) < 0.0 { -c } else { c };
+    Svd3 {
+        u: Matrix3::from_columns(&[u0, u1, u2]),
+        s: s * scale,
+        v: vs,
+    }
+}
+
+/// A unit vector orthogonal to the unit vector `u`.
+fn any_orthogonal(u: &Vector3<f64>) -> Vector3<f64> {
+    // Cross with the coordinate axis least aligned with u.
+    let e = if u.x.abs() <= u.y.abs() && u.x.abs() <= u.z.abs() {
+        Vector3::x()
+    } else if u.y.abs() <= u.z.abs() {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    u.cross(&e).normalize()
+}
+
+/// The power of two `2^k <= x < 2^(k+1)` for finite `x > 0` (exact scaling factor).
+pub(crate) fn pow2_scale(x: f64) -> f64 {
+    debug_assert!(x > 0.0 && x.is_finite());
+    let bits = x.to_bits();
+    if x >= f64::MIN_POSITIVE {
+        // Normal: keep the exponent, clear the mantissa.
+        f64::from_bits(bits & 0x7ff0_0000_0000_0000)
+    } else {
+        // Subnormal: x = m 2^-1074; keep the highest set bit of m.
+        f64::from_bits(1u64 << (63 - (bits & 0x000f_ffff_ffff_ffff).leading_zeros()))
+    }
+}
+
+/// Eigen-decomposition of a symmetric 3 x 3 matrix by cyclic Jacobi rotations: eigenvalues
+/// descending and the eigenvectors as the columns of an orthogonal matrix.
+///
+/// The matrix is first divided by a power of two near its largest absolute entry (exact). A
+/// rotation is skipped when `|a_pq| <= eps sqrt(|a_pp a_qq|)` (the relative criterion of
+/// Demmel and Veselic: for a positive definite matrix that is diagonal up to a small relative
+/// coupling, every eigenvalue comes out with a small *relative* error, not only `eps |A|`), and
+/// the sweeps stop when a sweep rotates nothing or after `bounds::SYM_EIGEN3_MAX_SWEEPS`. Returns `None`
+/// for non-finite input. Only the upper triangle is read.
+pub(crate) fn sym_eigen3(a: &Matrix3<f64>) -> Option<(Vector3<f64>, Matrix3<f64>)> {
+    let mut b = Matrix3::new(
+        a[(0, 0)],
+        a[(0, 1)],
+        a[(0, 2)],
+        a[(0, 1)],
+        a[(1, 1)],
+        a[(1, 2)],
+        a[(0, 2)],
+        a[(1, 2)],
+        a[(2, 2)],
+    );
+    if !b.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let amax = b.amax();
+    if amax == 0.0 {
+        return Some((Vector3::zeros(), Matrix3::identity()));
+    }
+    let scale = pow2_scale(amax);
+    b /= scale;
+    let mut v = Matrix3::<f64>::identity();
+    let mut sweeps = Budget::new(Bound::FrameEigenSweeps);
+    while sweeps.next() {
+        let mut rotated = false;
+        for &(p, q, r) in &[(0usize, 1usize, 2usize), (0, 2, 1), (1, 2, 0)] {
+            let apq = b[(p, q)];
+            if apq == 0.0 || apq.abs() <= f64::EPSILON * (b[(p, p)] * b[(q, q)]).abs().sqrt() {
+                continue;
+            }
+            rotated = true;
+            // Rutishauser's formulas: t = tan(phi) of the smaller rotation that zeroes a_pq.
+            let zeta = (b[(q, q)] - b[(p, p)]) / (2.0 * apq);
+            let t = if zeta.abs() > 1e150 {
+                0.5 / zeta
+            } else {
+                let t = 1.0 / (zeta.abs() + (1.0 + zeta * zeta).sqrt());
+                if zeta < 0.0 {
+                    -t
+                } else {
+                    t
+                }
+            };
+            let c = 1.0 / (1.0 + t * t).sqrt();
+            let s = c * t;
+            let app = b[(p, p)] - t * apq;
+            let aqq = b[(q, q)] + t * apq;
+            let arp = b[(r, p)];
+            let arq = b[(r, q)];
+            let nrp = c * arp - s * arq;
+            let nrq = s * arp + c * arq;
+            b[(p, p)] = app;
+            b[(q, q)] = aqq;
+            b[(p, q)] = 0.0;
+            b[(q, p)] = 0.0;
+            b[(r, p)] = nrp;
+            b[(p, r)] = nrp;
+            b[(r, q)] = nrq;
+            b[(q, r)] = nrq;
+            for i in 0..3 {
+                let vp = v[(i, p)];
+                let vq = v[(i, q)];
+                v[(i, p)] = c * vp - s * vq;
+                v[(i, q)] = s * vp + c * vq;
+            }
+        }
+        if !rotated {
+            break;
+        }
+    }
+    // Sort descending (3 elements: a fixed sorting network).
+    let mut idx = [0usize, 1, 2];
+    for &(i, j) in &[(0usize, 1usize), (1, 2), (0, 1)] {
+        if b[(idx[i], idx[i])] < b[(idx[j], idx[j])] {
+            idx.swap(i, j);
+        }
+    }
+    let vals = Vector3::new(
+        b[(idx[0], idx[0])],
+        b[(idx[1], idx[1])],
+        b[(idx[2], idx[2])],
+    );
+    let vecs = Matrix3::from_columns(&[v.column(idx[0]), v.column(idx[1]), v.column(idx[2])]);
+    Some((vals * scale, vecs))
+}
+
+/// Smallest eigenvalue of a symmetric 3 x 3 matrix by cyclic Jacobi rotations (at most
+/// `bounds::MIN_EIGEN3_MAX_SWEEPS` sweeps), computed in units of the largest entry. Absolute error about
+/// `eps * |H|` (Weyl's bound: rotations stop once every off-diagonal entry is below
+/// `eps / 8 * |H|_F`). The trigonometric closed form is not used: it loses accuracy to
+/// `~sqrt(eps) |H|` when two eigenvalues nearly coincide (acos near +-1), which would leave
+/// `H + shift I` indefinite. NaN for non-finite input.
+pub(crate) fn min_eigenvalue_sym3(h: &Matrix3<f64>) -> f64 {
+    let scale = h.amax();
+    if scale == 0.0 || !scale.is_finite() {
+        return if scale == 0.0 { 0.0 } else { f64::NAN };
+    }
+    let mut a = (h + h.transpose()) * (0.5 / scale);
+    let thresh = 0.125 * f64::EPSILON * a.norm();
+    let mut sweeps = Budget::new(Bound::HessianEigenSweeps);
+    while sweeps.next() {
+        let mut rotated = false;
+        for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
+            let apq = a[(p, q)];
+            if apq.abs() <= thresh {
+                continue;
+            }
+            rotated = true;
+            let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
+            let t = if theta.abs() > 1e150 {
+                0.5 / theta
+            } else {
+                theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt())
+            };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            a[(p, p)] -= t * apq;
+            a[(q, q)] += t * apq;
+            a[(p, q)] = 0.0;
+            a[(q, p)] = 0.0;
+            let r = 3 - p - q;
+            let (arp, arq) = (a[(r, p)], a[(r, q)]);
+            a[(r, p)] = c * arp - s * arq;
+            a[(p, r)] = a[(r, p)];
+            a[(r, q)] = s * arp + c * arq;
+            a[(q, r)] = a[(r, q)];
+        }
+        if !rotated {
+            break;
+        }
+    }
+    a[(0, 0)].min(a[(1, 1)]).min(a[(2, 2)]) * scale
+}
+
+/// Cholesky factor `L` (lower) of a symmetric 3 x 3 matrix; `None` unless positive definite
+/// (every pivot > 0 and finite).
+pub(crate) fn cholesky3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let mut l = Matrix3::<f64>::zeros();
+    for j in 0..3 {
+        let mut d = a[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return None;
+        }
+        let djj = d.sqrt();
+        l[(j, j)] = djj;
+        for i in (j + 1)..3 {
+            let mut s = a[(i, j)];
+            for k in 0..j {
+                s -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = s / djj;
+        }
+    }
+    Some(l)
+}
+
+/// Solve `L L^T x = b`.
+pub(crate) fn cholesky3_solve(l: &Matrix3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
+    let mut y = Vector3::zeros();
+    for i in 0..3 {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= l[(i, k)] * y[k];
+        }
+        y[i] = s / l[(i, i)];
+    }
+    let mut x = Vector3::zeros();
+    for i in (0..3).rev() {
+        let mut s = y[i];
+        for k in (i + 1)..3 {
+            s -= l[(k, i)] * x[k];
+        }
+        x[i] = s / l[(i, i)];
+    }
+    x
+}
+
+/// Reciprocal condition number of a 3x3 matrix (smallest / largest singular value; 0 for a
+/// zero or non-finite matrix). Uses `svd3`'s singular values: nalgebra's 3x3 SVD squares the singular values.
+pub(crate) fn rcond3(m: &Matrix3<f64>) -> f64 {
+    match singular_values3(m) {
+        Some(s) if s[0] > 0.0 => s[2] / s[0],
+        _ => 0.0,
+    }
+}
+
+/// The right singular vector of the smallest singular value of `m` (any scale and sign), for
+/// an `m` that is singular up to rounding (case 4 at a root of det M(k1)).
+///
+/// For rank 2, the cross product `c` of two rows is that vector; the pair with the largest
+/// `|c|` is used. It is accepted only when a residual bound certifies it: with `y = c / |c|`,
+/// `|M y|^2 >= s2^2 sin^2(angle(y, v3))` and `s2 >= |c| / s1 >= |c| / |M|_F` give
+/// `sin(angle) <= |M c| |M|_F / |c|^2` (plus the rounding of `M c`, `4 eps |M|_F |c|`), which
+/// must be below `NULL_VECTOR_TOL`, i.e. the cross product agrees with the singular vector to
+/// rounding level. Otherwise (rank below 2, or `s3` not negligible against `s2`) the SVD
+/// decides ([`smallest_right_singular_vector`]). `None` if an entry is not finite.
+pub(crate) fn null_vector3(m: &Matrix3<f64>) -> Option<Vector3<f64>> {
+    const NULL_VECTOR_TOL: f64 = 1e-13;
+    let r: [Vector3<f64>; 3] = std::array::from_fn(|i| m.row(i).transpose());
+    let cs = [r[0].cross(&r[1]), r[0].cross(&r[2]), r[1].cross(&r[2])];
+    let mut best = 0;
+    let mut best_n2 = cs[0].norm_squared();
+    for (i, c) in cs.iter().enumerate().skip(1) {
+        let n2 = c.norm_squared();
+        if n2 > best_n2 {
+            best = i;
+            best_n2 = n2;
+        }
+    }
+    let c = cs[best];
+    let fro = m.norm();
+    let lhs = ((m * c).norm() + 4.0 * f64::EPSILON * fro * best_n2.sqrt()) * fro;
+    let rhs = NULL_VECTOR_TOL * best_n2;
+    if best_n2 > 0.0 && lhs.is_finite() && rhs.is_finite() && lhs <= rhs {
+        return Some(c);
+    }
+    smallest_right_singular_vector(m)
+}

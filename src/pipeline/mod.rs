@@ -1,0 +1,274 @@
+//! The EOPnP pipeline, one file per stage, in the order the data passes through them:
+//!
+//! | stage | file | what it does | touches the points |
+//! |---|---|---|---|
+//! | S1 | [`frame`] | validates the input; the working frame (centroid, scale, principal axes) | yes (through `moments`' passes) |
+//! | S2 | [`moments`] | the O(N) moment sums in the working frame; `M` (9 x 9) and `G` (3 x 9) | yes |
+//! | S3 | [`run`] (below) | which branch: non-planar, planar or both, from the planarity ratio | no |
+//! | S4 | [`nullspace`] | candidate rotations from the null space of `M` (cases 1-4, extra starts) | no |
+//! | S4' | [`planar`] | planar candidates from the 6 x 6 system of the first two columns of `R` | yes (depth signs) |
+//! | S6 | [`newton`] | damped Newton on SO(3) from every start, to local minima of `f(R)` | no |
+//! | cert. | [`certificate`] | a Lagrangian dual certificate that a minimum is global (early exit) | no |
+//! | S7 | [`select`] | the minimum with the smallest `f` among those with most points in front | yes (depth signs) |
+//! | S9, S8 | [`reprojection`], [`output`] | LM on the reprojection error; back to the world frame | yes |
+//!
+//! [`run`] is the only place that calls the stages. It tries a certified fast path first (the
+//! case-1 start through S6, the certificate and S7's depth test) and, when that does not settle
+//! the solve, the full search (S4, S4', S6 from every start, S7); either ends in S9 and S8.
+
+#[doc(hidden)]
+pub mod bench_hooks;
+pub(crate) mod certificate;
+pub(crate) mod frame;
+pub(crate) mod moments;
+pub(crate) mod newton;
+pub(crate) mod nullspace;
+pub(crate) mod options;
+pub(crate) mod output;
+pub(crate) mod planar;
+pub(crate) mod reprojection;
+pub(crate) mod select;
+
+pub use nullspace::CandidateSource;
+pub(crate) use nullspace::MAX_CANDIDATES;
+pub(crate) use options::Options;
+pub use options::{PlanarDetection, Refinement};
+pub use output::{Solution, Solutions};
+
+pub(crate) use frame::check_lengths;
+pub(crate) use reprojection::ReprojOptions;
+
+use arrayvec::ArrayVec;
+use nalgebra::{Matrix3, Point2, Point3};
+
+use crate::error::PnpError;
+use moments::System;
+use newton::NewtonOptions;
+use nullspace::Candidates;
+use output::Output;
+use select::Minimum;
+
+/// S6 step tolerance in reprojection mode (CGR units, ~ radians / 2): S6 stops when a step is
+/// this small, or when quadratic convergence predicts the next step below a thousandth of it,
+/// so the minimum of f is located to ~1e-9 before S9 takes over.
+const S6_TOLERANCE_BEFORE_S9: f64 = 1e-6;
+/// Planarity thresholds (S3).
+const NONPLANAR_MIN_RATIO: f64 = 1e-6;
+const PLANAR_MAX_RATIO: f64 = 1e-3;
+/// Two refined rotations closer than this (Frobenius norm of the difference, ~ radians) are the
+/// same local minimum.
+const SAME_MINIMUM: f64 = 1e-8;
+/// Radius (Frobenius norm of the rotation difference; 0.05 is about 2 degrees) of the
+/// neighbourhood of a refined local minimum that is taken to lie in its basin: a start or a
+/// Newton iterate that comes this close to a known minimum converges to it (the cost is a
+/// quadratic form in the entries of R, whose distinct minima are tens of degrees apart), so its
+/// refinement is skipped or stopped.
+const IN_BASIN: f64 = 0.05;
+
+/// One solve: `image` are normalised image points, `weights` optional per-point weights,
+/// `reproj` the S9 options (row weights of pixel input), `all` collects every distinct minimum
+/// (`solve_all`).
+pub(crate) fn run(
+    opts: &Options,
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    reproj: &ReprojOptions,
+    all: Option<&mut Solutions>,
+) -> Result<Solution, PnpError> {
+    // S1 + S2: the working frame, with the moment sums in it; M and G.
+    let fr = frame::working_frame(world, image, weights, opts.align_world_axes)?;
+    let sys = fr.sums.system(false).ok_or(PnpError::NoSolution)?;
+    let scale = sys.trace;
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(PnpError::NoSolution);
+    }
+    let m45 = moments::m_upper(&sys.m);
+    // S3: the branches.
+    let (nonplanar, planar) = match opts.planar {
+        PlanarDetection::Auto => (fr.ratio >= NONPLANAR_MIN_RATIO, fr.ratio < PLANAR_MAX_RATIO),
+        PlanarDetection::Planar => (false, true),
+        PlanarDetection::NonPlanar => (true, false),
+    };
+    let planar_sys = if planar { fr.sums.system(true) } else { None };
+    let probe = nullspace::probe(&sys.m, scale);
+    let out = Output {
+        world,
+        image,
+        weights,
+        fr: &fr,
+        m45: &m45,
+        degenerate: probe.degenerate,
+        scale,
+    };
+    let mut search = Search::new(opts, &sys, &m45, scale);
+    let is_certified = |r: &Matrix3<f64>| {
+        certificate::global_minimum(&sys.m, r, scale)
+            || planar_sys
+                .as_ref()
+                .is_some_and(|sp| certificate::global_minimum_planar(&sp.m, r, scale))
+    };
+
+    // The certified fast path (not in `solve_all` or exhaustive mode): refine the case-1 (or
+    // p1) start; if the certificate proves the minimum it reaches is the global minimum of f
+    // over O(3) and more than half of the points are in front of it, no other candidate can be
+    // selected by S7, so the search stops here.
+    let early_exit = !opts.exhaustive && all.is_none();
+    if early_exit {
+        let start = if nonplanar && !planar {
+            nullspace::first_start(&sys.m, &probe, scale).map(|r| (r, CandidateSource::Case1))
+        } else if planar && !nonplanar {
+            planar_sys.as_ref().and_then(|sp| {
+                planar::first_start(sp, world, weights, &fr, scale)
+                    .map(|r| (r, CandidateSource::Planar1))
+            })
+        } else {
+            None
+        };
+        if let Some((r0, source)) = start {
+            if let Some(mut m) = search.refine(&r0, source) {
+                if is_certified(&m.r) && select::in_front(world, weights, &fr, &m.r, &m.t) {
+                    m.cheirality = Some(true);
+                    return out.finish(&m, opts.refinement, reproj);
+                }
+                search.keep(m);
+            }
+        }
+    }
+
+    // S4, S4', S4'': the candidate starts.
+    let mut cands = Candidates::new();
+    if nonplanar {
+        nullspace::candidates(&sys.m, &mut cands)?;
+    }
+    if let Some(sp) = &planar_sys {
+        planar::candidates(sp, world, weights, &fr, &mut cands);
+    }
+    nullspace::extra_starts(&mut cands);
+
+    // S6: refine every candidate, in order of increasing initial cost.
+    let mut init: ArrayVec<(f64, usize), MAX_CANDIDATES> = cands
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (newton::cost_at(&m45, &c.r), i))
+        .collect();
+    init.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    for &(_, i) in &init {
+        let c = cands[i];
+        // A start already inside the basin of a known minimum would only find it again.
+        if search.in_known_basin(&c.r) {
+            continue;
+        }
+        if let Some(mut m) = search.refine(&c.r, c.source) {
+            // A certified global minimum with most points in front is S7's pick.
+            if early_exit && is_certified(&m.r) && select::in_front(world, weights, &fr, &m.r, &m.t)
+            {
+                m.cheirality = Some(true);
+                return out.finish(&m, opts.refinement, reproj);
+            }
+            search.keep(m);
+        }
+    }
+    let minima = &mut search.minima;
+    if minima.is_empty() {
+        return Err(PnpError::NoSolution);
+    }
+    if let Some(all) = all {
+        select::count_all(minima, world, weights, &fr);
+        return output::rank_all(&out, minima, opts.refinement, reproj, all);
+    }
+    // S7, then S9 and S8.
+    let pick = select::pick(minima, world, weights, &fr);
+    out.finish(&minima[pick], opts.refinement, reproj)
+}
+
+/// The refined minima found so far and how a start is refined (S6).
+struct Search<'a> {
+    sys: &'a System,
+    m45: &'a [f64; 45],
+    scale: f64,
+    newton: NewtonOptions,
+    exhaustive: bool,
+    minima: ArrayVec<Minimum, MAX_CANDIDATES>,
+}
+
+impl<'a> Search<'a> {
+    fn new(opts: &Options, sys: &'a System, m45: &'a [f64; 45], scale: f64) -> Self {
+        // When S9 follows, S6 only has to identify and certify the minimum of f: S9 moves the
+        // pose on by the algebraic-vs-reprojection difference (~noise level) and converges to
+        // its own tolerance from anywhere in the basin.
+        let newton = match opts.refinement {
+            Refinement::Reprojection => NewtonOptions {
+                step_tolerance: opts.newton.step_tolerance.max(S6_TOLERANCE_BEFORE_S9),
+                ..opts.newton
+            },
+            Refinement::Algebraic => opts.newton,
+        };
+        Search {
+            sys,
+            m45,
+            scale,
+            newton,
+            exhaustive: opts.exhaustive,
+            minima: ArrayVec::new(),
+        }
+    }
+
+    /// Whether `r` lies in the basin of a known minimum (never in exhaustive mode).
+    fn in_known_basin(&self, r: &Matrix3<f64>) -> bool {
+        !self.exhaustive && self.minima.iter().any(|m| (m.r - r).norm() <= IN_BASIN)
+    }
+
+    /// S6 from `r0`: a new local minimum, or `None` when the refinement entered the basin of a
+    /// known one, found one already known, or did not produce a finite rotation.
+    fn refine(&self, r0: &Matrix3<f64>, source: CandidateSource) -> Option<Minimum> {
+        let known: ArrayVec<Matrix3<f64>, MAX_CANDIDATES> =
+            self.minima.iter().map(|m| m.r).collect();
+        let refined = newton::refine_so3_until(self.m45, self.scale, r0, &self.newton, &mut |r| {
+            !self.exhaustive && known.iter().any(|k| (k - r).norm() <= IN_BASIN)
+        });
+        if refined.stopped_early
+            || !refined.f.is_finite()
+            || !refined.r.iter().all(|x| x.is_finite())
+            || self
+                .minima
+                .iter()
+                .any(|m| (m.r - refined.r).norm() <= SAME_MINIMUM)
+        {
+            return None;
+        }
+        Some(Minimum {
+            r: refined.r,
+            t: self.sys.translation(&refined.r),
+            f: refined.f,
+            source,
+            planar: matches!(source, CandidateSource::Planar1 | CandidateSource::Planar2),
+            iterations: refined.iterations,
+            cheirality: None,
+        })
+    }
+
+    /// Records a new minimum (while there is room).
+    fn keep(&mut self, m: Minimum) {
+        if !self.minima.is_full() {
+            self.minima.push(m);
+        }
+    }
+}
+
+/// `(M, G, Rw, ratio)` of S1-S2 in the working frame, or `None` on invalid input (for the tests
+/// against the reference prototype).
+#[allow(clippy::type_complexity)]
+pub(crate) fn intermediates(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+) -> Option<(
+    nalgebra::SMatrix<f64, 9, 9>,
+    nalgebra::SMatrix<f64, 3, 9>,
+    Matrix3<f64>,
+    f64,
+)> {
+    let fr = frame::working_frame(world, image, None, true).ok()?;
+    let sys = fr.sums.system(false)?;
+    Some((sys.m, sys.g, fr.rw, fr.ratio))
+}

@@ -1,0 +1,538 @@
+//! S2 of ALGORITHM.md: O(N) accumulation of the sums that give `M` (9 x 9) and `G` (3 x 9);
+//! `W`, `V` and `K` are never formed.
+//!
+//! | symbol | meaning (sums over points with weight `w > 0`; `w = 1` without weights) |
+//! |---|---|
+//! | `P = (x, y, z)` | working-frame point `Rw (X - c) / d` |
+//! | `u, v, q` | image point, `q = u^2 + v^2` |
+//! | `sw` | `sum w` (N without weights) |
+//! | `su, sv, sq` | `sum w u`, `sum w v`, `sum w q` |
+//! | `a, a_u, a_v, a_q` | `sum w P`, `sum w u P`, `sum w v P`, `sum w q P` |
+//! | `S, S_u, S_v, S_q` | `sum w P P^T`, `sum w u P P^T`, `sum w v P P^T`, `sum w q P P^T` |
+//!
+//! Then (weighted rows `sqrt(w) W_i`, `sqrt(w) V_i`):
+//! `W^T W = [[sw, 0, -su], [0, sw, -sv], [-su, -sv, sq]]`,
+//! `W^T V = [[-a^T, 0, a_u^T], [0, -a^T, a_v^T], [a_u^T, a_v^T, -a_q^T]]`,
+//! `V^T V = [[S, 0, -S_u], [0, S, -S_v], [-S_u, -S_v, S_q]]`,
+//! `G = (W^T W)^-1 W^T V`, `M = V^T V - (W^T V)^T G`, symmetrised.
+//!
+//! Cost per point: 12 multiply-adds and 1 division for the transform to the working frame,
+//! then 48 multiply-adds for the sums (q: 2, w u / w v / w q: 3, su/sv/sq: 3, w P: 3, a: 3,
+//! a_u/a_v/a_q: 9, w P P^T: 6, S/S_u/S_v/S_q: 6 + 18): 60 in all, no allocation.
+
+use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector2, Vector3};
+
+use crate::numeric::lanes::{lane_sum, Block, LANES};
+
+/// The weighted sums of S2 (symmetric matrices stored in full).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Accumulator {
+    /// `sum w` (the N of the unweighted formulas).
+    pub sw: f64,
+    /// `sum w u`.
+    pub su: f64,
+    /// `sum w v`.
+    pub sv: f64,
+    /// `sum w (u^2 + v^2)`.
+    pub sq: f64,
+    /// `sum w P` (0 in exact arithmetic: the points are centred; kept).
+    pub a: Vector3<f64>,
+    /// `sum w u P`.
+    pub a_u: Vector3<f64>,
+    /// `sum w v P`.
+    pub a_v: Vector3<f64>,
+    /// `sum w q P`.
+    pub a_q: Vector3<f64>,
+    /// `sum w P P^T`.
+    pub s: Matrix3<f64>,
+    /// `sum w u P P^T`.
+    pub s_u: Matrix3<f64>,
+    /// `sum w v P P^T`.
+    pub s_v: Matrix3<f64>,
+    /// `sum w q P P^T`.
+    pub s_q: Matrix3<f64>,
+}
+
+/// `M` (9 x 9, symmetric PSD) and `G` (3 x 9) of S2, with `f(R) = r^T M r` and `t = G r`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct System {
+    /// `M = V^T V - (W^T V)^T G`, symmetrised.
+    pub m: SMatrix<f64, 9, 9>,
+    /// `G = (W^T W)^-1 W^T V`.
+    pub g: SMatrix<f64, 3, 9>,
+    /// `trace(M)`, the natural scale of the cost.
+    pub trace: f64,
+}
+
+/// Index pairs of the 6 unique entries of a symmetric 3 x 3 matrix.
+const SYM6: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+
+/// Parameters of [`accumulate_centred`]: the point map `Y = X * inv_unit - centre` (exact
+/// power-of-two units, then centred), the optional linear map applied to `Y`, the weight unit
+/// and the image map used for the image spread.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CentredMap {
+    /// `1 / sx`, an exact power of two (world unit).
+    pub inv_unit: f64,
+    /// Weighted centroid in world units of `sx`.
+    pub centre: Vector3<f64>,
+    /// `1 / sw`, an exact power of two (weight unit).
+    pub inv_weight: f64,
+    /// `1 / sm`, an exact power of two (image unit; spread only).
+    pub inv_image: f64,
+    /// Weighted image mean in image units of `sm` (spread only).
+    pub image_mean: Vector2<f64>,
+}
+
+/// Output of [`accumulate_centred`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CentredSums {
+    /// The S2 sums of the mapped points `p = A Y` (or `Y`), with weights `w / sw`.
+    pub acc: Accumulator,
+    /// `sum (w / sw) |m / sm - image_mean|^2` (the S1 image spread, before dividing by the
+    /// weight sum).
+    pub spread: f64,
+}
+
+/// The S2 sums of [`accumulate_centred`] as a flat array: row `k` holds the monomial `k` of
+/// `p` = `1, x, y, z, xx, xy, xz, yy, yz, zz` times `[w, w u, w v, w q]`.
+type Sums = [[f64; 4]; 10];
+
+/// Number of the sums of [`Sums`] added in point order (see [`centred_pass`]): `sum w` and
+/// the scatter `sum w P P^T` (column 0 of the rows 0 and 4..=9).
+const ORDERED: usize = 7;
+/// [`ORDERED`] rounded up to whole SSE2 registers (the last entry is unused).
+const ORDERED_PAD: usize = 8;
+
+/// Index among the [`ORDERED`] sums of the sum `k, j` of [`Sums`], if it is one of them.
+#[inline(always)]
+const fn ordered_index(k: usize, j: usize) -> Option<usize> {
+    match (k, j) {
+        (0, 0) => Some(0),
+        (4..=9, 0) => Some(k - 3),
+        _ => None,
+    }
+}
+
+/// What the centred pass needs of [`CentredMap`] and `A`, as plain scalars.
+struct PassConsts {
+    /// `1 / sx`.
+    isx: f64,
+    /// The centre (world units of `sx`).
+    c: [f64; 3],
+    /// `A`, row-major (unused without `A`).
+    a: [[f64; 3]; 3],
+    /// `1 / sm`.
+    ism: f64,
+    /// The image mean (image units of `sm`).
+    mm: [f64; 2],
+}
+
+/// Partial sums of the centred pass. Lane `l` of `s` and `spread` sums the points
+/// `l, l + LANES, ...` of the sequence of active points; the [`ORDERED`] sums take the terms
+/// of a block from `t` in point order ([`Partial::flush`]). Aligned (every field is a
+/// multiple of 16 bytes) so that SSE2 can use the sums as operands in place.
+#[repr(C, align(16))]
+struct Partial {
+    /// `s[k][j][l]`: lane `l` of the sum `k, j` of [`Sums`] (unused for the ordered sums).
+    s: [[[f64; LANES]; 4]; 10],
+    /// The image spread.
+    spread: [f64; LANES],
+    /// `t[l][i]`: the term of point `l` of the current block in the ordered sum `i` (point
+    /// by point, so that [`Partial::flush`] adds two sums per packed instruction).
+    t: [[f64; ORDERED_PAD]; LANES],
+    /// The ordered sums.
+    ordered: [f64; ORDERED_PAD],
+}
+
+impl Partial {
+    /// Adds the terms of the first `n` points of the block to the ordered sums, in order.
+    #[inline(always)]
+    fn flush(&mut self, n: usize) {
+        for l in 0..n {
+            for i in 0..ORDERED {
+                self.ordered[i] += self.t[l][i];
+            }
+        }
+    }
+
+    /// The sums (each lane-wise sum added pairwise), times `scale`, and the spread.
+    fn finish(&self, scale: f64) -> (Sums, f64) {
+        let s = core::array::from_fn(|k| {
+            core::array::from_fn(|j| match ordered_index(k, j) {
+                Some(i) => self.ordered[i] * scale,
+                None => lane_sum(&self.s[k][j]) * scale,
+            })
+        });
+        (s, lane_sum(&self.spread) * scale)
+    }
+}
+
+/// Adds the point `x`, `m` with weight `w` (scaled, or 1 without weights) as point `l` of
+/// the current block to `acc` (see [`centred_pass`]; `R`: apply `A`). The terms are those of
+/// the scalar formulas: `f[j] * mono[k]` with `f = [w, w u, w v, w q]`.
+#[inline(always)]
+fn lane<const R: bool>(
+    k: &PassConsts,
+    x: [f64; 3],
+    m: [f64; 2],
+    w: f64,
+    l: usize,
+    acc: &mut Partial,
+) {
+    let y = [
+        x[0] * k.isx - k.c[0],
+        x[1] * k.isx - k.c[1],
+        x[2] * k.isx - k.c[2],
+    ];
+    let p = if R {
+        let a = &k.a;
+        [
+            a[0][0] * y[0] + a[0][1] * y[1] + a[0][2] * y[2],
+            a[1][0] * y[0] + a[1][1] * y[1] + a[1][2] * y[2],
+            a[2][0] * y[0] + a[2][1] * y[1] + a[2][2] * y[2],
+        ]
+    } else {
+        y
+    };
+    let (u, v) = (m[0], m[1]);
+    let du = u * k.ism - k.mm[0];
+    let dv = v * k.ism - k.mm[1];
+    acc.spread[l] += w * (du * du + dv * dv);
+    let q = u * u + v * v;
+    let f = [w, w * u, w * v, w * q];
+    let mono = [
+        1.0,
+        p[0],
+        p[1],
+        p[2],
+        p[0] * p[0],
+        p[0] * p[1],
+        p[0] * p[2],
+        p[1] * p[1],
+        p[1] * p[2],
+        p[2] * p[2],
+    ];
+    for (r, &mr) in mono.iter().enumerate() {
+        for (j, &fj) in f.iter().enumerate() {
+            // Row 0: `f[j] * 1 = f[j]` exactly.
+            let term = fj * mr;
+            match ordered_index(r, j) {
+                Some(i) => acc.t[l][i] = term,
+                None => acc.s[r][j][l] += term,
+            }
+        }
+    }
+}
+
+/// The centred pass over all points (`W`: weights present; `R`: apply `a` to `Y`).
+///
+/// Vectorised across points, without `unsafe` or target features: the points with weight
+/// `w > 0`, in order, are gathered into blocks of [`LANES`] (without weights, every point,
+/// straight from the slices), and point `l` of a block goes into lane `l` of its own partial
+/// sums ([`Partial`]), so that the compiler runs the per-point code ([`lane`]) on packed
+/// registers; the lanes are added pairwise at the end. The sequence of active points, and so
+/// the result to the bit, does not depend on the points of weight 0.
+///
+/// `sum w` and the scatter `sum w P P^T` are instead added in point order (one running sum
+/// each, as a sequential loop): S1 takes the frame's axes from the scatter's eigenvectors,
+/// which resolve the small axes of a thin cloud only to the rounding of its entries (trap T9
+/// of [`crate::frame`]); summed in order, the frame and the choice of S1's fast path are
+/// those of a sequential pass to the bit.
+///
+/// Without weights every scaled weight is `isw = 1 / sw`: the terms are formed with weight 1
+/// (the multiplications by `w` dropped: `1 * t = t`) and the sums multiplied by `isw` at the
+/// end. `isw` is a power of two, so `sum isw t = isw sum t` exactly unless a scaled term or
+/// sum falls below the normal range; S1 passes `isw = 1` without weights, where it is the
+/// identity.
+#[inline(always)]
+fn centred_pass<const W: bool, const R: bool>(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: &[f64],
+    map: &CentredMap,
+    a: &Matrix3<f64>,
+) -> (Sums, f64) {
+    let k = PassConsts {
+        isx: map.inv_unit,
+        c: [map.centre.x, map.centre.y, map.centre.z],
+        a: [
+            [a[(0, 0)], a[(0, 1)], a[(0, 2)]],
+            [a[(1, 0)], a[(1, 1)], a[(1, 2)]],
+            [a[(2, 0)], a[(2, 1)], a[(2, 2)]],
+        ],
+        ism: map.inv_image,
+        mm: [map.image_mean.x, map.image_mean.y],
+    };
+    let isw = map.inv_weight;
+    let mut acc = Partial {
+        s: [[[0.0; LANES]; 4]; 10],
+        spread: [0.0; LANES],
+        t: [[0.0; ORDERED_PAD]; LANES],
+        ordered: [0.0; ORDERED_PAD],
+    };
+    let mut blk = Block::new();
+    let n = world.len().min(image.len());
+    let (world, image) = (&world[..n], &image[..n]);
+    let mut filled = 0;
+    if W {
+        for ((x, m), &w) in world.iter().zip(image).zip(weights) {
+            if w <= 0.0 {
+                continue;
+            }
+            let l = filled % LANES;
+            blk.set(l, x, m);
+            blk.w[l] = w * isw;
+            filled = l + 1;
+            if filled == LANES {
+                for l in 0..LANES {
+                    let (x, m, w) = blk.point(l);
+                    lane::<R>(&k, x, m, w, l, &mut acc);
+                }
+                acc.flush(LANES);
+                filled = 0;
+            }
+        }
+    } else {
+        let mut cw = world.chunks_exact(LANES);
+        let mut cm = image.chunks_exact(LANES);
+        for (xs, ms) in (&mut cw).zip(&mut cm) {
+            for l in 0..LANES {
+                let (x, m) = (&xs[l], &ms[l]);
+                lane::<R>(&k, [x.x, x.y, x.z], [m.x, m.y], 1.0, l, &mut acc);
+            }
+            acc.flush(LANES);
+        }
+        for (l, (x, m)) in cw.remainder().iter().zip(cm.remainder()).enumerate() {
+            blk.set(l, x, m);
+            filled = l + 1;
+        }
+    }
+    let filled = filled.min(LANES);
+    for l in 0..filled {
+        let (x, m, w) = blk.point(l);
+        lane::<R>(&k, x, m, w, l, &mut acc);
+    }
+    acc.flush(filled);
+    acc.finish(if W { 1.0 } else { isw })
+}
+
+/// S1/S2 fused pass: the S2 sums of `p = A Y` (`a = Some(A)`) or of `p = Y` (`a = None`),
+/// `Y = X / sx - centre`, with weights `w / sw` (points with `w <= 0` are skipped, so they give
+/// bit-identical sums to removing them), plus the S1 image spread. The weights must already
+/// be validated.
+///
+/// Cost per point: 3 (+ 15 with `A`) flops for the point, 7 for the spread, 3 for `q` and
+/// `w u, w v, w q` (without weights, `q` only), 6 for the quadratic monomials and 40
+/// multiply-adds for the sums, on packed SSE2 registers two points at a time
+/// ([`centred_pass`]). Measured with callgrind (x86-64 baseline target, no weights, no `A`):
+/// 103 instructions per point at N = 1000, 108 at N = 100 (158 and 159 for the previous
+/// one-point-at-a-time loop); most of it is the 36 products and their sums (a copy, a
+/// multiply, an add and a store per two points). With weights (86 % active): 127 and 135
+/// instructions per input point (170 and 172 before).
+pub(crate) fn accumulate_centred(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    map: &CentredMap,
+    a: Option<&Matrix3<f64>>,
+) -> CentredSums {
+    let id = Matrix3::identity();
+    let (s, spread) = match (weights, a) {
+        (None, None) => centred_pass::<false, false>(world, image, &[], map, &id),
+        (None, Some(a)) => centred_pass::<false, true>(world, image, &[], map, a),
+        (Some(w), None) => centred_pass::<true, false>(world, image, w, map, &id),
+        (Some(w), Some(a)) => centred_pass::<true, true>(world, image, w, map, a),
+    };
+    let vec = |j: usize| Vector3::new(s[1][j], s[2][j], s[3][j]);
+    let mat = |j: usize| {
+        Matrix3::new(
+            s[4][j], s[5][j], s[6][j], //
+            s[5][j], s[7][j], s[8][j], //
+            s[6][j], s[8][j], s[9][j],
+        )
+    };
+    CentredSums {
+        acc: Accumulator {
+            sw: s[0][0],
+            su: s[0][1],
+            sv: s[0][2],
+            sq: s[0][3],
+            a: vec(0),
+            a_u: vec(1),
+            a_v: vec(2),
+            a_q: vec(3),
+            s: mat(0),
+            s_u: mat(1),
+            s_v: mat(2),
+            s_q: mat(3),
+        },
+        spread,
+    }
+}
+
+/// `B S B^T` for symmetric `S`, exactly symmetric (upper triangle computed, then mirrored).
+fn congruence(b: &Matrix3<f64>, s: &Matrix3<f64>) -> Matrix3<f64> {
+    let bs = b * s;
+    let mut out = Matrix3::zeros();
+    for &(r, c) in &SYM6 {
+        let x = bs.row(r).dot(&b.row(c));
+        out[(r, c)] = x;
+        out[(c, r)] = x;
+    }
+    out
+}
+
+impl Accumulator {
+    /// The sums of the points `B p` with weights `scale * w`, from the sums of the points `p`
+    /// with weights `w`: scalar sums times `scale`, vector sums `scale B a`, matrix sums
+    /// `scale B S B^T`. An exact identity up to rounding (the sums are linear and quadratic in
+    /// `p`). `scale` is a power of two (the weight unit), so it is applied exactly.
+    pub(crate) fn transformed(&self, b: &Matrix3<f64>, scale: f64) -> Accumulator {
+        let v = |x: &Vector3<f64>| (b * x) * scale;
+        let m = |x: &Matrix3<f64>| congruence(b, x) * scale;
+        Accumulator {
+            sw: self.sw * scale,
+            su: self.su * scale,
+            sv: self.sv * scale,
+            sq: self.sq * scale,
+            a: v(&self.a),
+            a_u: v(&self.a_u),
+            a_v: v(&self.a_v),
+            a_q: v(&self.a_q),
+            s: m(&self.s),
+            s_u: m(&self.s_u),
+            s_v: m(&self.s_v),
+            s_q: m(&self.s_q),
+        }
+    }
+}
+
+/// Zero the terms containing the working-frame z coordinate (S4' flattening).
+fn flat_vec(x: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(x.x, x.y, 0.0)
+}
+
+/// Zero row and column 2 of a symmetric matrix (terms containing z).
+fn flat_mat(x: &Matrix3<f64>) -> Matrix3<f64> {
+    let mut y = *x;
+    for k in 0..3 {
+        y[(2, k)] = 0.0;
+        y[(k, 2)] = 0.0;
+    }
+    y
+}
+
+impl Accumulator {
+    /// `M`, `G` and `trace(M)` from the sums (one 3 x 3 Cholesky solve with 9 right-hand sides).
+    ///
+    /// `flatten = true` gives the planar system of S4' (working-frame z set to 0): every
+    /// sum containing z is zeroed, which equals accumulating the flattened points.
+    ///
+    /// Returns `None` if `W^T W` is not positive definite (all image points coincide, which
+    /// S1 already rejects) or if a result is not finite (e.g. image coordinates so large that
+    /// `u^2 + v^2` overflows).
+    pub(crate) fn system(&self, flatten: bool) -> Option<System> {
+        let (a, a_u, a_v, a_q, s, s_u, s_v, s_q) = if flatten {
+            (
+                flat_vec(&self.a),
+                flat_vec(&self.a_u),
+                flat_vec(&self.a_v),
+                flat_vec(&self.a_q),
+                flat_mat(&self.s),
+                flat_mat(&self.s_u),
+                flat_mat(&self.s_v),
+                flat_mat(&self.s_q),
+            )
+        } else {
+            (
+                self.a, self.a_u, self.a_v, self.a_q, self.s, self.s_u, self.s_v, self.s_q,
+            )
+        };
+        #[rustfmt::skip]
+        let wtw = Matrix3::new(
+            self.sw, 0.0, -self.su,
+            0.0, self.sw, -self.sv,
+            -self.su, -self.sv, self.sq,
+        );
+        let mut wtv = SMatrix::<f64, 3, 9>::zeros();
+        for j in 0..3 {
+            wtv[(0, j)] = -a[j];
+            wtv[(0, 6 + j)] = a_u[j];
+            wtv[(1, 3 + j)] = -a[j];
+            wtv[(1, 6 + j)] = a_v[j];
+            wtv[(2, j)] = a_u[j];
+            wtv[(2, 3 + j)] = a_v[j];
+            wtv[(2, 6 + j)] = -a_q[j];
+        }
+        let mut vtv = SMatrix::<f64, 9, 9>::zeros();
+        vtv.fixed_view_mut::<3, 3>(0, 0).copy_from(&s);
+        vtv.fixed_view_mut::<3, 3>(3, 3).copy_from(&s);
+        vtv.fixed_view_mut::<3, 3>(6, 6).copy_from(&s_q);
+        vtv.fixed_view_mut::<3, 3>(0, 6).copy_from(&(-s_u));
+        vtv.fixed_view_mut::<3, 3>(6, 0).copy_from(&(-s_u));
+        vtv.fixed_view_mut::<3, 3>(3, 6).copy_from(&(-s_v));
+        vtv.fixed_view_mut::<3, 3>(6, 3).copy_from(&(-s_v));
+
+        let sums_finite = [self.sw, self.su, self.sv, self.sq]
+            .iter()
+            .all(|x| x.is_finite())
+            && [a, a_u, a_v, a_q]
+                .iter()
+                .all(|x| x.iter().all(|y| y.is_finite()))
+            && [s, s_u, s_v, s_q]
+                .iter()
+                .all(|x| x.iter().all(|y| y.is_finite()));
+        if !sums_finite {
+            return None;
+        }
+        let chol = wtw.cholesky()?;
+        let g = chol.solve(&wtv);
+        // M = V^T V - (W^T V)^T G, symmetric by construction: the upper triangle is computed
+        // and mirrored (45 of the 81 entries).
+        let mut m = vtv;
+        let mut finite = g.iter().all(|x| x.is_finite());
+        for i in 0..9 {
+            for j in i..9 {
+                let v = vtv[(i, j)]
+                    - (wtv[(0, i)] * g[(0, j)] + wtv[(1, i)] * g[(1, j)] + wtv[(2, i)] * g[(2, j)]);
+                finite &= v.is_finite();
+                m[(i, j)] = v;
+                m[(j, i)] = v;
+            }
+        }
+        if !finite {
+            return None;
+        }
+        Some(System {
+            m,
+            g,
+            trace: m.trace(),
+        })
+    }
+}
+
+impl System {
+    /// `t = G vec(R)` (working frame).
+    pub(crate) fn translation(&self, r: &Matrix3<f64>) -> Vector3<f64> {
+        let rv = SMatrix::<f64, 9, 1>::from_row_slice(r.transpose().as_slice());
+        self.g * rv
+    }
+}
+
+/// Upper triangle of a symmetric 9 x 9 matrix, row by row: (0,0), (0,1), ..., (0,8), (1,1),
+/// ..., (8,8) (the input order of the generated kernels).
+pub(crate) fn m_upper(m: &SMatrix<f64, 9, 9>) -> [f64; 45] {
+    let mut out = [0.0; 45];
+    let mut k = 0;
+    for i in 0..9 {
+        for j in i..9 {
+            out[k] = m[(i, j)];
+            k += 1;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+pub(crate) mod tests;

@@ -1,0 +1,250 @@
+//! S6 of ALGORITHM.md: damped Newton on SO(3) in moving CGR coordinates.
+//!
+//! Minimises `f(R) = vec(R)^T M vec(R)` from a starting rotation. Every iteration works in the
+//! CGR chart centred on the current estimate `R_k` (`s -> R(s) R_k`, `s = 0` at `R_k`), so the
+//! 180-degree singularity of the CGR map never matters (trap T1) and the iteration converges
+//! to a stationary point of `f` itself, not of the chart-dependent `C(s)` (T2).
+//!
+//! | symbol | meaning |
+//! |---|---|
+//! | `f, g, H_C` | local model at `R_k` from `crate::kernels::so3_local_model` |
+//! | `H` | `H_C - 4 f I`, the exact Hessian of `F_k(s) = f(R(s) R_k)` at 0 (T3) |
+//! | `shift` | `max(0, -lambda_min(H))`, smallest eigenvalue by 3 x 3 Jacobi (T4) |
+//! | `mu` | damping: `lambda = mu * scale + shift`, `scale = trace(M)` |
+//! | `d` | step `-(H + lambda I)^-1 g` (hand-written 3 x 3 Cholesky) |
+//!
+//! Acceptance: `f' < f`, or `f' <= f + accept_floor * scale` and `|g'| < |g|` (the rounding
+//! floor of T5, needed to reach ~1e-13 deg on noise-free data). `mu` x10 after a rejected step
+//! (or a failed Cholesky), /10 (floor 1e-15) after an accepted one; stop when no step is
+//! accepted before `mu > mu_max`, when `|d| <= step_tolerance`, when quadratic convergence
+//! predicts the next step at or below `step_tolerance / 1000` (`|d_k|^3 / |d_k-1|^2` for two
+//! consecutive undamped Newton steps (H positive definite, mu <= mu0), with
+//! `|d_k| < |d_k-1| / 10`: saves the last, confirming iteration), or at `max_iterations`.
+//! Every loop is bounded: at most `max_iterations` outer iterations, each with at most
+//! `bounds::NEWTON_MAX_DAMPING_STEPS` trial steps. A trial step first evaluates only `f'` (the quadratic
+//! form, 45 entries of M); the local-model kernel runs only for a step that may be accepted.
+//! Over half of the trial steps of the N = 4 search are rejected.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::kernels::so3_local_model;
+use crate::numeric::bounds::{Bound, Budget};
+use crate::numeric::mat3::{cholesky3, cholesky3_solve, min_eigenvalue_sym3};
+use crate::numeric::rotation::cgr_to_rotation;
+
+/// Options of [`refine_so3`] (ALGORITHM.md S0 table).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct NewtonOptions {
+    /// Maximum number of iterations. Default: 50.
+    pub max_iterations: u32,
+    /// Stop when the accepted step has norm `<= step_tolerance` (CGR units ~ radians / 2).
+    /// Default: 1e-12.
+    pub step_tolerance: f64,
+    /// Initial damping factor (relative to `scale`). Default: 1e-6.
+    pub mu0: f64,
+    /// Give up (stop) when the damping factor exceeds this. Default: 1e8.
+    pub mu_max: f64,
+    /// Acceptance floor relative to `scale`. Default: 1e-13.
+    pub accept_floor: f64,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        Self {
+            max_iterations: 50,
+            step_tolerance: 1e-12,
+            mu0: 1e-6,
+            mu_max: 1e8,
+            accept_floor: 1e-13,
+        }
+    }
+}
+
+/// Result of [`refine_so3`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Refined {
+    /// The refined rotation.
+    pub r: Matrix3<f64>,
+    /// `f(r) = vec(r)^T M vec(r)`.
+    pub f: f64,
+    /// Number of iterations run (each evaluates one or more trial steps).
+    pub iterations: u32,
+    /// True if the iteration cap stopped the refinement (neither the step tolerance nor the
+    /// damping limit did).
+    pub hit_limit: bool,
+    /// True if the caller's stop predicate ended the refinement.
+    pub stopped_early: bool,
+}
+
+/// Row-major `vec(R)`.
+fn row_major(r: &Matrix3<f64>) -> [f64; 9] {
+    [
+        r[(0, 0)],
+        r[(0, 1)],
+        r[(0, 2)],
+        r[(1, 0)],
+        r[(1, 1)],
+        r[(1, 2)],
+        r[(2, 0)],
+        r[(2, 1)],
+        r[(2, 2)],
+    ]
+}
+
+/// `f(R) = vec(R)^T M vec(R)` from the upper triangle `m45` (row-major `vec`, order of
+/// `COST_M_UPPER`): a quarter of the work of the local model; the trial steps, and the
+/// solver's values of f.
+pub(crate) fn cost_at(m45: &[f64; 45], r: &Matrix3<f64>) -> f64 {
+    let v = row_major(r);
+    let mut k = 0;
+    let mut f = 0.0;
+    for i in 0..9 {
+        // v_i (M_ii v_i / 2 + sum_{j > i} M_ij v_j), doubled below.
+        let mut s = 0.5 * m45[k] * v[i];
+        k += 1;
+        for vj in &v[i + 1..] {
+            s += m45[k] * vj;
+            k += 1;
+        }
+        f += v[i] * s;
+    }
+    2.0 * f
+}
+
+/// The local model at `r`: `(f, g, H)` with `H = H_C - 4 f I` (the exact Hessian of f).
+fn local_model(m45: &[f64; 45], r: &Matrix3<f64>) -> (f64, Vector3<f64>, Matrix3<f64>) {
+    let k = so3_local_model(m45, &row_major(r));
+    let f = k[0];
+    let g = Vector3::new(k[1], k[2], k[3]);
+    #[rustfmt::skip]
+    let hc = Matrix3::new(
+        k[4], k[5], k[6],
+        k[5], k[7], k[8],
+        k[6], k[8], k[9],
+    );
+    (f, g, hc - Matrix3::identity() * (4.0 * f))
+}
+
+/// S6: refine the rotation `r0` to a stationary point (normally a local minimum) of
+/// `f(R) = vec(R)^T M vec(R)` over SO(3).
+///
+/// `m45` is the upper triangle of M (`crate::pipeline::moments::m_upper`); `scale` is `trace(M)`
+/// (values that are not positive and finite are replaced by 1e-300, as in the prototype).
+/// `r0` must be a rotation. The returned `f` never exceeds `f(r0) + k * accept_floor * scale`
+/// after `k` accepted steps (it decreases except within the rounding floor).
+pub(crate) fn refine_so3(
+    m45: &[f64; 45],
+    scale: f64,
+    r0: &Matrix3<f64>,
+    opts: &NewtonOptions,
+) -> Refined {
+    refine_so3_until(m45, scale, r0, opts, &mut |_| false)
+}
+
+/// As [`refine_so3`], but stops early (with `stopped_early = true`) as soon as `stop` returns
+/// true for an accepted iterate. The solver uses it to abandon a trajectory once it has entered
+/// the neighbourhood of a local minimum that is already known.
+pub(crate) fn refine_so3_until(
+    m45: &[f64; 45],
+    scale: f64,
+    r0: &Matrix3<f64>,
+    opts: &NewtonOptions,
+    stop: &mut dyn FnMut(&Matrix3<f64>) -> bool,
+) -> Refined {
+    let scale = if scale.is_finite() && scale > 1e-300 {
+        scale
+    } else {
+        1e-300
+    };
+    let floor = opts.accept_floor * scale;
+    let mut r = *r0;
+    let (_, mut g, mut h) = local_model(m45, &r);
+    // Acceptance compares values of one evaluation order: `cost_at` throughout.
+    let mut f = cost_at(m45, &r);
+    let mut mu = opts.mu0;
+    let mut iterations = 0u32;
+    let mut hit_limit = true;
+    let mut stopped_early = false;
+    let mut d_prev = f64::INFINITY;
+    for it in 0..opts.max_iterations {
+        iterations = it + 1;
+        // shift = max(0, -lambda_min(H)); a successful Cholesky of H proves lambda_min > 0
+        // (shift 0), so the eigenvalue is only computed for an indefinite H.
+        let shift = if cholesky3(&h).is_some() {
+            0.0
+        } else {
+            (-min_eigenvalue_sym3(&h)).max(0.0)
+        };
+        let gnorm = g.norm();
+        let mut accepted = None;
+        let mut damping = Budget::new(Bound::NewtonDamping);
+        while damping.next() {
+            // Also stops on a NaN mu or mu_max.
+            if !matches!(
+                mu.partial_cmp(&opts.mu_max),
+                Some(core::cmp::Ordering::Less | core::cmp::Ordering::Equal)
+            ) {
+                break;
+            }
+            let a = h + Matrix3::identity() * (mu * scale + shift);
+            let Some(l) = cholesky3(&a) else {
+                mu *= 10.0;
+                continue;
+            };
+            let d = -cholesky3_solve(&l, &g);
+            let rn = cgr_to_rotation(&d) * r;
+            let fnew = cost_at(m45, &rn);
+            if fnew <= f + floor {
+                let (_, gnew, hnew) = local_model(m45, &rn);
+                if fnew < f || gnew.norm() < gnorm {
+                    accepted = Some((d, rn, fnew, gnew, hnew));
+                    break;
+                }
+            }
+            mu *= 10.0;
+        }
+        let Some((d, rn, fnew, gnew, hnew)) = accepted else {
+            hit_limit = false;
+            break;
+        };
+        r = rn;
+        f = fnew;
+        g = gnew;
+        h = hnew;
+        // A Newton step: H positive definite and no damping escalation in this iteration.
+        let newton_step = shift == 0.0 && mu <= opts.mu0;
+        mu = (mu / 10.0).max(1e-15);
+        let dn = d.norm();
+        if dn <= opts.step_tolerance {
+            hit_limit = false;
+            break;
+        }
+        // Quadratic convergence (|d_k+1| ~ C |d_k|^2, C estimated from the last two Newton
+        // steps): when the predicted next step is 1000x below the tolerance (below rounding at
+        // the default), it is not computed.
+        if newton_step
+            && d_prev.is_finite()
+            && dn < 0.1 * d_prev
+            && dn * (dn / d_prev) * (dn / d_prev) <= 1e-3 * opts.step_tolerance
+        {
+            hit_limit = false;
+            break;
+        }
+        d_prev = if newton_step { dn } else { f64::INFINITY };
+        if stop(&r) {
+            hit_limit = false;
+            stopped_early = true;
+            break;
+        }
+    }
+    Refined {
+        r,
+        f,
+        iterations,
+        hit_limit,
+        stopped_early,
+    }
+}
+
+#[cfg(test)]
+mod tests;

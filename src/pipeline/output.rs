@@ -1,0 +1,218 @@
+//! S8 of ALGORITHM.md, with S9 before it in the default mode: a refined minimum in the working
+//! frame becomes the returned [`Solution`]. S9 moves it to the minimum of the reprojection
+//! error ([`super::reprojection`]); the pose is carried back to the world frame, and its
+//! costs, cheirality and diagnostics are filled in. The only way out of the solver: a pose that
+//! is not finite in the world frame is [`PnpError::NoSolution`], never an `Ok`.
+
+use arrayvec::ArrayVec;
+use nalgebra::{Isometry3, Matrix3, Point2, Point3, Translation3, Vector3};
+
+use super::frame::WorkingFrame;
+use super::newton;
+use super::nullspace::{CandidateSource, MAX_CANDIDATES};
+use super::options::Refinement;
+use super::reprojection::{self, ReprojOptions};
+use super::select::{in_front, Minimum};
+use crate::error::PnpError;
+use crate::numeric::rotation::to_unit_quaternion;
+
+/// A camera pose and how it was found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Solution {
+    /// World-to-camera pose: `x_cam = R X + t`.
+    pub pose: Isometry3<f64>,
+    /// The rotation `R` as a matrix (the same rotation as `pose.rotation`, without the
+    /// quaternion round trip).
+    pub rotation: Matrix3<f64>,
+    /// The minimised cost: the (weighted) sum of squared normalised reprojection residuals in
+    /// [`Refinement::Reprojection`] mode, `f / trace(M)` in [`Refinement::Algebraic`] mode.
+    pub cost: f64,
+    /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (ALGORITHM.md S7).
+    pub algebraic_cost: f64,
+    /// Root-mean-square normalised reprojection residual (weighted), in units of the focal
+    /// length: multiply by `f` for pixels. `f64::INFINITY` if a point lies in the focal plane
+    /// (depth 0) of the returned pose, which can happen only in [`Refinement::Algebraic`] mode
+    /// (in the default mode such a pose is never returned).
+    pub reprojection_rmse: f64,
+    /// More than half of the points (with non-zero weight) are in front of the camera.
+    pub cheirality_ok: bool,
+    /// More than four eigenvalues of `M` are below `1e-10 trace(M)`: the configuration is close
+    /// to degenerate and the pose may be ambiguous (ALGORITHM.md S7, section 6).
+    pub degenerate: bool,
+    /// Whether the planar branch produced this pose's starting candidate.
+    pub planar: bool,
+    /// The candidate generator of the winning start.
+    pub source: CandidateSource,
+    /// Damped-Newton iterations (S6) of the winning candidate.
+    pub newton_iterations: u32,
+    /// Levenberg-Marquardt iterations of the reprojection refinement (S9; 0 in algebraic mode).
+    pub reprojection_iterations: u32,
+}
+
+/// Every distinct local minimum found, best first (see [`crate::Solver::solve_all`]).
+pub type Solutions = ArrayVec<Solution, MAX_CANDIDATES>;
+
+/// What S8 and S9 need of the problem.
+pub(crate) struct Output<'a> {
+    pub world: &'a [Point3<f64>],
+    pub image: &'a [Point2<f64>],
+    pub weights: Option<&'a [f64]>,
+    pub fr: &'a WorkingFrame,
+    /// Upper triangle of M (`moments::m_upper`).
+    pub m45: &'a [f64; 45],
+    pub degenerate: bool,
+    /// `trace(M)`.
+    pub scale: f64,
+}
+
+impl Output<'_> {
+    /// S9 (optional) and S8 for one minimum. The only way out of the solver: a pose that is not
+    /// finite in the world frame (e.g. a translation that overflows when the working-frame
+    /// scale is undone) is [`PnpError::NoSolution`], never an `Ok`.
+    pub(crate) fn finish(
+        &self,
+        m: &Minimum,
+        mode: Refinement,
+        opts: &ReprojOptions,
+    ) -> Result<Solution, PnpError> {
+        let (mut r, mut t) = (m.r, m.t);
+        let mut iters = 0;
+        // What S9 already knows at its final pose: the cost (equal to the reprojection error
+        // when the two residual rows are not reweighted) and the depth signs, which it never
+        // changes (a step that moves a point across z = 0 is rejected).
+        let mut s9_error = None;
+        let mut depth_signs_kept = false;
+        if mode == Refinement::Reprojection {
+            let out = reprojection::refine_reprojection(
+                self.world,
+                self.image,
+                self.weights,
+                &self.fr.c,
+                self.fr.d,
+                &self.fr.rw,
+                &r,
+                &t,
+                opts,
+            );
+            if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
+                r = out.r;
+                t = out.t;
+                if out.stop != reprojection::ReprojStop::SkippedZeroDepth {
+                    depth_signs_kept = true;
+                    if opts.row_weights == (1.0, 1.0) && out.e.is_finite() {
+                        s9_error = Some(out.e);
+                    }
+                }
+            }
+            iters = out.iterations;
+        }
+        // M is positive semi-definite, so f >= 0 in exact arithmetic. With wildly scaled input
+        // (found by fuzzing: an image coordinate of 3e9) the accumulated M is not PSD to
+        // working precision and r^T M r comes out negative; the nearest admissible value is 0.
+        let f = newton::cost_at(self.m45, &r).max(0.0);
+        let cheirality = match m.cheirality {
+            Some(c) if mode == Refinement::Algebraic || depth_signs_kept => c,
+            _ => in_front(self.world, self.weights, self.fr, &r, &t),
+        };
+        let (rw, tw) = self.fr.to_world(&r, &t);
+        let (e, wsum) = match s9_error {
+            Some(e) => (
+                e,
+                self.weights
+                    .map_or(self.fr.n_active as f64, |w| w.iter().sum::<f64>()),
+            ),
+            None => reprojection_error(self.world, self.image, self.weights, &rw, &tw),
+        };
+        let rot = to_unit_quaternion(&rw);
+        let sol = Solution {
+            pose: Isometry3::from_parts(Translation3::from(tw), rot),
+            rotation: rw,
+            cost: if mode == Refinement::Algebraic {
+                f / self.scale
+            } else {
+                e
+            },
+            algebraic_cost: f / self.scale,
+            // Infinite (not NaN) when a point lies in the focal plane (depth 0) of the pose,
+            // which only an algebraic-mode pose can do (see below).
+            reprojection_rmse: if e.is_finite() && wsum > 0.0 {
+                (e / wsum).sqrt()
+            } else {
+                f64::INFINITY
+            },
+            cheirality_ok: cheirality,
+            degenerate: self.degenerate,
+            planar: m.planar,
+            source: m.source,
+            newton_iterations: m.iterations,
+            reprojection_iterations: iters,
+        };
+        // Reprojection mode promises the maximum-likelihood pose; a pose with a point at depth
+        // 0 has an infinite reprojection error and is not one (found by fuzzing, with an image
+        // coordinate of 3.5e16).
+        if mode == Refinement::Reprojection && !e.is_finite() {
+            return Err(PnpError::NoSolution);
+        }
+        let finite = sol.rotation.iter().all(|x| x.is_finite())
+            && sol.pose.translation.vector.iter().all(|x| x.is_finite())
+            && sol.pose.rotation.coords.iter().all(|x| x.is_finite());
+        if finite {
+            Ok(sol)
+        } else {
+            Err(PnpError::NoSolution)
+        }
+    }
+}
+
+/// `solve_all`: every distinct minimum finished (S9, S8), duplicates (poses within 1e-6)
+/// dropped, ranked cheirality-valid first, then by increasing reprojection error.
+pub(crate) fn rank_all(
+    out: &Output<'_>,
+    minima: &[Minimum],
+    mode: Refinement,
+    opts: &ReprojOptions,
+    all: &mut Solutions,
+) -> Result<Solution, PnpError> {
+    for m in minima {
+        let Ok(s) = out.finish(m, mode, opts) else {
+            continue;
+        };
+        if !all.iter().any(|o: &Solution| {
+            (o.rotation - s.rotation).norm() <= 1e-6
+                && (o.pose.translation.vector - s.pose.translation.vector).norm()
+                    <= 1e-6 * (1.0 + s.pose.translation.vector.norm())
+        }) {
+            all.push(s);
+        }
+    }
+    all.sort_by(|a, b| {
+        (!a.cheirality_ok)
+            .cmp(&!b.cheirality_ok)
+            .then(a.reprojection_rmse.total_cmp(&b.reprojection_rmse))
+    });
+    all.first().copied().ok_or(PnpError::NoSolution)
+}
+
+/// Weighted sum of squared normalised reprojection residuals of a world-frame pose, and the
+/// weight sum. Points at or behind the camera plane contribute an infinite residual.
+fn reprojection_error(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> (f64, f64) {
+    let (mut e, mut wsum) = (0.0, 0.0);
+    for (i, (x, m)) in world.iter().zip(image).enumerate() {
+        let w = weights.map_or(1.0, |w| w[i]);
+        if w == 0.0 {
+            continue;
+        }
+        let p = r * x.coords + t;
+        let (du, dv) = (m.x - p.x / p.z, m.y - p.y / p.z);
+        e += w * (du * du + dv * dv);
+        wsum += w;
+    }
+    (e, wsum)
+}
