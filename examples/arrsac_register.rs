@@ -7,10 +7,10 @@
 //!
 //! For each outlier level (0 %, 50 %, 80 %) every image's correspondences get the injected
 //! wrong 3D points of `eopnp register --outliers L --seed S` ([`image_problem`]: the same
-//! [`eopnp::ransac::inject_outliers`] draw, noise 0.5 model units, seed mixed with the image
+//! [`eopnp::colmap::inject_outliers`] draw, noise 0.5 model units, seed mixed with the image
 //! id), then:
 //!
-//! - `eopnp::ransac`: [`register_image`] (threshold 4 px, seed `S`);
+//! - `eopnp::ransac`: [`register_image_ransac`] (threshold 4 px, seed `S`);
 //! - `arrsac + P3pEstimator`: the pixels are undistorted, ARRSAC ([`Arrsac::new`] with its
 //!   default options, threshold 4 px on [`PoseModel`]'s pixel residual, a PCG generator seeded
 //!   with `S`) finds the inliers, and EOPnP ([`eopnp::camera::solve_pixels`]) refits on them;
@@ -27,10 +27,11 @@
 use std::time::Instant;
 
 use arrsac::Arrsac;
+use eopnp::colmap::{image_problem, register_image_ransac, ImageProblem, Outliers};
 use eopnp::colmap::{read_model, Model};
 use eopnp::metrics::{rotation_error_deg, translation_error_pct};
 use eopnp::ransac::consensus::{Correspondence, P3pEstimator};
-use eopnp::ransac::{image_problem, register_image, ImageProblem, Outliers, Ransac};
+use eopnp::ransac::Ransac;
 use eopnp::Solver;
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use rand_core::SeedableRng;
@@ -103,7 +104,7 @@ fn run(
     let solver = Solver::default();
     if method == Method::Eopnp {
         let ransac = Ransac::default().threshold_px(THRESHOLD_PX).seed(seed);
-        return match register_image(model, image_id, &ransac, &solver, Some(outliers)) {
+        return match register_image_ransac(model, image_id, &ransac, &solver, Some(outliers)) {
             Ok((reg, _, _)) => (
                 Some((reg.solution.rotation, reg.solution.pose.translation.vector)),
                 reg.micros * 1e-3,

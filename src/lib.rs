@@ -53,9 +53,8 @@ pub mod colmap;
 mod error;
 pub mod kernels;
 mod numeric;
-pub mod p3p;
 mod pipeline;
-pub mod ransac;
+mod robust;
 mod solver;
 #[cfg(test)]
 mod test_data;
@@ -66,6 +65,7 @@ pub use numeric::roots;
 #[doc(hidden)]
 pub use pipeline::bench_hooks;
 pub use pipeline::{CandidateSource, PlanarDetection, Refinement, Solution, Solutions};
+pub use robust::{p3p, ransac};
 pub use solver::{solve, CameraSolution, Solver};
 
 /// Error metrics of ALGORITHM.md section 1 (the paper's).

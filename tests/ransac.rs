@@ -3,8 +3,9 @@
 
 use std::path::PathBuf;
 
+use eopnp::colmap::{self, Outliers};
 use eopnp::colmap::{read_model, Model};
-use eopnp::ransac::{self, Outliers, Ransac};
+use eopnp::ransac::Ransac;
 use eopnp::Solver;
 
 fn model() -> Model {
@@ -55,9 +56,10 @@ fn run_level(model: &Model, ransac: &Ransac, fraction: f64, seed: u64) -> (Level
     let (mut r, mut t, mut ms) = (vec![], vec![], vec![]);
     let (mut fr, mut ft, mut fms) = (vec![], vec![], vec![]);
     for &id in model.images.keys() {
-        let (reg, sol, problem) = ransac::register_image(model, id, ransac, &solver, Some(&o))
-            .unwrap_or_else(|e| panic!("image {id} at {fraction}: {e}"));
-        let floor = ransac::floor(model, id, &problem, &solver).unwrap();
+        let (reg, sol, problem) =
+            colmap::register_image_ransac(model, id, ransac, &solver, Some(&o))
+                .unwrap_or_else(|e| panic!("image {id} at {fraction}: {e}"));
+        let floor = colmap::floor(model, id, &problem, &solver).unwrap();
         let truth = problem.truth.iter().filter(|b| **b).count();
         let tp = sol
             .inliers
@@ -139,7 +141,7 @@ fn same_seed_same_result() {
     let id = *model.images.keys().next().unwrap();
     let run = |seed: u64| {
         let r = Ransac::default().seed(seed);
-        let (_, sol, p) = ransac::register_image(&model, id, &r, &solver, Some(&o)).unwrap();
+        let (_, sol, p) = colmap::register_image_ransac(&model, id, &r, &solver, Some(&o)).unwrap();
         (
             sol.solution.pose,
             sol.inliers,

@@ -510,7 +510,8 @@ fn exercise_model(model: &eopnp::colmap::Model) {
         if let Ok(reg) = eopnp::colmap::register_image(model, id, &solver) {
             check_solution(&reg.solution);
         }
-        if let Ok((reg, sol, _)) = eopnp::ransac::register_image(model, id, &ransac, &solver, None)
+        if let Ok((reg, sol, _)) =
+            eopnp::colmap::register_image_ransac(model, id, &ransac, &solver, None)
         {
             check_solution(&reg.solution);
             check_solution(&sol.solution);

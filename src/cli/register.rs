@@ -6,7 +6,8 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use crate::colmap::{self, Model, RegisterError, Registration};
-use crate::ransac::{self, ImageProblem, Outliers, Ransac, RansacStats};
+use crate::colmap::{ImageProblem, Outliers};
+use crate::ransac::{Ransac, RansacStats};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
@@ -69,10 +70,10 @@ fn estimate(
         });
         return (result, None);
     }
-    let problem = ransac::image_problem(model, image_id, spec.as_ref());
+    let problem = colmap::image_problem(model, image_id, spec.as_ref());
     let floor = spec
         .as_ref()
-        .and_then(|_| ransac::floor(model, image_id, &problem, &solver).ok());
+        .and_then(|_| colmap::floor(model, image_id, &problem, &solver).ok());
     let mut extra = Extra {
         stats: None,
         true_correspondences: problem.truth.iter().filter(|b| **b).count(),
@@ -81,7 +82,7 @@ fn estimate(
     };
     let result = if opts.ransac {
         let r = opts.ransac_options();
-        let run = || ransac::register_image(model, image_id, &r, &solver, spec.as_ref());
+        let run = || colmap::register_image_ransac(model, image_id, &r, &solver, spec.as_ref());
         run().and_then(|(mut best, sol, _)| {
             for _ in 0..2 {
                 best.micros = best.micros.min(run()?.0.micros);
@@ -123,7 +124,7 @@ fn plain_on_problem(
         sol = Some(s);
     }
     let s = sol.ok_or(RegisterError::UnknownImage(image_id))?;
-    let mut reg = ransac::registration(model, image_id, problem, &s.solution, s.used)?;
+    let mut reg = colmap::registration(model, image_id, problem, &s.solution, s.used)?;
     reg.micros = best;
     Ok(reg)
 }
@@ -144,7 +145,7 @@ fn export_problems(model: &Model, opts: &RegisterOptions) -> String {
         .iter()
         .filter_map(|(id, img)| {
             let cam = model.cameras.get(&img.camera_id)?;
-            let p = ransac::image_problem(model, *id, spec.as_ref());
+            let p = colmap::image_problem(model, *id, spec.as_ref());
             let (r, t) = img.pose();
             Some(json!({
                 "image_id": id,

@@ -1,4 +1,6 @@
+use super::binary::{parse_cameras_bin, parse_images_bin, parse_points_bin};
 use super::*;
+use nalgebra::Matrix3;
 
 #[test]
 fn quaternion_matrix_is_a_rotation_and_matches_nalgebra() {

@@ -55,10 +55,9 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg64;
 
+use super::p3p::p3p;
 use crate::camera::Camera;
-use crate::colmap::{Model, RegisterError, Registration};
 use crate::error::{InputKind, PnpError};
-use crate::p3p::p3p;
 use crate::{Solution, Solver};
 
 /// Maximum EOPnP refits per local optimisation.
@@ -311,12 +310,12 @@ impl FitBuffers {
 /// Uniform index in `0..n` (Lemire's multiply-shift; the bias, below `n / 2^64`, is
 /// irrelevant here and the mapping is the same on every platform).
 #[inline]
-fn index(rng: &mut Pcg64, n: usize) -> usize {
+pub(crate) fn index(rng: &mut Pcg64, n: usize) -> usize {
     ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
 }
 
 /// Standard normal deviate (Box-Muller on two uniform draws).
-fn normal(rng: &mut Pcg64) -> f64 {
+pub(crate) fn normal(rng: &mut Pcg64) -> f64 {
     let u1 = ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
     let u2 = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
     (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
@@ -665,280 +664,8 @@ fn sample3(rng: &mut Pcg64, n: usize) -> Option<[usize; 3]> {
     (a != b && a != c && b != c).then_some([a, b, c])
 }
 
-/// Replaces `round(fraction * N)` of the correspondences' world points, chosen uniformly
-/// without replacement, by wrong ones: a uniformly chosen point of `cloud` plus Gaussian noise
-/// of standard deviation `noise` in each coordinate, all drawn from a PCG generator seeded with
-/// `seed`. Returns the mask of the **true** (unchanged) correspondences. A test and
-/// benchmarking tool (`eopnp register --outliers`); `fraction` is clamped to `[0, 1]`, an
-/// empty cloud changes nothing.
-pub fn inject_outliers(
-    world: &mut [Point3<f64>],
-    cloud: &[Point3<f64>],
-    fraction: f64,
-    noise: f64,
-    seed: u64,
-) -> Vec<bool> {
-    let n = world.len();
-    let mut truth = vec![true; n];
-    if cloud.is_empty() || !(fraction > 0.0) {
-        return truth;
-    }
-    let k = ((fraction.min(1.0) * n as f64).round() as usize).min(n);
-    let mut rng = Pcg64::seed_from_u64(seed);
-    let mut order: Vec<usize> = (0..n).collect();
-    // Partial Fisher-Yates: the first k entries are a uniform k-subset.
-    for i in 0..k {
-        let j = i + index(&mut rng, n - i);
-        order.swap(i, j);
-    }
-    let noise = if noise.is_finite() { noise.abs() } else { 0.0 };
-    for &i in &order[..k] {
-        let p = cloud[index(&mut rng, cloud.len())];
-        let d = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * noise;
-        world[i] = p + d;
-        truth[i] = false;
-    }
-    truth
-}
-
-/// The per-image seed of [`register_image`]'s outlier injection: `seed` mixed with the image
-/// id (SplitMix64 finaliser), so images get independent wrong points.
-#[must_use]
-pub fn image_seed(seed: u64, image_id: u32) -> u64 {
-    let mut z = seed ^ u64::from(image_id).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// Injected outliers for [`register_image`] (see [`inject_outliers`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Outliers {
-    /// Fraction of each image's correspondences replaced by wrong 3D points.
-    pub fraction: f64,
-    /// Standard deviation of the noise added to the wrong points (model units).
-    pub noise: f64,
-    /// Seed (mixed with the image id, [`image_seed`]).
-    pub seed: u64,
-}
-
-/// One image's 2D-3D problem of a model, with injected outliers.
-#[derive(Clone, Debug)]
-#[non_exhaustive]
-pub struct ImageProblem {
-    /// World points (wrong ones where `truth` is false).
-    pub world: Vec<Point3<f64>>,
-    /// Observed pixels.
-    pub pixels: Vec<Point2<f64>>,
-    /// `truth[i]`: correspondence `i` is the model's (not replaced).
-    pub truth: Vec<bool>,
-}
-
-/// The correspondences of image `image_id` ([`Model::correspondences`]) with
-/// `outliers.fraction` of them replaced by random points of the model's cloud plus noise.
-#[must_use]
-pub fn image_problem(model: &Model, image_id: u32, outliers: Option<&Outliers>) -> ImageProblem {
-    let (mut world, pixels) = model.correspondences(image_id);
-    let truth = match outliers {
-        Some(o) => {
-            let cloud: Vec<Point3<f64>> = model.points.values().map(|p| p.xyz).collect();
-            inject_outliers(
-                &mut world,
-                &cloud,
-                o.fraction,
-                o.noise,
-                image_seed(o.seed, image_id),
-            )
-        }
-        None => vec![true; world.len()],
-    };
-    ImageProblem {
-        world,
-        pixels,
-        truth,
-    }
-}
-
-/// [`crate::colmap::register_image`] with RANSAC ([`Ransac::estimate_pixels`]) on the image's
-/// correspondences, optionally with injected outliers ([`image_problem`]).
-/// `registration.inliers` is the RANSAC inlier count; the pixel RMSEs are over the true
-/// correspondences.
-///
-/// # Errors
-/// As [`crate::colmap::register_image`].
-pub fn register_image(
-    model: &Model,
-    image_id: u32,
-    ransac: &Ransac,
-    solver: &Solver,
-    outliers: Option<&Outliers>,
-) -> Result<(Registration, RansacSolution, ImageProblem), RegisterError> {
-    let (_, cam) = model.image_and_camera(image_id)?;
-    let problem = image_problem(model, image_id, outliers);
-    let sol = ransac.estimate_pixels(solver, cam, &problem.world, &problem.pixels)?;
-    let reg = registration(model, image_id, &problem, &sol.solution, sol.num_inliers)?;
-    let mut reg = reg;
-    reg.micros = sol.stats.micros;
-    Ok((reg, sol, problem))
-}
-
-/// A [`Registration`] of `solution` for image `image_id` (errors against the model's pose,
-/// pixel RMSEs over the true correspondences of `problem`).
-///
-/// # Errors
-/// [`RegisterError::UnknownImage`], [`RegisterError::UnknownCamera`].
-pub fn registration(
-    model: &Model,
-    image_id: u32,
-    problem: &ImageProblem,
-    solution: &Solution,
-    inliers: usize,
-) -> Result<Registration, RegisterError> {
-    let (img, cam) = model.image_and_camera(image_id)?;
-    let (r_ref, t_ref) = img.pose();
-    let r = solution.rotation;
-    let t = solution.pose.translation.vector;
-    let rmse = |r: &Matrix3<f64>, t: &Vector3<f64>| {
-        let (mut s, mut k) = (0.0, 0usize);
-        for ((x, px), ok) in problem
-            .world
-            .iter()
-            .zip(&problem.pixels)
-            .zip(&problem.truth)
-        {
-            if *ok {
-                let p = r * x.coords + t;
-                let q = cam.project(Point2::new(p.x / p.z, p.y / p.z));
-                s += (q - px).norm_squared();
-                k += 1;
-            }
-        }
-        if k == 0 {
-            f64::NAN
-        } else {
-            (s / k as f64).sqrt()
-        }
-    };
-    Ok(Registration {
-        image_id,
-        name: img.name.clone(),
-        n: problem.world.len(),
-        inliers,
-        skipped: 0,
-        solution: *solution,
-        rotation_error_deg: crate::metrics::rotation_error_deg(&r, &r_ref),
-        translation_error_pct: crate::metrics::translation_error_pct(&t, &t_ref),
-        rmse_px: rmse(&r, &t),
-        model_rmse_px: rmse(&r_ref, &t_ref),
-        micros: 0.0,
-    })
-}
-
-/// The floor of an image problem: EOPnP ([`crate::camera::solve_pixels`] with `solver`) on the
-/// true correspondences only, as a [`Registration`].
-///
-/// # Errors
-/// As [`crate::colmap::register_image`].
-pub fn floor(
-    model: &Model,
-    image_id: u32,
-    problem: &ImageProblem,
-    solver: &Solver,
-) -> Result<Registration, RegisterError> {
-    let (_, cam) = model.image_and_camera(image_id)?;
-    let (mut w, mut p) = (Vec::new(), Vec::new());
-    for ((x, px), ok) in problem
-        .world
-        .iter()
-        .zip(&problem.pixels)
-        .zip(&problem.truth)
-    {
-        if *ok {
-            w.push(*x);
-            p.push(*px);
-        }
-    }
-    let start = Instant::now();
-    let sol = solver.solve_camera(cam, &w, &p)?;
-    let micros = start.elapsed().as_secs_f64() * 1e6;
-    let mut reg = registration(model, image_id, problem, &sol.solution, sol.used)?;
-    reg.micros = micros;
-    Ok(reg)
-}
-
 /// `impl sample_consensus::Estimator` (feature `sample-consensus`), so rust-cv's consensus
 /// algorithms (e.g. `arrsac::Arrsac`) can drive the [`crate::p3p`] minimal solver; refit the
 /// consensus's inliers with [`Solver`] (EOPnP) afterwards, as [`Ransac`] does.
 #[cfg(feature = "sample-consensus")]
-pub mod consensus {
-    use arrayvec::ArrayVec;
-    use nalgebra::{Matrix3, Point2, Point3, Vector3};
-    use sample_consensus::{Estimator, Model};
-
-    use crate::p3p::{p3p, MAX_P3P_SOLUTIONS};
-
-    /// One 2D-3D correspondence: world point, normalised image point `(x/z, y/z)` and the
-    /// scale from normalised to pixel residuals (e.g. the focal length).
-    #[derive(Clone, Copy, Debug, PartialEq)]
-    pub struct Correspondence {
-        /// World point.
-        pub world: Point3<f64>,
-        /// Normalised image point.
-        pub image: Point2<f64>,
-        /// Pixels per normalised unit at this point.
-        pub pixel_scale: f64,
-    }
-
-    /// A world-to-camera pose `x_cam = R X + t`.
-    #[derive(Clone, Copy, Debug, PartialEq)]
-    pub struct PoseModel {
-        /// Rotation `R`.
-        pub rotation: Matrix3<f64>,
-        /// Translation `t`.
-        pub translation: Vector3<f64>,
-    }
-
-    impl Model<Correspondence> for PoseModel {
-        /// Pixel reprojection error (infinite behind the camera).
-        fn residual(&self, c: &Correspondence) -> f64 {
-            let p = self.rotation * c.world.coords + self.translation;
-            if !(p.z > 0.0) {
-                return f64::INFINITY;
-            }
-            let d = Point2::new(p.x / p.z, p.y / p.z) - c.image;
-            c.pixel_scale * d.norm()
-        }
-    }
-
-    /// The P3P minimal solver as a `sample_consensus::Estimator` (3 samples, up to 4 models).
-    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-    pub struct P3pEstimator;
-
-    impl Estimator<Correspondence> for P3pEstimator {
-        type Model = PoseModel;
-        type ModelIter = ArrayVec<PoseModel, MAX_P3P_SOLUTIONS>;
-        const MIN_SAMPLES: usize = 3;
-
-        /// Poses from the first three correspondences; none (rather than the trait's suggested
-        /// panic) if fewer are given or the triplet is degenerate.
-        fn estimate<I>(&self, mut data: I) -> Self::ModelIter
-        where
-            I: Iterator<Item = Correspondence> + Clone,
-        {
-            let (Some(a), Some(b), Some(c)) = (data.next(), data.next(), data.next()) else {
-                return ArrayVec::new();
-            };
-            let bearing = |c: &Correspondence| Vector3::new(c.image.x, c.image.y, 1.0);
-            p3p(
-                &[a.world, b.world, c.world],
-                &[bearing(&a), bearing(&b), bearing(&c)],
-            )
-            .into_iter()
-            .map(|p| PoseModel {
-                rotation: p.rotation,
-                translation: p.translation,
-            })
-            .collect()
-        }
-    }
-}
+pub mod consensus;

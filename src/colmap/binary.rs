@@ -1,0 +1,327 @@
+//! The binary format (`cameras.bin`, `images.bin`, `points3D.bin`; little-endian, COLMAP's
+//! `reconstruction_io` layout): the readers, bounded by the bytes present, and the writer.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use nalgebra::{Point2, Point3, Vector3};
+
+use super::model::{check_quaternion, Image, Images, Location, Model, ModelError, Point3D};
+use crate::camera::{Camera, CameraError, CameraModel};
+
+// Binary format (little-endian; COLMAP's reconstruction_io / read_write_model.py layout).
+
+struct Reader<'a> {
+    path: &'a Path,
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn err_at(&self, pos: usize, reason: impl Into<String>) -> ModelError {
+        ModelError {
+            file: self.path.to_path_buf(),
+            location: Location::Offset(pos as u64),
+            reason: reason.into(),
+        }
+    }
+
+    fn remaining(&self) -> usize {
+        self.bytes.len() - self.pos
+    }
+
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], ModelError> {
+        if self.remaining() < n {
+            return Err(self.err_at(
+                self.pos,
+                format!(
+                    "unexpected end of file reading {what}: need {n} bytes, {} left \
+                     (truncated file?)",
+                    self.remaining()
+                ),
+            ));
+        }
+        let s = &self.bytes[self.pos..self.pos + n];
+        self.pos += n;
+        Ok(s)
+    }
+
+    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], ModelError> {
+        let s = self.take(N, what)?;
+        let mut a = [0u8; N];
+        a.copy_from_slice(s);
+        Ok(a)
+    }
+
+    fn u64(&mut self, what: &str) -> Result<u64, ModelError> {
+        Ok(u64::from_le_bytes(self.array(what)?))
+    }
+
+    fn i64(&mut self, what: &str) -> Result<i64, ModelError> {
+        Ok(i64::from_le_bytes(self.array(what)?))
+    }
+
+    fn u32(&mut self, what: &str) -> Result<u32, ModelError> {
+        Ok(u32::from_le_bytes(self.array(what)?))
+    }
+
+    fn i32(&mut self, what: &str) -> Result<i32, ModelError> {
+        Ok(i32::from_le_bytes(self.array(what)?))
+    }
+
+    fn u8(&mut self, what: &str) -> Result<u8, ModelError> {
+        Ok(self.array::<1>(what)?[0])
+    }
+
+    fn f64(&mut self, what: &str) -> Result<f64, ModelError> {
+        let at = self.pos;
+        let v = f64::from_le_bytes(self.array(what)?);
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err_at(at, format!("{what} is not finite ({v})")))
+        }
+    }
+
+    /// A count of records of at least `min_size` bytes each, checked against the bytes left
+    /// (so a corrupt count can never cause a huge allocation or a long loop).
+    fn count(&mut self, what: &str, min_size: usize) -> Result<usize, ModelError> {
+        let at = self.pos;
+        let n = self.u64(what)?;
+        let fits = usize::try_from(n)
+            .ok()
+            .and_then(|n| n.checked_mul(min_size))
+            .is_some_and(|b| b <= self.remaining());
+        if !fits {
+            return Err(self.err_at(
+                at,
+                format!(
+                    "{what} = {n} needs at least {} bytes but only {} remain (corrupt or \
+                     truncated file?)",
+                    u128::from(n) * min_size as u128,
+                    self.remaining()
+                ),
+            ));
+        }
+        Ok(n as usize)
+    }
+
+    fn finish(&self) -> Result<(), ModelError> {
+        if self.remaining() == 0 {
+            Ok(())
+        } else {
+            Err(self.err_at(
+                self.pos,
+                format!("{} unexpected trailing bytes", self.remaining()),
+            ))
+        }
+    }
+}
+
+pub(super) fn parse_cameras_bin(
+    path: &Path,
+    bytes: &[u8],
+) -> Result<BTreeMap<u32, Camera>, ModelError> {
+    let mut r = Reader {
+        path,
+        bytes,
+        pos: 0,
+    };
+    let n = r.count("number of cameras", 24)?;
+    let mut cameras = BTreeMap::new();
+    for _ in 0..n {
+        let at = r.pos;
+        let id = r.u32("CAMERA_ID")?;
+        let model_id = r.i32("MODEL_ID")?;
+        let width = r.u64("WIDTH")?;
+        let height = r.u64("HEIGHT")?;
+        let model =
+            CameraModel::from_colmap_id(model_id).map_err(|e| r.err_at(at, e.to_string()))?;
+        let mut params = Vec::with_capacity(model.num_params());
+        for _ in 0..model.num_params() {
+            params.push(r.f64("camera parameter")?);
+        }
+        let cam = Camera::new(model, width, height, params)
+            .map_err(|e: CameraError| r.err_at(at, e.to_string()))?;
+        if cameras.insert(id, cam).is_some() {
+            return Err(r.err_at(at, format!("duplicate camera id {id}")));
+        }
+    }
+    r.finish()?;
+    Ok(cameras)
+}
+
+/// Longest image name accepted (bytes), a bound on the NUL search.
+const MAX_NAME: usize = 1 << 16;
+
+pub(super) fn parse_images_bin(path: &Path, bytes: &[u8]) -> Result<Images, ModelError> {
+    let mut r = Reader {
+        path,
+        bytes,
+        pos: 0,
+    };
+    // Smallest record: 4 + 7 * 8 + 4 + 1 (empty name's NUL) + 8 = 73 bytes.
+    let n = r.count("number of images", 73)?;
+    let mut images = BTreeMap::new();
+    let mut locs = BTreeMap::new();
+    for _ in 0..n {
+        let at = r.pos;
+        let id = r.u32("IMAGE_ID")?;
+        let mut q = [0.0; 4];
+        for v in &mut q {
+            *v = r.f64("quaternion")?;
+        }
+        check_quaternion(&q).map_err(|e| r.err_at(at, e))?;
+        let mut t = Vector3::zeros();
+        for k in 0..3 {
+            t[k] = r.f64("translation")?;
+        }
+        let camera_id = r.u32("CAMERA_ID")?;
+        let name_at = r.pos;
+        let window = &r.bytes[r.pos..r.bytes.len().min(r.pos + MAX_NAME + 1)];
+        let Some(len) = window.iter().position(|&b| b == 0) else {
+            return Err(r.err_at(
+                name_at,
+                "image name is not NUL-terminated (truncated file, or name longer than 64 KiB)",
+            ));
+        };
+        let name = std::str::from_utf8(&window[..len])
+            .map_err(|_| r.err_at(name_at, "image name is not valid UTF-8"))?
+            .to_string();
+        r.pos += len + 1;
+        let np = r.count("number of 2D points", 24)?;
+        let mut points2d = Vec::with_capacity(np);
+        for _ in 0..np {
+            let x = r.f64("observation x")?;
+            let y = r.f64("observation y")?;
+            let pat = r.pos;
+            let pid = r.i64("POINT3D_ID")?;
+            let pid = match pid {
+                -1 => None,
+                p if p >= 0 => Some(p as u64),
+                p => return Err(r.err_at(pat, format!("invalid POINT3D_ID {p}"))),
+            };
+            points2d.push((Point2::new(x, y), pid));
+        }
+        let img = Image {
+            id,
+            q,
+            t,
+            camera_id,
+            name,
+            points2d,
+        };
+        if images.insert(id, img).is_some() {
+            return Err(r.err_at(at, format!("duplicate image id {id}")));
+        }
+        locs.insert(id, Location::Offset(at as u64));
+    }
+    r.finish()?;
+    Ok((images, locs))
+}
+
+pub(super) fn parse_points_bin(
+    path: &Path,
+    bytes: &[u8],
+) -> Result<BTreeMap<u64, Point3D>, ModelError> {
+    let mut r = Reader {
+        path,
+        bytes,
+        pos: 0,
+    };
+    // Smallest record: 8 + 3 * 8 + 3 + 8 + 8 = 51 bytes.
+    let n = r.count("number of 3D points", 51)?;
+    let mut points = BTreeMap::new();
+    for _ in 0..n {
+        let at = r.pos;
+        let id = r.u64("POINT3D_ID")?;
+        let mut xyz = [0.0; 3];
+        for v in &mut xyz {
+            *v = r.f64("point coordinate")?;
+        }
+        let rgb = [r.u8("colour")?, r.u8("colour")?, r.u8("colour")?];
+        let error = f64::from_le_bytes(r.array("ERROR")?);
+        let nt = r.count("track length", 8)?;
+        let mut track = Vec::with_capacity(nt);
+        for _ in 0..nt {
+            track.push((r.u32("track IMAGE_ID")?, r.u32("track POINT2D_IDX")?));
+        }
+        let p = Point3D {
+            id,
+            xyz: Point3::new(xyz[0], xyz[1], xyz[2]),
+            rgb,
+            error,
+            track,
+        };
+        if points.insert(id, p).is_some() {
+            return Err(r.err_at(at, format!("duplicate 3D point id {id}")));
+        }
+    }
+    r.finish()?;
+    Ok(points)
+}
+
+/// Writes `model` in COLMAP's binary format (`cameras.bin`, `images.bin`, `points3D.bin`) to
+/// `dir`, which must exist. Reading it back with [`read_model_binary`] gives an identical
+/// model.
+///
+/// # Errors
+/// Any I/O error.
+pub fn write_model_binary(model: &Model, dir: impl AsRef<Path>) -> std::io::Result<()> {
+    let dir = dir.as_ref();
+    let mut b = Vec::new();
+    b.extend_from_slice(&(model.cameras.len() as u64).to_le_bytes());
+    for (id, cam) in &model.cameras {
+        b.extend_from_slice(&id.to_le_bytes());
+        b.extend_from_slice(&cam.model().colmap_id().to_le_bytes());
+        b.extend_from_slice(&cam.width().to_le_bytes());
+        b.extend_from_slice(&cam.height().to_le_bytes());
+        for p in cam.params() {
+            b.extend_from_slice(&p.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.join("cameras.bin"), &b)?;
+
+    b.clear();
+    b.extend_from_slice(&(model.images.len() as u64).to_le_bytes());
+    for img in model.images.values() {
+        if img.name.as_bytes().contains(&0) {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!("image {} name contains a NUL byte", img.id),
+            ));
+        }
+        b.extend_from_slice(&img.id.to_le_bytes());
+        for v in img.q.iter().chain(img.t.iter()) {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&img.camera_id.to_le_bytes());
+        b.extend_from_slice(img.name.as_bytes());
+        b.push(0);
+        b.extend_from_slice(&(img.points2d.len() as u64).to_le_bytes());
+        for (px, pid) in &img.points2d {
+            b.extend_from_slice(&px.x.to_le_bytes());
+            b.extend_from_slice(&px.y.to_le_bytes());
+            let id = pid.map_or(-1i64, |p| i64::try_from(p).unwrap_or(-1));
+            b.extend_from_slice(&id.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.join("images.bin"), &b)?;
+
+    b.clear();
+    b.extend_from_slice(&(model.points.len() as u64).to_le_bytes());
+    for p in model.points.values() {
+        b.extend_from_slice(&p.id.to_le_bytes());
+        for v in p.xyz.iter() {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&p.rgb);
+        b.extend_from_slice(&p.error.to_le_bytes());
+        b.extend_from_slice(&(p.track.len() as u64).to_le_bytes());
+        for (i, k) in &p.track {
+            b.extend_from_slice(&i.to_le_bytes());
+            b.extend_from_slice(&k.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.join("points3D.bin"), &b)
+}

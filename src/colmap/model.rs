@@ -1,0 +1,199 @@
+//! The reconstruction as read: images (pose, camera, observations), 3D points and cameras, and
+//! the errors of reading it.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::PathBuf;
+
+use nalgebra::{Matrix3, Point2, Point3, Vector3};
+
+use crate::camera::Camera;
+use crate::PnpError;
+
+/// An image of the reconstruction: its pose, camera and 2D observations.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Image id.
+    pub id: u32,
+    /// World-to-camera rotation as a quaternion `(qw, qx, qy, qz)` as stored in the file (not
+    /// renormalised; [`Image::pose`] normalises).
+    pub q: [f64; 4],
+    /// World-to-camera translation.
+    pub t: Vector3<f64>,
+    /// Id of the image's camera in [`Model::cameras`].
+    pub camera_id: u32,
+    /// Image name (may contain spaces).
+    pub name: String,
+    /// Observations: pixel and the id of the 3D point it observes (`None` if untriangulated).
+    pub points2d: Vec<(Point2<f64>, Option<u64>)>,
+}
+
+impl Image {
+    /// The model's pose `(R, t)` of this image, `x_cam = R X + t`, with `R` from the
+    /// normalised quaternion in closed form.
+    #[must_use]
+    pub fn pose(&self) -> (Matrix3<f64>, Vector3<f64>) {
+        (quaternion_to_matrix(self.q), self.t)
+    }
+}
+
+/// A triangulated 3D point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point3D {
+    /// Point id.
+    pub id: u64,
+    /// World coordinates.
+    pub xyz: Point3<f64>,
+    /// Colour.
+    pub rgb: [u8; 3],
+    /// Mean reprojection error reported by COLMAP, pixels.
+    pub error: f64,
+    /// Track: `(image id, index into that image's points2d)`.
+    pub track: Vec<(u32, u32)>,
+}
+
+/// A COLMAP sparse reconstruction.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Model {
+    /// Cameras by id.
+    pub cameras: BTreeMap<u32, Camera>,
+    /// Images by id.
+    pub images: BTreeMap<u32, Image>,
+    /// 3D points by id.
+    pub points: BTreeMap<u64, Point3D>,
+}
+
+impl Model {
+    /// An image and its camera.
+    ///
+    /// # Errors
+    /// [`RegisterError::UnknownImage`] or [`RegisterError::UnknownCamera`].
+    pub fn image_and_camera(&self, image_id: u32) -> Result<(&Image, &Camera), RegisterError> {
+        let img = self
+            .images
+            .get(&image_id)
+            .ok_or(RegisterError::UnknownImage(image_id))?;
+        let cam = self
+            .cameras
+            .get(&img.camera_id)
+            .ok_or(RegisterError::UnknownCamera(img.camera_id))?;
+        Ok((img, cam))
+    }
+
+    /// The 2D-3D correspondences of an image: world points and their observed (distorted)
+    /// pixels, in the order of the image's observations. Empty for an unknown image id.
+    /// (Every referenced 3D point exists: [`read_model`] checks this.)
+    #[must_use]
+    pub fn correspondences(&self, image_id: u32) -> (Vec<Point3<f64>>, Vec<Point2<f64>>) {
+        let Some(img) = self.images.get(&image_id) else {
+            return (Vec::new(), Vec::new());
+        };
+        img.points2d
+            .iter()
+            .filter_map(|(px, id)| {
+                let p = self.points.get(&(*id)?)?;
+                Some((p.xyz, *px))
+            })
+            .unzip()
+    }
+}
+
+/// Rotation matrix of a quaternion `(w, x, y, z)` (normalised first), closed form.
+/// A zero or non-finite quaternion gives a NaN matrix ([`read_model`] rejects those).
+#[must_use]
+pub fn quaternion_to_matrix(q: [f64; 4]) -> Matrix3<f64> {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    Matrix3::new(
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y - w * z),
+        2.0 * (x * z + w * y),
+        2.0 * (x * y + w * z),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z - w * x),
+        2.0 * (x * z - w * y),
+        2.0 * (y * z + w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    )
+}
+
+/// Where in a file an error is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// No particular place (e.g. the file cannot be opened).
+    File,
+    /// 1-based line number of a text file.
+    Line(usize),
+    /// Byte offset into a binary file.
+    Offset(u64),
+}
+
+/// An error reading a model: the file, where in it, and why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ModelError {
+    /// The file (or directory) concerned.
+    pub file: PathBuf,
+    /// Where in the file.
+    pub location: Location,
+    /// What is wrong.
+    pub reason: String,
+}
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let file = self.file.display();
+        match self.location {
+            Location::File => write!(f, "{file}: {}", self.reason),
+            Location::Line(l) => write!(f, "{file}:{l}: {}", self.reason),
+            Location::Offset(o) => write!(f, "{file}: at byte offset {o}: {}", self.reason),
+        }
+    }
+}
+
+impl std::error::Error for ModelError {}
+
+/// The images of a model and where each was read (for the cross-reference errors).
+pub(crate) type Images = (BTreeMap<u32, Image>, BTreeMap<u32, Location>);
+
+/// A quaternion must be finite and non-zero.
+pub(crate) fn check_quaternion(q: &[f64; 4]) -> Result<(), String> {
+    let n2: f64 = q.iter().map(|x| x * x).sum();
+    if n2.is_finite() && n2 > 1e-12 {
+        Ok(())
+    } else {
+        Err(format!(
+            "quaternion ({}, {}, {}, {}) is zero or not finite",
+            q[0], q[1], q[2], q[3]
+        ))
+    }
+}
+
+/// Errors of [`register_image`].
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum RegisterError {
+    /// No image with this id in the model.
+    UnknownImage(u32),
+    /// The image's camera is missing from the model.
+    UnknownCamera(u32),
+    /// The solver failed.
+    Solver(PnpError),
+}
+
+impl fmt::Display for RegisterError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RegisterError::UnknownImage(i) => write!(f, "no image with id {i} in the model"),
+            RegisterError::UnknownCamera(c) => write!(f, "no camera with id {c} in the model"),
+            RegisterError::Solver(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for RegisterError {}
+
+impl From<PnpError> for RegisterError {
+    fn from(e: PnpError) -> Self {
+        RegisterError::Solver(e)
+    }
+}
