@@ -274,5 +274,49 @@ fn sturm_count_below(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
     count
 }
 
+/// Solves `(H + lam I) delta = -g` by a 6 x 6 Cholesky factorisation; `None` if `H + lam I`
+/// is not (numerically) positive definite, including NaN entries.
+// Index loops mirror the textbook factorisation; `!(s > 0.0)` deliberately rejects NaN.
+#[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+pub(crate) fn solve_damped6(h: &[[f64; 6]; 6], lam: f64, g: &[f64; 6]) -> Option<[f64; 6]> {
+    let mut l = [[0.0; 6]; 6];
+    for j in 0..6 {
+        let mut s = h[j][j] + lam;
+        for k in 0..j {
+            s -= l[j][k] * l[j][k];
+        }
+        if !(s > 0.0) {
+            return None;
+        }
+        let ljj = s.sqrt();
+        l[j][j] = ljj;
+        for i in (j + 1)..6 {
+            let mut s = h[i][j];
+            for k in 0..j {
+                s -= l[i][k] * l[j][k];
+            }
+            l[i][j] = s / ljj;
+        }
+    }
+    // L y = -g, then L^T delta = y.
+    let mut y = [0.0; 6];
+    for i in 0..6 {
+        let mut s = -g[i];
+        for k in 0..i {
+            s -= l[i][k] * y[k];
+        }
+        y[i] = s / l[i][i];
+    }
+    let mut delta = [0.0; 6];
+    for i in (0..6).rev() {
+        let mut s = y[i];
+        for k in (i + 1)..6 {
+            s -= l[k][i] * delta[k];
+        }
+        delta[i] = s / l[i][i];
+    }
+    Some(delta)
+}
+
 #[cfg(test)]
 mod tests;

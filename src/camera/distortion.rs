@@ -1,0 +1,96 @@
+//! The lens distortion of the perspective models in one uniform layout, and its inversion by
+//! Newton's method with a trust region and a convergence check.
+
+use crate::numeric::bounds::{Bound, Budget};
+
+/// Newton stops when the step is below this (relative to `max(1, |x|)`).
+const STEP_TOL: f64 = 1e-14;
+/// Convergence check: the distortion equation must hold to this (relative to `max(1, |x0|)`),
+/// a few ulps above the rounding of its evaluation.
+const RESIDUAL_TOL: f64 = 1e-13;
+
+/// The distortion coefficients of a model in a uniform layout:
+/// `D(u, v) = (u g(r2) + 2 p1 u v + p2 (r2 + 2 u^2), v g(r2) + 2 p2 u v + p1 (r2 + 2 v^2))`
+/// with `g = k1 r2 + k2 r2^2 + k3 r2^3 + k4 r2^4` (polynomial models) or
+/// `g = (1 + k1 r2 + k2 r4 + k3 r6) / (1 + k4 r2 + k5 r4 + k6 r6) - 1` (FULL_OPENCV).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Distortion {
+    pub k: [f64; 4],
+    pub p: [f64; 2],
+    pub rational: Option<[f64; 6]>,
+}
+
+impl Distortion {
+    /// `g(r2)` and `g'(r2)`.
+    pub(super) fn radial(&self, r2: f64) -> (f64, f64) {
+        if let Some([k1, k2, k3, k4, k5, k6]) = self.rational {
+            let n = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+            let dn = k1 + r2 * (2.0 * k2 + 3.0 * r2 * k3);
+            let d = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6));
+            let dd = k4 + r2 * (2.0 * k5 + 3.0 * r2 * k6);
+            (n / d - 1.0, (dn * d - n * dd) / (d * d))
+        } else {
+            let [k1, k2, k3, k4] = self.k;
+            let g = r2 * (k1 + r2 * (k2 + r2 * (k3 + r2 * k4)));
+            let dg = k1 + r2 * (2.0 * k2 + r2 * (3.0 * k3 + 4.0 * r2 * k4));
+            (g, dg)
+        }
+    }
+
+    /// `(u, v) + D(u, v)` and its Jacobian `[[a, b], [c, d]]`.
+    pub(super) fn apply(&self, u: f64, v: f64) -> ((f64, f64), [f64; 4]) {
+        let (u2, v2, uv) = (u * u, v * v, u * v);
+        let r2 = u2 + v2;
+        let (g, dg) = self.radial(r2);
+        let [p1, p2] = self.p;
+        let du = u * g + 2.0 * p1 * uv + p2 * (r2 + 2.0 * u2);
+        let dv = v * g + 2.0 * p2 * uv + p1 * (r2 + 2.0 * v2);
+        let j = [
+            1.0 + g + 2.0 * u2 * dg + 2.0 * p1 * v + 6.0 * p2 * u,
+            2.0 * uv * dg + 2.0 * p1 * u + 2.0 * p2 * v,
+            2.0 * uv * dg + 2.0 * p2 * v + 2.0 * p1 * u,
+            1.0 + g + 2.0 * v2 * dg + 2.0 * p2 * u + 6.0 * p1 * v,
+        ];
+        ((u + du, v + dv), j)
+    }
+}
+
+/// Solves `x + D(x) = x0` for `x` (COLMAP's `IterativeUndistortion`, with a tighter stopping
+/// rule and an explicit convergence check). `None` if it does not converge.
+pub(super) fn iterative_undistortion(d: &Distortion, x0: (f64, f64)) -> Option<(f64, f64)> {
+    // COLMAP's trust region: |step| <= max(0.1 |x|, 0.1).
+    const REL_RADIUS: f64 = 0.1;
+    const RADIUS: f64 = 0.1;
+    let scale0 = 1f64.max(x0.0.hypot(x0.1));
+    let (mut u, mut v) = x0;
+    let mut steps = Budget::new(Bound::Undistort);
+    while steps.next() {
+        let ((xu, xv), j) = d.apply(u, v);
+        let (fu, fv) = (xu - x0.0, xv - x0.1);
+        let det = j[0] * j[3] - j[1] * j[2];
+        if !(det.is_finite() && det != 0.0 && fu.is_finite() && fv.is_finite()) {
+            return None;
+        }
+        let mut su = (j[3] * fu - j[1] * fv) / det;
+        let mut sv = (j[0] * fv - j[2] * fu) / det;
+        let radius = (REL_RADIUS * u.hypot(v)).max(RADIUS);
+        let sn = su.hypot(sv);
+        if sn > radius {
+            su *= radius / sn;
+            sv *= radius / sn;
+        }
+        u -= su;
+        v -= sv;
+        if su.hypot(sv) <= STEP_TOL * 1f64.max(u.hypot(v)) {
+            break;
+        }
+    }
+    // Convergence check: the equation holds and the map is locally invertible (det J > 0,
+    // as at the image centre) at the solution.
+    let ((xu, xv), j) = d.apply(u, v);
+    let res = (xu - x0.0).hypot(xv - x0.1);
+    let det = j[0] * j[3] - j[1] * j[2];
+    // (Running out of iterations is accepted only if this residual test passes anyway.)
+    let ok = u.is_finite() && v.is_finite() && res <= RESIDUAL_TOL * scale0 && det > 0.0;
+    ok.then_some((u, v))
+}

@@ -1,0 +1,364 @@
+//! COLMAP camera models: projection of normalised image points to pixels and iterative
+//! undistortion of pixels back to normalised image points.
+//!
+//! The models, their parameter orders and their distortion formulas are COLMAP's
+//! (`src/colmap/sensor/models.h`), so a camera read from a COLMAP reconstruction
+//! ([`crate::colmap`]) maps points exactly as COLMAP does:
+//!
+//! | model                   | parameters                                       |
+//! |-------------------------|--------------------------------------------------|
+//! | `SIMPLE_PINHOLE`        | `f, cx, cy`                                      |
+//! | `PINHOLE`               | `fx, fy, cx, cy`                                 |
+//! | `SIMPLE_RADIAL`         | `f, cx, cy, k`                                   |
+//! | `RADIAL`                | `f, cx, cy, k1, k2`                              |
+//! | `OPENCV`                | `fx, fy, cx, cy, k1, k2, p1, p2`                 |
+//! | `OPENCV_FISHEYE`        | `fx, fy, cx, cy, k1, k2, k3, k4`                 |
+//! | `FULL_OPENCV`           | `fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6` |
+//! | `SIMPLE_RADIAL_FISHEYE` | `f, cx, cy, k`                                   |
+//! | `RADIAL_FISHEYE`        | `f, cx, cy, k1, k2`                              |
+//!
+//! Pixel convention (COLMAP's): the upper-left corner of the image is `(0, 0)`, so the centre
+//! of the upper-left pixel is `(0.5, 0.5)`. The camera model is a plain mapping between
+//! normalised coordinates `(x/z, y/z)` and pixels; no half-pixel shift is applied anywhere.
+//!
+//! For a perspective model, a normalised point `(u, v)` is distorted to
+//! `(u, v) + D(u, v)` and then mapped to pixels by the focal lengths and principal point.
+//! Fisheye models first map `(u, v)` to `theta / r (u, v)` (`r = |(u, v)|`, `theta = atan r`,
+//! the equidistant projection) and distort that. [`Camera::undistort`] inverts the distortion
+//! by Newton's method with an analytic Jacobian, a trust region (as COLMAP) and at most
+//! [`UNDISTORT_MAX_ITERATIONS`] iterations; a pixel whose undistortion does not converge is
+//! an error, never a silently wrong point.
+
+use nalgebra::Point2;
+
+mod distortion;
+mod model;
+
+use distortion::{iterative_undistortion, Distortion};
+pub use model::{CameraError, CameraModel, SUPPORTED_MODELS};
+
+/// Hard bound on the Newton iterations of [`Camera::undistort`].
+pub const UNDISTORT_MAX_ITERATIONS: u32 = crate::numeric::bounds::UNDISTORT_MAX_ITERATIONS;
+/// Pinhole intrinsics: `px = fx x + skew y + cx`, `py = fy y + cy` for normalised `(x, y)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    /// Focal length in x, pixels.
+    pub fx: f64,
+    /// Focal length in y, pixels.
+    pub fy: f64,
+    /// Principal point x, pixels.
+    pub cx: f64,
+    /// Principal point y, pixels.
+    pub cy: f64,
+    /// Skew, pixels (0 for almost every camera).
+    pub skew: f64,
+}
+
+impl Intrinsics {
+    /// Normalised image coordinates of a pixel.
+    #[must_use]
+    pub fn normalize(&self, px: &Point2<f64>) -> Point2<f64> {
+        let y = (px.y - self.cy) / self.fy;
+        let x = (px.x - self.cx - self.skew * y) / self.fx;
+        Point2::new(x, y)
+    }
+
+    /// Pixel of a normalised image point.
+    #[must_use]
+    pub fn project(&self, p: &Point2<f64>) -> Point2<f64> {
+        Point2::new(
+            self.fx * p.x + self.skew * p.y + self.cx,
+            self.fy * p.y + self.cy,
+        )
+    }
+}
+
+/// A camera: model, image size and parameters (validated on construction).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    model: CameraModel,
+    width: u64,
+    height: u64,
+    params: Vec<f64>,
+}
+
+impl Camera {
+    /// A camera of `model` with COLMAP's parameter order (see the module documentation).
+    ///
+    /// # Errors
+    /// [`CameraError::ParamCount`] for the wrong number of parameters,
+    /// [`CameraError::InvalidParams`] for non-finite parameters or non-positive focal lengths.
+    pub fn new(
+        model: CameraModel,
+        width: u64,
+        height: u64,
+        params: Vec<f64>,
+    ) -> Result<Self, CameraError> {
+        if params.len() != model.num_params() {
+            return Err(CameraError::ParamCount {
+                model,
+                expected: model.num_params(),
+                got: params.len(),
+            });
+        }
+        if let Some(i) = params.iter().position(|p| !p.is_finite()) {
+            return Err(CameraError::InvalidParams(format!(
+                "parameter {} of {model} ({}) is not finite",
+                i + 1,
+                model.params_info()
+            )));
+        }
+        let cam = Camera {
+            model,
+            width,
+            height,
+            params,
+        };
+        let (fx, fy) = cam.intrinsics_scale();
+        if !(fx > 0.0 && fy > 0.0) {
+            return Err(CameraError::InvalidParams(format!(
+                "focal length must be positive (got {fx}, {fy})"
+            )));
+        }
+        Ok(cam)
+    }
+
+    /// A camera from a COLMAP model name and parameters, e.g.
+    /// `Camera::from_colmap("SIMPLE_RADIAL", 1200, 1600, vec![1245.65, 600.0, 800.0, 0.0577])`.
+    ///
+    /// # Errors
+    /// [`CameraError::UnsupportedModel`] naming an unsupported model, and as [`Camera::new`].
+    pub fn from_colmap(
+        model_name: &str,
+        width: u64,
+        height: u64,
+        params: Vec<f64>,
+    ) -> Result<Self, CameraError> {
+        Camera::new(CameraModel::from_name(model_name)?, width, height, params)
+    }
+
+    /// The camera model.
+    #[must_use]
+    pub fn model(&self) -> CameraModel {
+        self.model
+    }
+
+    /// Image width in pixels.
+    #[must_use]
+    pub fn width(&self) -> u64 {
+        self.width
+    }
+
+    /// Image height in pixels.
+    #[must_use]
+    pub fn height(&self) -> u64 {
+        self.height
+    }
+
+    /// The parameters in COLMAP's order.
+    #[must_use]
+    pub fn params(&self) -> &[f64] {
+        &self.params
+    }
+
+    /// Focal lengths `(fx, fy)` in pixels (`(f, f)` for single-focal models): the scale from
+    /// normalised to pixel residuals, for weighting.
+    #[must_use]
+    pub fn intrinsics_scale(&self) -> (f64, f64) {
+        let p = &self.params;
+        if self.model.single_focal() {
+            (p[0], p[0])
+        } else {
+            (p[0], p[1])
+        }
+    }
+
+    /// Principal point `(cx, cy)` in pixels.
+    #[must_use]
+    pub fn principal_point(&self) -> (f64, f64) {
+        let p = &self.params;
+        if self.model.single_focal() {
+            (p[1], p[2])
+        } else {
+            (p[2], p[3])
+        }
+    }
+
+    /// The pinhole part of the camera (focal lengths and principal point, no distortion).
+    #[must_use]
+    pub fn intrinsics(&self) -> Intrinsics {
+        let (fx, fy) = self.intrinsics_scale();
+        let (cx, cy) = self.principal_point();
+        Intrinsics {
+            fx,
+            fy,
+            cx,
+            cy,
+            skew: 0.0,
+        }
+    }
+
+    /// Whether the model has lens distortion terms (all models except the pinhole ones).
+    #[must_use]
+    pub fn has_distortion(&self) -> bool {
+        !matches!(
+            self.model,
+            CameraModel::SimplePinhole | CameraModel::Pinhole
+        )
+    }
+
+    fn distortion(&self) -> Distortion {
+        let p = &self.params;
+        let mut d = Distortion::default();
+        match self.model {
+            CameraModel::SimplePinhole | CameraModel::Pinhole => {}
+            CameraModel::SimpleRadial | CameraModel::SimpleRadialFisheye => d.k[0] = p[3],
+            CameraModel::Radial | CameraModel::RadialFisheye => {
+                d.k[0] = p[3];
+                d.k[1] = p[4];
+            }
+            CameraModel::OpenCv => {
+                d.k[0] = p[4];
+                d.k[1] = p[5];
+                d.p = [p[6], p[7]];
+            }
+            CameraModel::OpenCvFisheye => d.k = [p[4], p[5], p[6], p[7]],
+            CameraModel::FullOpenCv => {
+                d.p = [p[6], p[7]];
+                d.rational = Some([p[4], p[5], p[8], p[9], p[10], p[11]]);
+            }
+        }
+        d
+    }
+
+    /// The pixel of a normalised image point `(x/z, y/z)` (COLMAP's `ImgFromCam` with
+    /// `w = 1`). Non-finite input gives non-finite output.
+    #[must_use]
+    pub fn project(&self, normalised: Point2<f64>) -> Point2<f64> {
+        let (mut u, mut v) = (normalised.x, normalised.y);
+        if self.model.is_fisheye() {
+            let r = u.hypot(v);
+            if r > f64::EPSILON {
+                let s = r.atan() / r;
+                u *= s;
+                v *= s;
+            }
+        }
+        let ((xd, yd), _) = self.distortion().apply(u, v);
+        let (fx, fy) = self.intrinsics_scale();
+        let (cx, cy) = self.principal_point();
+        Point2::new(fx * xd + cx, fy * yd + cy)
+    }
+
+    /// The Jacobian `d pixel / d normalised` of [`Camera::project`] at a normalised point,
+    /// row-major `[[dpx/dx, dpx/dy], [dpy/dx, dpy/dy]]`, for weighting residuals in pixels.
+    #[must_use]
+    pub fn project_jacobian(&self, normalised: Point2<f64>) -> [f64; 4] {
+        let (fx, fy) = self.intrinsics_scale();
+        let (x, y) = (normalised.x, normalised.y);
+        // Fisheye models: chain rule through (u, v) = s(r) (x, y), s = atan(r) / r.
+        let (u, v, jf) = if self.model.is_fisheye() {
+            let r2 = x * x + y * y;
+            let r = r2.sqrt();
+            if r > 1e-8 {
+                let s = r.atan() / r;
+                // ds/dr = (r / (1 + r^2) - atan r) / r^2; d(s x)/dx = s + x^2 s'(r) / r.
+                let ds = (r / (1.0 + r2) - r.atan()) / r2;
+                let q = ds / r;
+                (
+                    s * x,
+                    s * y,
+                    [s + q * x * x, q * x * y, q * x * y, s + q * y * y],
+                )
+            } else {
+                (x, y, [1.0, 0.0, 0.0, 1.0])
+            }
+        } else {
+            (x, y, [1.0, 0.0, 0.0, 1.0])
+        };
+        let (_, jd) = self.distortion().apply(u, v);
+        let m = [
+            jd[0] * jf[0] + jd[1] * jf[2],
+            jd[0] * jf[1] + jd[1] * jf[3],
+            jd[2] * jf[0] + jd[3] * jf[2],
+            jd[2] * jf[1] + jd[3] * jf[3],
+        ];
+        [fx * m[0], fx * m[1], fy * m[2], fy * m[3]]
+    }
+
+    /// The normalised image point `(x/z, y/z)` of a pixel: inverts [`Camera::project`].
+    ///
+    /// The distortion is inverted by Newton's method (analytic Jacobian, COLMAP's trust region)
+    /// with at most [`UNDISTORT_MAX_ITERATIONS`] iterations, followed by a check that the
+    /// distortion equation holds to about 1e-13 and that the distortion map is locally
+    /// invertible at the solution.
+    ///
+    /// # Errors
+    /// [`CameraError::NonFinite`] for a NaN or infinite pixel, [`CameraError::NoConvergence`]
+    /// if the iteration does not converge, [`CameraError::BeyondHemisphere`] for a fisheye
+    /// pixel 90 degrees or more off axis.
+    pub fn undistort(&self, pixel: Point2<f64>) -> Result<Point2<f64>, CameraError> {
+        if !(pixel.x.is_finite() && pixel.y.is_finite()) {
+            return Err(CameraError::NonFinite);
+        }
+        let (fx, fy) = self.intrinsics_scale();
+        let (cx, cy) = self.principal_point();
+        let x0 = ((pixel.x - cx) / fx, (pixel.y - cy) / fy);
+        let fail = CameraError::NoConvergence {
+            pixel: (pixel.x, pixel.y),
+        };
+        let (u, v) = if self.has_distortion() {
+            iterative_undistortion(&self.distortion(), x0).ok_or(fail)?
+        } else {
+            x0
+        };
+        if !(u.is_finite() && v.is_finite()) {
+            return Err(CameraError::OutOfRange {
+                pixel: (pixel.x, pixel.y),
+            });
+        }
+        if !self.model.is_fisheye() {
+            return Ok(Point2::new(u, v));
+        }
+        // Equidistant fisheye: theta = |(u, v)|, normalised radius tan(theta).
+        let theta = u.hypot(v);
+        if theta >= core::f64::consts::FRAC_PI_2 {
+            return Err(CameraError::BeyondHemisphere {
+                pixel: (pixel.x, pixel.y),
+            });
+        }
+        if theta > f64::EPSILON {
+            let s = theta.tan() / theta;
+            Ok(Point2::new(u * s, v * s))
+        } else {
+            Ok(Point2::new(u, v))
+        }
+    }
+
+    /// [`Camera::undistort`] and the weight of the point in [`solve_pixels`]:
+    /// `|det J| / (fx fy)`, `J` the Jacobian of [`Camera::project`] at the normalised point (to
+    /// first order, the squared scale of a pixel error in normalised units relative to the
+    /// undistorted pinhole camera).
+    ///
+    /// # Errors
+    /// As [`Camera::undistort`], and [`CameraError::OutOfRange`] if the weight overflows.
+    pub fn undistort_weighted(
+        &self,
+        pixel: Point2<f64>,
+    ) -> Result<(Point2<f64>, f64), CameraError> {
+        let n = self.undistort(pixel)?;
+        let (fx, fy) = self.intrinsics_scale();
+        let j = self.project_jacobian(n);
+        let w = ((j[0] * j[3] - j[1] * j[2]) / (fx * fy)).abs();
+        if w.is_finite() {
+            Ok((n, w))
+        } else {
+            Err(CameraError::OutOfRange {
+                pixel: (pixel.x, pixel.y),
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,275 @@
+//! The supported COLMAP camera models (names, ids, parameter counts) and the errors of
+//! building a camera and of undistorting a pixel.
+
+use core::fmt;
+
+/// A COLMAP camera model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[non_exhaustive]
+pub enum CameraModel {
+    /// `f, cx, cy`: pinhole, one focal length, no distortion (COLMAP id 0).
+    SimplePinhole,
+    /// `fx, fy, cx, cy`: pinhole, no distortion (COLMAP id 1).
+    Pinhole,
+    /// `f, cx, cy, k`: one radial distortion term `k r^2` (COLMAP id 2).
+    SimpleRadial,
+    /// `f, cx, cy, k1, k2`: radial distortion `k1 r^2 + k2 r^4` (COLMAP id 3).
+    Radial,
+    /// `fx, fy, cx, cy, k1, k2, p1, p2`: OpenCV's radial and tangential distortion
+    /// (COLMAP id 4).
+    OpenCv,
+    /// `fx, fy, cx, cy, k1, k2, k3, k4`: OpenCV's fisheye model (COLMAP id 5).
+    OpenCvFisheye,
+    /// `fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6`: OpenCV's rational model
+    /// (COLMAP id 6).
+    FullOpenCv,
+    /// `f, cx, cy, k`: equidistant fisheye with one radial term (COLMAP id 8).
+    SimpleRadialFisheye,
+    /// `f, cx, cy, k1, k2`: equidistant fisheye with two radial terms (COLMAP id 9).
+    RadialFisheye,
+}
+
+/// Every supported model, in COLMAP id order.
+pub const SUPPORTED_MODELS: [CameraModel; 9] = [
+    CameraModel::SimplePinhole,
+    CameraModel::Pinhole,
+    CameraModel::SimpleRadial,
+    CameraModel::Radial,
+    CameraModel::OpenCv,
+    CameraModel::OpenCvFisheye,
+    CameraModel::FullOpenCv,
+    CameraModel::SimpleRadialFisheye,
+    CameraModel::RadialFisheye,
+];
+
+/// COLMAP's names of its models this crate does not support (for a clearer error message).
+const KNOWN_UNSUPPORTED: [(i32, &str); 9] = [
+    (7, "FOV"),
+    (10, "THIN_PRISM_FISHEYE"),
+    (11, "RAD_TAN_THIN_PRISM_FISHEYE"),
+    (12, "SIMPLE_DIVISION"),
+    (13, "DIVISION"),
+    (14, "SIMPLE_FISHEYE"),
+    (15, "FISHEYE"),
+    (16, "EUCM"),
+    (17, "EQUIRECTANGULAR"),
+];
+
+impl CameraModel {
+    /// COLMAP's name of the model, e.g. `"SIMPLE_RADIAL"`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            CameraModel::SimplePinhole => "SIMPLE_PINHOLE",
+            CameraModel::Pinhole => "PINHOLE",
+            CameraModel::SimpleRadial => "SIMPLE_RADIAL",
+            CameraModel::Radial => "RADIAL",
+            CameraModel::OpenCv => "OPENCV",
+            CameraModel::OpenCvFisheye => "OPENCV_FISHEYE",
+            CameraModel::FullOpenCv => "FULL_OPENCV",
+            CameraModel::SimpleRadialFisheye => "SIMPLE_RADIAL_FISHEYE",
+            CameraModel::RadialFisheye => "RADIAL_FISHEYE",
+        }
+    }
+
+    /// COLMAP's numeric model id (used by the binary model format).
+    #[must_use]
+    pub fn colmap_id(self) -> i32 {
+        match self {
+            CameraModel::SimplePinhole => 0,
+            CameraModel::Pinhole => 1,
+            CameraModel::SimpleRadial => 2,
+            CameraModel::Radial => 3,
+            CameraModel::OpenCv => 4,
+            CameraModel::OpenCvFisheye => 5,
+            CameraModel::FullOpenCv => 6,
+            CameraModel::SimpleRadialFisheye => 8,
+            CameraModel::RadialFisheye => 9,
+        }
+    }
+
+    /// Number of parameters of the model.
+    #[must_use]
+    pub fn num_params(self) -> usize {
+        match self {
+            CameraModel::SimplePinhole => 3,
+            CameraModel::Pinhole => 4,
+            CameraModel::SimpleRadial | CameraModel::SimpleRadialFisheye => 4,
+            CameraModel::Radial | CameraModel::RadialFisheye => 5,
+            CameraModel::OpenCv | CameraModel::OpenCvFisheye => 8,
+            CameraModel::FullOpenCv => 12,
+        }
+    }
+
+    /// The parameter names in order, e.g. `"f, cx, cy, k"`.
+    #[must_use]
+    pub fn params_info(self) -> &'static str {
+        match self {
+            CameraModel::SimplePinhole => "f, cx, cy",
+            CameraModel::Pinhole => "fx, fy, cx, cy",
+            CameraModel::SimpleRadial | CameraModel::SimpleRadialFisheye => "f, cx, cy, k",
+            CameraModel::Radial | CameraModel::RadialFisheye => "f, cx, cy, k1, k2",
+            CameraModel::OpenCv => "fx, fy, cx, cy, k1, k2, p1, p2",
+            CameraModel::OpenCvFisheye => "fx, fy, cx, cy, k1, k2, k3, k4",
+            CameraModel::FullOpenCv => "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6",
+        }
+    }
+
+    /// The model of a COLMAP name (exact, upper case as COLMAP writes it).
+    ///
+    /// # Errors
+    /// [`CameraError::UnsupportedModel`] naming the model if it is not one of
+    /// [`SUPPORTED_MODELS`].
+    pub fn from_name(name: &str) -> Result<Self, CameraError> {
+        SUPPORTED_MODELS
+            .iter()
+            .copied()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| CameraError::UnsupportedModel(name.to_string()))
+    }
+
+    /// The model of a COLMAP numeric model id.
+    ///
+    /// # Errors
+    /// [`CameraError::UnsupportedModel`] naming the model (or the id, if COLMAP has no such
+    /// model) if it is not supported.
+    pub fn from_colmap_id(id: i32) -> Result<Self, CameraError> {
+        if let Some(m) = SUPPORTED_MODELS
+            .iter()
+            .copied()
+            .find(|m| m.colmap_id() == id)
+        {
+            return Ok(m);
+        }
+        let name = KNOWN_UNSUPPORTED
+            .iter()
+            .find(|(i, _)| *i == id)
+            .map_or_else(
+                || format!("unknown model id {id}"),
+                |(_, n)| format!("{n} (model id {id})"),
+            );
+        Err(CameraError::UnsupportedModel(name))
+    }
+
+    pub(super) fn is_fisheye(self) -> bool {
+        matches!(
+            self,
+            CameraModel::OpenCvFisheye
+                | CameraModel::SimpleRadialFisheye
+                | CameraModel::RadialFisheye
+        )
+    }
+
+    /// Whether the model has a single focal length `f`.
+    pub(super) fn single_focal(self) -> bool {
+        matches!(
+            self,
+            CameraModel::SimplePinhole
+                | CameraModel::SimpleRadial
+                | CameraModel::Radial
+                | CameraModel::SimpleRadialFisheye
+                | CameraModel::RadialFisheye
+        )
+    }
+}
+
+impl fmt::Display for CameraModel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl core::str::FromStr for CameraModel {
+    type Err = CameraError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        CameraModel::from_name(s)
+    }
+}
+
+/// Errors of camera construction and undistortion.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum CameraError {
+    /// The camera model is not supported (the string names it).
+    UnsupportedModel(String),
+    /// Wrong number of parameters for the model.
+    ParamCount {
+        /// The model.
+        model: CameraModel,
+        /// Parameters the model needs.
+        expected: usize,
+        /// Parameters given.
+        got: usize,
+    },
+    /// A parameter is not finite, or a focal length is not positive.
+    InvalidParams(String),
+    /// The pixel (or the normalised point) is NaN or infinite.
+    NonFinite,
+    /// The undistortion of the pixel did not converge within
+    /// [`UNDISTORT_MAX_ITERATIONS`] Newton iterations, or converged to a point where the
+    /// distortion map folds over (the pixel is outside the region where the model is
+    /// invertible).
+    NoConvergence {
+        /// The pixel.
+        pixel: (f64, f64),
+    },
+    /// The pixel lies at or beyond 90 degrees from the optical axis of a fisheye camera: it has
+    /// no normalised coordinates `(x/z, y/z)` with `z > 0`.
+    BeyondHemisphere {
+        /// The pixel.
+        pixel: (f64, f64),
+    },
+    /// The pixel is so far outside the image that its normalised coordinates, or the lens
+    /// model's local scale there, overflow `f64`.
+    OutOfRange {
+        /// The pixel.
+        pixel: (f64, f64),
+    },
+}
+
+impl fmt::Display for CameraError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CameraError::UnsupportedModel(name) => {
+                let list: Vec<&str> = SUPPORTED_MODELS.iter().map(|m| m.name()).collect();
+                write!(
+                    f,
+                    "unsupported camera model \"{name}\" (supported: {})",
+                    list.join(", ")
+                )
+            }
+            CameraError::ParamCount {
+                model,
+                expected,
+                got,
+            } => write!(
+                f,
+                "camera model {model} takes {expected} parameters ({}), got {got}",
+                model.params_info()
+            ),
+            CameraError::InvalidParams(why) => write!(f, "invalid camera parameters: {why}"),
+            CameraError::NonFinite => f.write_str("point coordinate is NaN or infinite"),
+            CameraError::NoConvergence { pixel } => write!(
+                f,
+                "undistortion of pixel ({:?}, {:?}) did not converge (outside the region where \
+                 the distortion model is invertible?)",
+                pixel.0, pixel.1
+            ),
+            CameraError::BeyondHemisphere { pixel } => write!(
+                f,
+                "pixel ({:?}, {:?}) is 90 degrees or more off the optical axis of this fisheye \
+                 camera: it has no normalised image coordinates",
+                pixel.0, pixel.1
+            ),
+            CameraError::OutOfRange { pixel } => write!(
+                f,
+                "pixel ({:?}, {:?}) is too far outside the image for this camera model (its \
+                 normalised coordinates or the lens model's scale there overflow); check the \
+                 pixel coordinates and the camera parameters",
+                pixel.0, pixel.1
+            ),
+        }
+    }
+}
+
+impl std::error::Error for CameraError {}

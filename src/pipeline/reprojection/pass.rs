@@ -1,0 +1,268 @@
+//! The O(N) pass of S9, vectorised across points: cost, gradient and (optionally) `J^T W J`
+//! at one pose, with the depth-sign test against a reference pose.
+
+use nalgebra::{Matrix3, Point2, Point3};
+
+use super::{Composed, Normal, Problem};
+use crate::numeric::lanes::{lane_sum, Block, LANES};
+
+/// Number of sums of one pass: `E` (1), `H_rr` (6, upper triangle, row-major), `H_rt = sum K`
+/// (9, row-major, the third column negated), `H_tt` (`kx`, `ky`, `fx`, `fy`, `n22`: 5),
+/// `sum [q]x b` (3), `sum b` (3, the third entry negated). The two negations are undone in
+/// [`Partial::normal`] (exactly: negation does not round).
+const NSUMS: usize = 27;
+
+/// What one pass needs of the problem and the poses, as plain scalars.
+pub(super) struct PassConsts {
+    /// `A` of the pose, row-major.
+    a: [[f64; 3]; 3],
+    t: [f64; 3],
+    /// Centroid `c` of the working frame.
+    c: [f64; 3],
+    /// Third row of `A` and `t_z` of the reference pose (zeros without one).
+    ref_a: [f64; 3],
+    ref_tz: f64,
+    wx: f64,
+    wy: f64,
+}
+
+impl PassConsts {
+    pub(super) fn new(prob: &Problem<'_>, pose: &Composed, reference: Option<&Composed>) -> Self {
+        let row = |m: &Matrix3<f64>, j: usize| [m[(j, 0)], m[(j, 1)], m[(j, 2)]];
+        let (ref_a, ref_tz) = reference.map_or(([0.0; 3], 0.0), |rf| (row(&rf.a, 2), rf.t.z));
+        Self {
+            a: [row(&pose.a, 0), row(&pose.a, 1), row(&pose.a, 2)],
+            t: [pose.t.x, pose.t.y, pose.t.z],
+            c: [prob.c.x, prob.c.y, prob.c.z],
+            ref_a,
+            ref_tz,
+            wx: prob.row_weights.0,
+            wy: prob.row_weights.1,
+        }
+    }
+}
+
+/// Lane-wise partial sums of one pass: lane `l` sums the points `l, l + LANES, ...` of the
+/// sequence of active points. Aligned (every field is a multiple of 16 bytes) so that SSE2
+/// can use the sums as operands in place.
+#[repr(C, align(16))]
+struct Partial {
+    /// The [`NSUMS`] sums, in the order of [`NSUMS`]'s documentation.
+    s: [[f64; LANES]; NSUMS],
+    min_abs_z: [f64; LANES],
+    max_abs_z: [f64; LANES],
+    /// Largest `|q_i|^2` of the lane (pass without reference pose only).
+    max_q2: [f64; LANES],
+    /// Some depth of the lane differs in sign from its depth under the reference pose.
+    flipped: [u64; LANES],
+}
+
+impl Partial {
+    /// Adds the lanes ((0 + 1) + (2 + 3)) and assembles the normal equations. `CHECK`: the
+    /// pass had a reference pose (and so no `max_abs_q`).
+    // Index loops fill the blocks of H by position.
+    #[allow(clippy::needless_range_loop)]
+    fn normal<const CHECK: bool>(&self) -> Normal {
+        let s: [f64; NSUMS] = core::array::from_fn(|j| lane_sum(&self.s[j]));
+        let (e, hrr, hrt, htt, gq, gb) = (
+            s[0],
+            &s[1..7],
+            &s[7..16],
+            &s[16..21],
+            &s[21..24],
+            &s[24..27],
+        );
+        let mut h = [[0.0f64; 6]; 6];
+        let mut idx = 0;
+        for j in 0..3 {
+            for l in j..3 {
+                h[j][l] = hrr[idx];
+                idx += 1;
+            }
+            h[j][3] = hrt[3 * j];
+            h[j][4] = hrt[3 * j + 1];
+            h[j][5] = -hrt[3 * j + 2];
+        }
+        h[3][3] = htt[0];
+        h[3][4] = 0.0;
+        h[3][5] = -htt[2];
+        h[4][4] = htt[1];
+        h[4][5] = -htt[3];
+        h[5][5] = htt[4];
+        for k in 0..6 {
+            for l in 0..k {
+                h[k][l] = h[l][k];
+            }
+        }
+        Normal {
+            h,
+            g: [-gq[0], -gq[1], -gq[2], -gb[0], -gb[1], gb[2]],
+            e,
+            min_abs_z: self.min_abs_z.iter().fold(f64::INFINITY, |a, &z| a.min(z)),
+            max_abs_z: self.max_abs_z.iter().fold(0.0f64, |a, &z| a.max(z)),
+            max_abs_q: if CHECK {
+                f64::NAN
+            } else {
+                self.max_q2.iter().fold(0.0f64, |a, &q| a.max(q)).sqrt()
+            },
+        }
+    }
+}
+
+/// One pass over the points: gathers the active points into blocks (without weights, every
+/// point, straight from the slices) and runs [`lane`] on each lane. `CHECK`: compare depth
+/// signs with the reference pose of `k`; `None` after the first block with a flipped sign.
+#[inline(always)]
+pub(super) fn pass<const CHECK: bool, const HESS: bool>(
+    k: &PassConsts,
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+) -> Option<Normal> {
+    let mut acc = Partial {
+        s: [[0.0; LANES]; NSUMS],
+        min_abs_z: [f64::INFINITY; LANES],
+        max_abs_z: [0.0; LANES],
+        max_q2: [0.0; LANES],
+        flipped: [0; LANES],
+    };
+    let flipped = |acc: &Partial| CHECK && acc.flipped.iter().any(|&f| f != 0);
+    let mut blk = Block::new();
+    let mut filled = 0;
+    match weights {
+        None => {
+            let mut cw = world.chunks_exact(LANES);
+            let mut cm = image.chunks_exact(LANES);
+            for (xs, ms) in (&mut cw).zip(&mut cm) {
+                blk.x = [
+                    core::array::from_fn(|l| xs[l].x),
+                    core::array::from_fn(|l| xs[l].y),
+                    core::array::from_fn(|l| xs[l].z),
+                ];
+                blk.m = [
+                    core::array::from_fn(|l| ms[l].x),
+                    core::array::from_fn(|l| ms[l].y),
+                ];
+                for l in 0..LANES {
+                    lane::<CHECK, HESS>(k, &blk, l, &mut acc);
+                }
+                if flipped(&acc) {
+                    return None;
+                }
+            }
+            for (l, (x, m)) in cw.remainder().iter().zip(cm.remainder()).enumerate() {
+                blk.set(l, x, m);
+                filled = l + 1;
+            }
+        }
+        Some(weights) => {
+            for ((x, m), &w) in world.iter().zip(image).zip(weights) {
+                if w == 0.0 {
+                    continue;
+                }
+                let l = filled % LANES;
+                blk.set(l, x, m);
+                blk.w[l] = w;
+                filled = l + 1;
+                if filled == LANES {
+                    for l in 0..LANES {
+                        lane::<CHECK, HESS>(k, &blk, l, &mut acc);
+                    }
+                    if flipped(&acc) {
+                        return None;
+                    }
+                    filled = 0;
+                }
+            }
+        }
+    }
+    for l in 0..filled.min(LANES) {
+        lane::<CHECK, HESS>(k, &blk, l, &mut acc);
+    }
+    if flipped(&acc) {
+        return None;
+    }
+    Some(acc.normal::<CHECK>())
+}
+
+/// Adds point `l` of `blk` to lane `l` of `acc` (see [`Problem::accumulate`]).
+#[inline(always)]
+fn lane<const CHECK: bool, const HESS: bool>(
+    k: &PassConsts,
+    blk: &Block,
+    l: usize,
+    acc: &mut Partial,
+) {
+    let xc = [
+        blk.x[0][l] - k.c[0],
+        blk.x[1][l] - k.c[1],
+        blk.x[2][l] - k.c[2],
+    ];
+    let dot = |r: &[f64; 3]| r[0] * xc[0] + r[1] * xc[1] + r[2] * xc[2];
+    let (qx, qy, qz) = (dot(&k.a[0]), dot(&k.a[1]), dot(&k.a[2]));
+    let (px, py, pz) = (qx + k.t[0], qy + k.t[1], qz + k.t[2]);
+    if CHECK {
+        let z_ref = dot(&k.ref_a) + k.ref_tz;
+        let same_side = if z_ref > 0.0 { pz > 0.0 } else { pz < 0.0 };
+        acc.flipped[l] |= u64::from(!same_side);
+    } else {
+        let q2 = qx * qx + qy * qy + qz * qz;
+        let mq = acc.max_q2[l];
+        acc.max_q2[l] = if q2 > mq { q2 } else { mq };
+    }
+    // `if a < b { a } else { b }` (not f64::min): one packed instruction; a NaN depth is
+    // ignored as by f64::min, the partial extremes never being NaN.
+    let az = pz.abs();
+    let mn = acc.min_abs_z[l];
+    acc.min_abs_z[l] = if az < mn { az } else { mn };
+    let mx = acc.max_abs_z[l];
+    acc.max_abs_z[l] = if az > mx { az } else { mx };
+    let iz = 1.0 / pz;
+    let pu = px * iz;
+    let pv = py * iz;
+    let (ex, ey) = (blk.m[0][l] - pu, blk.m[1][l] - pv);
+    let wi = blk.w[l];
+    let sx = wi * k.wx;
+    let sy = wi * k.wy;
+    // N = sx a_x a_x^T + sy a_y a_y^T = [[kx, 0, -fx], [0, ky, -fy], [-fx, -fy, n22]] with
+    // a_x = iz (1, 0, -u), a_y = iz (0, 1, -v); b = sx ex a_x + sy ey a_y = (bx, by, -bz).
+    let iz2 = iz * iz;
+    let kx = sx * iz2;
+    let ky = sy * iz2;
+    let fx = kx * pu;
+    let fy = ky * pv;
+    let bx = sx * ex * iz;
+    let by = sy * ey * iz;
+    let s = &mut acc.s;
+    s[0][l] += sx * ex * ex + sy * ey * ey;
+    if HESS {
+        s[16][l] += kx;
+        s[17][l] += ky;
+        s[18][l] += fx;
+        s[19][l] += fy;
+        s[20][l] += fx * pu + fy * pv;
+    }
+    s[24][l] += bx;
+    s[25][l] += by;
+    s[26][l] += bx * pu + by * pv;
+    // With c1 = q x (1, 0, -u) and c2 = q x (0, 1, -v): [q]x N = kx c1 (1, 0, -u)^T +
+    // ky c2 (0, 1, -v)^T, so H_rt row j = (k1, k2, -(k1 u + k2 v)) with k1 = kx c1_j,
+    // k2 = ky c2_j; H_rr = [q]x N [q]x^T = kx c1 c1^T + ky c2 c2^T; [q]x b = bx c1 + by c2.
+    let c1 = [-pu * qy, qz + pu * qx, -qy];
+    let c2 = [-(pv * qy + qz), pv * qx, qx];
+    let mut idx = 1;
+    for j in 0..3 {
+        if HESS {
+            let k1 = kx * c1[j];
+            let k2 = ky * c2[j];
+            s[7 + 3 * j][l] += k1;
+            s[8 + 3 * j][l] += k2;
+            s[9 + 3 * j][l] += k1 * pu + k2 * pv;
+            for m in j..3 {
+                s[idx][l] += k1 * c1[m] + k2 * c2[m];
+                idx += 1;
+            }
+        }
+        s[21 + j][l] += bx * c1[j] + by * c2[j];
+    }
+}
