@@ -34,7 +34,7 @@ pub fn inject_outliers(
     let k = ((fraction.min(1.0) * n as f64).round() as usize).min(n);
     let mut rng = Pcg64::seed_from_u64(seed);
     let mut order: Vec<usize> = (0..n).collect();
-    // Partial Fisher-Yates: the first k entries are a uniform k-subset.
+    // LaneSums Fisher-Yates: the first k entries are a uniform k-subset.
     for i in 0..k {
         let j = i + index(&mut rng, n - i);
         order.swap(i, j);

@@ -115,7 +115,7 @@ const fn ordered_index(k: usize, j: usize) -> Option<usize> {
 }
 
 /// What the centred pass needs of [`CentredMap`] and `A`, as plain scalars.
-struct PassConsts {
+struct PassInputs {
     /// `1 / sx`.
     isx: f64,
     /// The centre (world units of `sx`).
@@ -128,24 +128,24 @@ struct PassConsts {
     mm: [f64; 2],
 }
 
-/// Partial sums of the centred pass. Lane `l` of `s` and `spread` sums the points
+/// LaneSums sums of the centred pass. Lane `l` of `s` and `spread` sums the points
 /// `l, l + LANES, ...` of the sequence of active points; the [`ORDERED`] sums take the terms
-/// of a block from `t` in point order ([`Partial::flush`]). Aligned (every field is a
+/// of a block from `t` in point order ([`LaneSums::flush`]). Aligned (every field is a
 /// multiple of 16 bytes) so that SSE2 can use the sums as operands in place.
 #[repr(C, align(16))]
-struct Partial {
+struct LaneSums {
     /// `s[k][j][l]`: lane `l` of the sum `k, j` of [`Sums`] (unused for the ordered sums).
     s: [[[f64; LANES]; 4]; 10],
     /// The image spread.
     spread: [f64; LANES],
     /// `t[l][i]`: the term of point `l` of the current block in the ordered sum `i` (point
-    /// by point, so that [`Partial::flush`] adds two sums per packed instruction).
+    /// by point, so that [`LaneSums::flush`] adds two sums per packed instruction).
     t: [[f64; ORDERED_PAD]; LANES],
     /// The ordered sums.
     ordered: [f64; ORDERED_PAD],
 }
 
-impl Partial {
+impl LaneSums {
     /// Adds the terms of the first `n` points of the block to the ordered sums, in order.
     #[inline(always)]
     fn flush(&mut self, n: usize) {
@@ -173,12 +173,12 @@ impl Partial {
 /// the scalar formulas: `f[j] * mono[k]` with `f = [w, w u, w v, w q]`.
 #[inline(always)]
 fn lane<const R: bool>(
-    k: &PassConsts,
+    k: &PassInputs,
     x: [f64; 3],
     m: [f64; 2],
     w: f64,
     l: usize,
-    acc: &mut Partial,
+    acc: &mut LaneSums,
 ) {
     let y = [
         x[0] * k.isx - k.c[0],
@@ -230,7 +230,7 @@ fn lane<const R: bool>(
 /// Vectorised across points, without `unsafe` or target features: the points with weight
 /// `w > 0`, in order, are gathered into blocks of [`LANES`] (without weights, every point,
 /// straight from the slices), and point `l` of a block goes into lane `l` of its own partial
-/// sums ([`Partial`]), so that the compiler runs the per-point code ([`lane`]) on packed
+/// sums ([`LaneSums`]), so that the compiler runs the per-point code ([`lane`]) on packed
 /// registers; the lanes are added pairwise at the end. The sequence of active points, and so
 /// the result to the bit, does not depend on the points of weight 0.
 ///
@@ -253,7 +253,7 @@ fn centred_pass<const W: bool, const R: bool>(
     map: &CentredMap,
     a: &Matrix3<f64>,
 ) -> (Sums, f64) {
-    let k = PassConsts {
+    let k = PassInputs {
         isx: map.inv_unit,
         c: [map.centre.x, map.centre.y, map.centre.z],
         a: [
@@ -265,7 +265,7 @@ fn centred_pass<const W: bool, const R: bool>(
         mm: [map.image_mean.x, map.image_mean.y],
     };
     let isw = map.inv_weight;
-    let mut acc = Partial {
+    let mut acc = LaneSums {
         s: [[[0.0; LANES]; 4]; 10],
         spread: [0.0; LANES],
         t: [[0.0; ORDERED_PAD]; LANES],

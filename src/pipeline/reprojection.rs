@@ -53,7 +53,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 mod pass;
 
-use pass::{pass, PassConsts};
+use pass::{pass, PassInputs};
 
 use crate::numeric::linalg::solve_damped6;
 use crate::numeric::rotation::exp_so3;
@@ -198,12 +198,12 @@ impl Problem<'_> {
     ///
     /// Vectorised across points, without `unsafe` or target features: the active points
     /// (non-zero weight), in order, are gathered into blocks of [`LANES`] transposed values
-    /// ([`Block`]); lane `l` of the block goes into its own partial sums ([`Partial`]), so the
+    /// ([`Block`]); lane `l` of the block goes into its own partial sums ([`LaneSums`]), so the
     /// compiler runs the per-point code ([`lane`]) on packed registers. The lanes are added
     /// once at the end. The sequence of active points, and so the result to the bit, does not
     /// depend on the points of weight 0; the depth-sign test is the scalar one, lane by lane.
     fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal> {
-        let k = PassConsts::new(self, pose, reference);
+        let k = PassInputs::new(self, pose, reference);
         let world = &self.world[..self.n];
         let image = &self.image[..self.n];
         let weights = self.weights.map(|w| &w[..self.n]);
@@ -223,7 +223,7 @@ impl Problem<'_> {
         reference: &Composed,
         h_prev: &[[f64; 6]; 6],
     ) -> Option<Normal> {
-        let k = PassConsts::new(self, pose, Some(reference));
+        let k = PassInputs::new(self, pose, Some(reference));
         let world = &self.world[..self.n];
         let image = &self.image[..self.n];
         let weights = self.weights.map(|w| &w[..self.n]);

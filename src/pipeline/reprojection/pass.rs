@@ -9,11 +9,11 @@ use crate::numeric::lanes::{lane_sum, Block, LANES};
 /// Number of sums of one pass: `E` (1), `H_rr` (6, upper triangle, row-major), `H_rt = sum K`
 /// (9, row-major, the third column negated), `H_tt` (`kx`, `ky`, `fx`, `fy`, `n22`: 5),
 /// `sum [q]x b` (3), `sum b` (3, the third entry negated). The two negations are undone in
-/// [`Partial::normal`] (exactly: negation does not round).
+/// [`LaneSums::normal`] (exactly: negation does not round).
 const NSUMS: usize = 27;
 
 /// What one pass needs of the problem and the poses, as plain scalars.
-pub(super) struct PassConsts {
+pub(super) struct PassInputs {
     /// `A` of the pose, row-major.
     a: [[f64; 3]; 3],
     t: [f64; 3],
@@ -26,7 +26,7 @@ pub(super) struct PassConsts {
     wy: f64,
 }
 
-impl PassConsts {
+impl PassInputs {
     pub(super) fn new(prob: &Problem<'_>, pose: &Composed, reference: Option<&Composed>) -> Self {
         let row = |m: &Matrix3<f64>, j: usize| [m[(j, 0)], m[(j, 1)], m[(j, 2)]];
         let (ref_a, ref_tz) = reference.map_or(([0.0; 3], 0.0), |rf| (row(&rf.a, 2), rf.t.z));
@@ -46,7 +46,7 @@ impl PassConsts {
 /// sequence of active points. Aligned (every field is a multiple of 16 bytes) so that SSE2
 /// can use the sums as operands in place.
 #[repr(C, align(16))]
-struct Partial {
+struct LaneSums {
     /// The [`NSUMS`] sums, in the order of [`NSUMS`]'s documentation.
     s: [[f64; LANES]; NSUMS],
     min_abs_z: [f64; LANES],
@@ -57,7 +57,7 @@ struct Partial {
     flipped: [u64; LANES],
 }
 
-impl Partial {
+impl LaneSums {
     /// Adds the lanes ((0 + 1) + (2 + 3)) and assembles the normal equations. `CHECK`: the
     /// pass had a reference pose (and so no `max_abs_q`).
     // Index loops fill the blocks of H by position.
@@ -114,19 +114,19 @@ impl Partial {
 /// signs with the reference pose of `k`; `None` after the first block with a flipped sign.
 #[inline(always)]
 pub(super) fn pass<const CHECK: bool, const HESS: bool>(
-    k: &PassConsts,
+    k: &PassInputs,
     world: &[Point3<f64>],
     image: &[Point2<f64>],
     weights: Option<&[f64]>,
 ) -> Option<Normal> {
-    let mut acc = Partial {
+    let mut acc = LaneSums {
         s: [[0.0; LANES]; NSUMS],
         min_abs_z: [f64::INFINITY; LANES],
         max_abs_z: [0.0; LANES],
         max_q2: [0.0; LANES],
         flipped: [0; LANES],
     };
-    let flipped = |acc: &Partial| CHECK && acc.flipped.iter().any(|&f| f != 0);
+    let flipped = |acc: &LaneSums| CHECK && acc.flipped.iter().any(|&f| f != 0);
     let mut blk = Block::new();
     let mut filled = 0;
     match weights {
@@ -188,10 +188,10 @@ pub(super) fn pass<const CHECK: bool, const HESS: bool>(
 /// Adds point `l` of `blk` to lane `l` of `acc` (see [`Problem::accumulate`]).
 #[inline(always)]
 fn lane<const CHECK: bool, const HESS: bool>(
-    k: &PassConsts,
+    k: &PassInputs,
     blk: &Block,
     l: usize,
-    acc: &mut Partial,
+    acc: &mut LaneSums,
 ) {
     let xc = [
         blk.x[0][l] - k.c[0],
