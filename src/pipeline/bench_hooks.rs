@@ -12,8 +12,6 @@ use super::reprojection::{self, ReprojOptions};
 use crate::numeric::bounds::M_EIGEN_MAX_ITER;
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, SVector, Vector3};
 
-/// Hard bound on the symmetric eigen-decomposition sweeps (as in the solver).
-
 /// The intermediates of one problem that the later stages take as input.
 #[derive(Clone, Debug)]
 pub struct Prepared {
