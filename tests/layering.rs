@@ -78,8 +78,13 @@ fn resolve(
     is_mod_rs: bool,
     path: &[&str],
     known: &BTreeSet<Vec<String>>,
+    root_exports: &BTreeMap<String, Vec<String>>,
 ) -> Option<Vec<String>> {
     let mut base: Vec<String> = match path.first()? {
+        // A name the crate root re-exports (`crate::Solver`) is an edge to where it lives.
+        &"crate" if path.len() >= 2 && root_exports.contains_key(path[1]) => {
+            return Some(root_exports[path[1]].clone());
+        }
         &"crate" => Vec::new(),
         &"self" | &"super" => {
             // `self` of a `foo.rs` or `foo/mod.rs` file is the module itself.
@@ -189,6 +194,28 @@ fn graph(src: &Path) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
         modules.insert(module_of(rel), (f.clone(), name == "mod.rs"));
     }
     let known: BTreeSet<Vec<String>> = modules.keys().cloned().collect();
+    // Names re-exported by the crate root (`pub use a::b::{X, Y};` in lib.rs): `crate::X`
+    // resolves to the module `a::b` (or the longest known prefix of it).
+    let mut root_exports = BTreeMap::new();
+    if let Some((root_file, _)) = modules.get(&Vec::new()) {
+        let code = production_code(&std::fs::read_to_string(root_file).unwrap());
+        for line in code.lines() {
+            let Some(rest) = line.trim_start().strip_prefix("pub use ") else {
+                continue;
+            };
+            for p in paths(&format!("crate::{rest}")) {
+                let Some((name, prefix)) = p.split_last() else {
+                    continue;
+                };
+                let segs: Vec<&str> = prefix.iter().map(String::as_str).collect();
+                if let Some(target) = resolve(&[], false, &segs, &known, &BTreeMap::new()) {
+                    if !target.is_empty() {
+                        root_exports.insert(name.clone(), target);
+                    }
+                }
+            }
+        }
+    }
     let mut g: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
     for (m, (f, is_mod_rs)) in &modules {
         let code = production_code(&std::fs::read_to_string(f).unwrap());
@@ -204,7 +231,7 @@ fn graph(src: &Path) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
             }
             for p in paths(line) {
                 let segs: Vec<&str> = p.iter().map(String::as_str).collect();
-                let Some(target) = resolve(m, *is_mod_rs, &segs, &known) else {
+                let Some(target) = resolve(m, *is_mod_rs, &segs, &known, &root_exports) else {
                     continue;
                 };
                 let related = target.starts_with(m) || m.starts_with(&target);
