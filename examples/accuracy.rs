@@ -1,6 +1,6 @@
 //! Accuracy tables for the README: `cargo run --release --example accuracy [-- TRIALS]`.
 //!
-//! The paper's synthetic protocol (ALGORITHM.md section 7; f = 800 px, 640x480, points in
+//! The paper's synthetic protocol (docs/algorithm.md section 7; f = 800 px, 640x480, points in
 //! [-2,2]x[-2,2]x[4,8] in the camera frame, Haar-uniform rotations, Gaussian pixel noise), the
 //! same seeded generator as the test suite (`tests/common`). For every trial: eopnp default
 //! mode (EOPnP + reprojection refinement), `Refinement::Algebraic` (the paper's algorithm), and

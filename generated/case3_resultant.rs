@@ -2,7 +2,7 @@
 // Committed copy: generated/case3_resultant.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 296 mul, 187 add. Naive expansion: 1164 terms, 6981 mul, 1154 add.
 
-/// Case 3 of EOPnP (ALGORITHM.md S4.3, G5): `r = v1 + k1 v2 + k2 v3` minimises the bivariate quartic `C3(k1, k2) = |B k|^2`. With `x = k1` and the hidden `y = k2`, `dC3/dx` and `dC3/dy` are cubics in `x`; their resultant in `x` (the 6x6 Sylvester determinant) has full degree 9 in `y`.
+/// Case 3 of EOPnP (docs/algorithm.md S4.3, G5): `r = v1 + k1 v2 + k2 v3` minimises the bivariate quartic `C3(k1, k2) = |B k|^2`. With `x = k1` and the hidden `y = k2`, `dC3/dx` and `dC3/dy` are cubics in `x`; their resultant in `x` (the 6x6 Sylvester determinant) has full degree 9 in `y`.
 ///
 /// Evaluated structurally: the 3x3 Bezout matrix (entries polynomial in `y`), its determinant by cofactor expansion with the polynomial products unrolled, sign flipped (`det Bezout = -det Sylvester`).
 ///
@@ -361,7 +361,7 @@ pub const CASE3_RESULTANT_OPS: KernelOps = KernelOps {
     naive_add: 1154,
     naive_terms: 1164,
 };
-/// Exponents `[i, j]` of `k1^i k2^j` for the 15 coefficients of the case-3 quartic (ALGORITHM.md G5 order).
+/// Exponents `[i, j]` of `k1^i k2^j` for the 15 coefficients of the case-3 quartic (docs/algorithm.md G5 order).
 pub const CASE3_MONOMIALS: [[u8; 2]; 15] = [
     [4, 0],
     [3, 1],

@@ -2,7 +2,7 @@
 // Committed copy: generated/cost.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 65 mul, 34 add. Naive expansion: 35 terms, 105 mul, 34 add.
 
-/// Value of the EOPnP cost `C(s) = sum_i c[i] s^COST_MONOMIALS[i]` at `s` (ALGORITHM.md section 4, G2), derived symbolically from the cost polynomial.
+/// Value of the EOPnP cost `C(s) = sum_i c[i] s^COST_MONOMIALS[i]` at `s` (docs/algorithm.md section 4, G2), derived symbolically from the cost polynomial.
 ///
 /// # Inputs
 /// - `c`: the 35 cost coefficients in `COST_MONOMIALS` order (from [`cost_coefficients`] or [`planar_cost_coefficients`])

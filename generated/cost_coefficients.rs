@@ -2,7 +2,7 @@
 // Committed copy: generated/cost_coefficients.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 82 mul, 116 add. Naive expansion: 264 terms, 252 mul, 229 add.
 
-/// Coefficients of the EOPnP cost `C(s) = rbar(s)^T M rbar(s)`, a quartic in the three Cayley (CGR) parameters `s = (s1, s2, s3)` with all 35 monomials of degree <= 4 (ALGORITHM.md section 4, G1; the paper prints only the 15 of degree 4).
+/// Coefficients of the EOPnP cost `C(s) = rbar(s)^T M rbar(s)`, a quartic in the three Cayley (CGR) parameters `s = (s1, s2, s3)` with all 35 monomials of degree <= 4 (docs/algorithm.md section 4, G1; the paper prints only the 15 of degree 4).
 ///
 /// `rbar(s) = vec((1 - s^T s) I + 2 [s]x + 2 s s^T)`, row-major.
 ///
@@ -210,7 +210,7 @@ pub const COST_COEFFICIENTS_OPS: KernelOps = KernelOps {
     naive_terms: 264,
 };
 /// Exponents `[a, b, c]` of `s1^a s2^b s3^c` for each of the 35 cost coefficients, in order
-/// (ALGORITHM.md section 4, G1).
+/// (docs/algorithm.md section 4, G1).
 pub const COST_MONOMIALS: [[u8; 3]; 35] = [
     [4, 0, 0],
     [3, 1, 0],

@@ -2,7 +2,7 @@
 // Committed copy: generated/planar_cost_coefficients.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 60 mul, 52 add. Naive expansion: 124 terms, 116 mul, 89 add.
 
-/// Coefficients of the planar EOPnP cost `C(s) = rbar(s)^T M rbar(s)` when only the first two columns of `R` enter the cost (ALGORITHM.md section 4, G3): `M` is the 6x6 restriction of the 9x9 matrix to `PLANAR = [0, 1, 3, 4, 6, 7]`, every other entry zero. All 35 coefficients stay non-zero; the gradient and Hessian at `s` come from [`cost_gradient`] and [`cost_hessian`] (same monomials) or from [`planar_cost_gradient`] / [`planar_cost_hessian`].
+/// Coefficients of the planar EOPnP cost `C(s) = rbar(s)^T M rbar(s)` when only the first two columns of `R` enter the cost (docs/algorithm.md section 4, G3): `M` is the 6x6 restriction of the 9x9 matrix to `PLANAR = [0, 1, 3, 4, 6, 7]`, every other entry zero. All 35 coefficients stay non-zero; the gradient and Hessian at `s` come from [`cost_gradient`] and [`cost_hessian`] (same monomials) or from [`planar_cost_gradient`] / [`planar_cost_hessian`].
 ///
 /// # Inputs
 /// - `m`: the 21 entries `M[i][j]`, `i <= j`, `i, j` in `PLANAR = [0, 1, 3, 4, 6, 7]`, in the order (0,0), (0,1), (0,3), ..., (7,7)

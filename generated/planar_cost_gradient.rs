@@ -2,7 +2,7 @@
 // Committed copy: generated/planar_cost_gradient.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 141 mul, 108 add. Naive expansion: 222 terms, 716 mul, 219 add.
 
-/// Derivative of the planar EOPnP cost (ALGORITHM.md section 4, G3) at `s`, from the 21 entries of the planar `M`: the 35 coefficients are formed first, then the derivative of `sum_i c[i] s^COST_MONOMIALS[i]`.
+/// Derivative of the planar EOPnP cost (docs/algorithm.md section 4, G3) at `s`, from the 21 entries of the planar `M`: the 35 coefficients are formed first, then the derivative of `sum_i c[i] s^COST_MONOMIALS[i]`.
 ///
 /// # Inputs
 /// - `m`: the 21 entries `M[i][j]`, `i <= j`, `i, j` in `PLANAR = [0, 1, 3, 4, 6, 7]`, in the order (0,0), (0,1), (0,3), ..., (7,7)

@@ -1,7 +1,7 @@
 //! Errors returned by the solver.
 //!
 //! Every input problem the solver can detect is reported as a [`PnpError`] (the solver never
-//! panics on user input). Input checks run in a fixed order (ALGORITHM.md section 6): slice
+//! panics on user input). Input checks run in a fixed order (docs/algorithm.md section 6): slice
 //! lengths, weights length, number of points, finiteness, weight signs, number of points with a
 //! positive weight, coincident world points, collinear world points, coincident image points.
 

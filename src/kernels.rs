@@ -6,7 +6,7 @@
 //! A formatted copy of exactly what is compiled is committed in `generated/`; read it there, or
 //! print one kernel with `cargo run -p eopnp-codegen -- show NAME`.
 //!
-//! | kernel | what it computes (ALGORITHM.md) |
+//! | kernel | what it computes (docs/algorithm.md) |
 //! |---|---|
 //! | [`cost_coefficients`] | the 35 coefficients of the quartic cost C(s) from the 45 entries of M (G1) |
 //! | [`cost`], [`cost_gradient`], [`cost_hessian`] | C, grad C, hess C at s from the coefficients (G2) |
@@ -16,7 +16,7 @@
 //! | [`case3_quartic`], [`case3_resultant`], [`case3_cubics`] | case 3: the bivariate quartic, its degree-9 resultant, the cubics (G5) |
 //! | [`case4_matrix`], [`case4_determinant`] | case 4: M(k1) and its degree-8 determinant (G6) |
 //!
-//! Symbols follow ALGORITHM.md: `s1, s2, s3` are the CGR parameters, `mIJ` the entry `M[I][J]`,
+//! Symbols follow docs/algorithm.md: `s1, s2, s3` are the CGR parameters, `mIJ` the entry `M[I][J]`,
 //! `rIJ` the rotation entry `R[I-1][J-1]`.
 
 /// Operation counts of one generated kernel, as emitted.

@@ -68,7 +68,7 @@ pub use pipeline::{CandidateSource, PlanarDetection, Refinement, Solution, Solut
 pub use robust::{p3p, ransac};
 pub use solver::{solve, CameraSolution, Solver};
 
-/// Error metrics of ALGORITHM.md section 1 (the paper's).
+/// Error metrics of docs/algorithm.md section 1 (the paper's).
 pub mod metrics {
     pub use crate::numeric::rotation::{rotation_error_deg, translation_error_pct};
 }
@@ -81,7 +81,7 @@ pub mod __internal {
     /// `(M, G, Rw, ratio)`: the S1-S2 intermediates in the working frame.
     pub type Intermediates = (SMatrix<f64, 9, 9>, SMatrix<f64, 3, 9>, Matrix3<f64>, f64);
 
-    /// `(M, G, Rw, ratio)` of ALGORITHM.md S1-S2 in the working frame, or `None` on invalid
+    /// `(M, G, Rw, ratio)` of docs/algorithm.md S1-S2 in the working frame, or `None` on invalid
     /// input.
     #[must_use]
     pub fn intermediates(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Intermediates> {

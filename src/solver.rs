@@ -68,7 +68,7 @@ impl Solver {
     }
 
     /// `true` runs every candidate generator and refines every start to convergence for every
-    /// problem (ALGORITHM.md S4-S6 literally: no certified early exit, no skipping of starts
+    /// problem (docs/algorithm.md S4-S6 literally: no certified early exit, no skipping of starts
     /// that lie near an already refined minimum). Default: `false`: the case-1 (planar: p1) start is refined
     /// first, and accepted without the rest of the search when a Lagrangian dual certificate
     /// proves it is the global minimum of the cost and more than half of the points are in

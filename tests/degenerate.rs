@@ -1,4 +1,4 @@
-//! Invalid and degenerate inputs (ALGORITHM.md section 6): one test per `PnpError` variant,
+//! Invalid and degenerate inputs (docs/algorithm.md section 6): one test per `PnpError` variant,
 //! the "solve and flag" cases, and a property test that `solve` never panics and never returns
 //! a non-finite pose.
 
@@ -67,7 +67,7 @@ fn length_mismatch() {
         matches!(err, PnpError::LengthMismatch { world: 6, image: 5 }),
         "{err:?}"
     );
-    // The shape check comes first (ALGORITHM.md section 6 order), even with N < 4.
+    // The shape check comes first (docs/algorithm.md section 6 order), even with N < 4.
     let err = eopnp::solve(&p.world[..3], &p.image[..2]).unwrap_err();
     assert!(
         matches!(err, PnpError::LengthMismatch { world: 3, image: 2 }),
@@ -273,7 +273,7 @@ fn all_points_behind_the_camera_is_flagged() {
             r.iter().chain(t.iter()).all(|v| v.is_finite()),
             "seed {seed:#x}"
         );
-        // The prototype returns a pose 177 deg off with f_rel = 2e-2 (ALGORITHM.md section 6).
+        // The prototype returns a pose 177 deg off with f_rel = 2e-2 (docs/algorithm.md section 6).
         // A residual "flags it" when it is far above noise-free rounding: an RMS of 1e-6 in
         // normalised units is 8e-4 px at f = 800, while exact solves give ~1e-15.
         assert!(
@@ -288,7 +288,7 @@ fn all_points_behind_the_camera_is_flagged() {
 #[test]
 fn nearly_collinear_solves_and_flags() {
     // Offset 1e-6 of the extent: above the collinearity threshold (sv1 / sv0 > 1e-8), but M
-    // has 7 tiny eigenvalues (ALGORITHM.md section 6): solve, and set the degenerate flag.
+    // has 7 tiny eigenvalues (docs/algorithm.md section 6): solve, and set the degenerate flag.
     for seed in 0..5 {
         let (world, image, _, _) = line_problem(1e-6, 100 + seed);
         let sol = eopnp::solve(&world, &image).unwrap_or_else(|e| panic!("seed {seed}: {e:?}"));
@@ -320,7 +320,7 @@ fn millimetre_world_with_large_offset_is_exact() {
 #[test]
 fn duplicated_correspondences_are_exact() {
     // One duplicated correspondence (N = 6, 5 distinct), and 4 distinct points each given
-    // twice (N = 8): exact (ALGORITHM.md section 6).
+    // twice (N = 8): exact (docs/algorithm.md section 6).
     let p = valid(6, "dup");
     let mut world = p.world.clone();
     let mut image = p.image.clone();

@@ -6,7 +6,7 @@
 //! Problems are noisy (1 px, general scenes, N = 6..30), so the pose is a genuine minimiser
 //! rather than an exact solution. Tolerances: the solver's answer is located by iterative
 //! stopping rules on a cost that is flat to rounding at the minimum; two correct minimisers
-//! of the same cost agree to ~1e-7 deg (ALGORITHM.md S9), so rotations are compared at 1e-6 deg
+//! of the same cost agree to ~1e-7 deg (docs/algorithm.md S9), so rotations are compared at 1e-6 deg
 //! (the spec's S9 comparison tolerance) and translations at 1e-8 relative (the same flatness:
 //! measured <= 4e-11 relative between two LMs, see common::lm_refine and test_vectors.rs).
 

@@ -1,5 +1,5 @@
 //! The 18 reference problems of `shared/reference/test_vectors.json` (copied to
-//! `tests/data/`), checked as ALGORITHM.md section 8 prescribes.
+//! `tests/data/`), checked as docs/algorithm.md section 8 prescribes.
 //!
 //! - Algebraic mode (S0-S8): noise-free vectors within 1e-9 deg / 1e-9 % of the ground truth;
 //!   noisy vectors within 1e-6 deg / 1e-6 % of the stored output (the same local minimum of the
@@ -126,7 +126,7 @@ fn algebraic_mode_matches_reference() {
                 "stored",
             )
         };
-        // Noise-free: the reference reaches the truth to <= 5.5e-10 deg (ALGORITHM.md section 7,
+        // Noise-free: the reference reaches the truth to <= 5.5e-10 deg (docs/algorithm.md section 7,
         // planar N = 4; typically 1e-13), so 1e-9 deg / 1e-9 % is the section-8 tolerance.
         // Noisy: the same local minimum of the same cost, located to ~1e-8 deg by S6's
         // stopping rules; section 8 prescribes 1e-6 deg / 1e-6 %.
@@ -180,7 +180,7 @@ fn default_mode_matches_s9_from_expected() {
             tv.name, lm.iterations
         ));
         // Two correct minimisers of E agree to ~1e-7 deg (E is flat to rounding there;
-        // ALGORITHM.md S9), hence section 8's 1e-6 deg. Measured on these 18 vectors: this
+        // docs/algorithm.md S9), hence section 8's 1e-6 deg. Measured on these 18 vectors: this
         // reference vs reproj_refine.py's S9 from the same start, <= 1.6e-8 deg and
         // <= 4.2e-9 % (so the 1e-6 % translation tolerance has a 200x margin).
         if !(er <= 1e-6 && et <= 1e-6) {
@@ -192,7 +192,7 @@ fn default_mode_matches_s9_from_expected() {
         if tv.noise_free() {
             let er = rot_err_deg(&r, &tv.r_gt);
             let et = trans_err_pct(&t, &tv.t_gt);
-            // S9 does not move a noise-free exact pose (ALGORITHM.md S9: <= 1.6e-13 deg).
+            // S9 does not move a noise-free exact pose (docs/algorithm.md S9: <= 1.6e-13 deg).
             if !(er <= 1e-9 && et <= 1e-9) {
                 failures.push(format!("{}: {er:e} deg, {et:e} % from the truth", tv.name));
             }
@@ -209,7 +209,7 @@ fn default_mode_matches_s9_from_expected() {
 }
 
 /// M, G, Rw and the planarity ratio of S1/S2 against the stored intermediates, after aligning
-/// the working frames (ALGORITHM.md section 8): D = Rw_port Rw_ref^T must be diagonal +-1 with
+/// the working frames (docs/algorithm.md section 8): D = Rw_port Rw_ref^T must be diagonal +-1 with
 /// det +1; compare M_port with Bd M_ref Bd^T and G_port with G_ref Bd^T, Bd = blockdiag(D, D, D).
 ///
 /// NEEDS the internal hook `eopnp::__internal::intermediates(world, image) ->

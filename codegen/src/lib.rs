@@ -5,7 +5,7 @@
 //!   partial derivative, substitution, collect by one variable, exact division, fraction-free
 //!   determinants). No floating point anywhere in the symbolic stage.
 //! - [`program`]: a kernel as inputs, named intermediate definitions and outputs.
-//! - [`defs`]: the EOPnP polynomials, each defined once (ALGORITHM.md section 4).
+//! - [`defs`]: the EOPnP polynomials, each defined once (docs/algorithm.md section 4).
 //! - [`emit`]: kernel -> formatted Rust (`quote` + `prettyplease`), with common-subexpression
 //!   elimination and operation counts.
 //!

@@ -108,7 +108,7 @@ impl Mono {
 }
 
 /// Graded lexicographic order: higher total degree first; within a degree, a higher power of
-/// the lowest-numbered variable first (so `s1^2 > s1 s2 > s2^2`, as in ALGORITHM.md's tables).
+/// the lowest-numbered variable first (so `s1^2 > s1 s2 > s2^2`, as in docs/algorithm.md's tables).
 impl Ord for Mono {
     fn cmp(&self, other: &Self) -> Ordering {
         other.degree().cmp(&self.degree()).then_with(|| {

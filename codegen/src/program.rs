@@ -229,7 +229,7 @@ impl Kernel {
 }
 
 /// A polynomial in one hidden variable whose coefficients are polynomials in other symbols:
-/// `UPoly(c)` stands for `sum_k c[k] y^k` (ascending powers, as in ALGORITHM.md section 4).
+/// `UPoly(c)` stands for `sum_k c[k] y^k` (ascending powers, as in docs/algorithm.md section 4).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct UPoly(pub Vec<Poly>);
 

@@ -1,7 +1,7 @@
 //! Exact (rational) self-checks of the symbolic definitions and of the structured programs.
 //!
 //! The numeric checks of the *emitted* code live in the independent `eopnp-verify` crate; these
-//! tests pin the algebra itself: the cost table of ALGORITHM.md (G1), the equivalence of the
+//! tests pin the algebra itself: the cost table of docs/algorithm.md (G1), the equivalence of the
 //! structured (Bezout, cofactor) evaluations with the expanded definitions and with the 6x6
 //! Sylvester determinant, and exact vanishing at known common roots.
 
@@ -41,8 +41,8 @@ fn rendering_is_deterministic() {
 
 #[test]
 fn cost_table_matches_algorithm_md() {
-    // codegen/tests/data/cost_coeff_table.txt is shared/reference/cost_coeff_table.txt, written
-    // by sympy (derive_sym.py). Parse "c[ k] ... = +1*M00 -2*M04 ..." lines.
+    // codegen/tests/data/cost_coeff_table.txt is the G1 table of docs/algorithm.md, written
+    // independently by sympy during development. Parse "c[ k] ... = +1*M00 -2*M04 ..." lines.
     let text = include_str!("data/cost_coeff_table.txt");
     let k = cost::cost_coefficients(false);
     let names = &k.ring.names;
@@ -107,7 +107,7 @@ fn structured_programs_equal_their_expansions() {
     }
 }
 
-/// The gradient cubics of case 2 as printed in ALGORITHM.md S4.2.
+/// The gradient cubics of case 2 as printed in docs/algorithm.md S4.2.
 fn case2_spec_gradients(qv: &[Poly], p: &[Poly], x: &Poly, y: &Poly) -> (Poly, Poly) {
     let (q00, q01, q02, q11, q12, q22) = (&qv[0], &qv[1], &qv[2], &qv[3], &qv[4], &qv[5]);
     let g1 = q00
@@ -225,7 +225,7 @@ fn case3_resultant_has_full_degree_9() {
     assert_eq!(expanded.len(), 10);
     assert!(!expanded[9].is_zero());
     let terms: usize = expanded.iter().map(Poly::len).sum();
-    assert_eq!(terms, 1164, "ALGORITHM.md G5");
+    assert_eq!(terms, 1164, "docs/algorithm.md G5");
 }
 
 /// Exact inverse of a 3x3 rational matrix (None if singular).
@@ -280,7 +280,7 @@ fn case4_determinant_vanishes_at_a_known_root() {
             f[0][0] -= val; // w0 = 1
             forms.push(f);
         }
-        // Mm (constant) and N(k1) columns [deg 1, deg 1, deg 2] per ALGORITHM.md S4.4.
+        // Mm (constant) and N(k1) columns [deg 1, deg 1, deg 2] per docs/algorithm.md S4.4.
         let mm: [[Q; 3]; 3] =
             std::array::from_fn(|e| [forms[e][2][2], forms[e][3][3], q(2) * forms[e][2][3]]);
         let Some(inv) = inv3(&mm) else { continue };
@@ -347,7 +347,7 @@ fn case4_determinant_has_degree_8_and_17395_terms() {
     let expanded = k.expanded_outputs();
     assert!(!expanded[8].is_zero());
     let terms: usize = expanded.iter().map(Poly::len).sum();
-    assert_eq!(terms, 17395, "ALGORITHM.md G6");
+    assert_eq!(terms, 17395, "docs/algorithm.md G6");
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! `eopnp-compare`: accuracy and speed of eopnp against other Rust PnP solvers on identical
-//! problems of the paper's protocol (ALGORITHM.md section 7), in one process.
+//! problems of the paper's protocol (docs/algorithm.md section 7), in one process.
 //!
 //! ```text
 //! cargo run --release -p eopnp-compare -- [--trials 500] [--passes 5] [--seed S]

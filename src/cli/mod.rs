@@ -188,7 +188,7 @@ pub(crate) fn emit(text: &str) -> Result<(), Failure> {
     }
 }
 
-/// The bundled model (a copy of `shared/data/colmap-boxes`).
+/// The bundled model (`data/colmap-boxes`).
 fn bundled_model() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/colmap-boxes")
 }

@@ -5,7 +5,7 @@
 //! [`MAX_DEGREE`] real roots, sorted ascending, each distinct root reported once). No function
 //! panics, allocates, or loops without a hard iteration bound; non-finite input gives no roots.
 //!
-//! # Normalisation (ALGORITHM.md S0)
+//! # Normalisation (docs/algorithm.md S0)
 //!
 //! The coefficients are divided by the largest `|c_i|`; leading coefficients whose normalised
 //! magnitude is below `1e-14` are dropped (a polynomial whose leading coefficient is that small
@@ -50,7 +50,7 @@
 //! placement check (with fallback to this method) to catch close real pairs they turn complex.
 //! Measured, `real_roots` is also the faster of the two for degrees 3 and 4.
 //!
-//! # Near-real roots (ALGORITHM.md T8)
+//! # Near-real roots (docs/algorithm.md T8)
 //!
 //! [`real_roots_near`] additionally reports the real part of complex pairs whose imaginary part is
 //! tiny (see its documentation), so that noise turning a double real root into a close complex
@@ -63,7 +63,7 @@ mod closed;
 /// Largest supported polynomial degree (the eopnp resultants have degree 8 and 9).
 pub const MAX_DEGREE: usize = 9;
 
-/// The imaginary-part tolerance of ALGORITHM.md S0 ("keep roots with |Im z| <= 1e-6 (1 + |z|)"),
+/// The imaginary-part tolerance of docs/algorithm.md S0 ("keep roots with |Im z| <= 1e-6 (1 + |z|)"),
 /// for use with [`real_roots_near`].
 pub const DEFAULT_IMAG_TOL: f64 = 1e-6;
 
@@ -575,7 +575,7 @@ pub fn real_roots(c: &[f64]) -> Roots {
     }
 }
 
-/// [`real_roots`] plus the real parts of *near-real* complex pairs (ALGORITHM.md T8), e.g.
+/// [`real_roots`] plus the real parts of *near-real* complex pairs (docs/algorithm.md T8), e.g.
 /// `real_roots_near(c, DEFAULT_IMAG_TOL)` reproduces the prototype's rule
 /// `|Im z| <= 1e-6 (1 + |z|)`.
 ///

@@ -1,5 +1,5 @@
 //! Rotation utilities: CGR (Cayley-Gibbs-Rodrigues) maps, the exponential map, the nearest
-//! rotation (ALGORITHM.md S5), an accurate 3 x 3 SVD, the error metrics of ALGORITHM.md
+//! rotation (docs/algorithm.md S5), an accurate 3 x 3 SVD, the error metrics of docs/algorithm.md
 //! section 1, and a closed-form rotation -> quaternion conversion (T11).
 //!
 //! | symbol | meaning |
@@ -74,7 +74,7 @@ pub(crate) fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
         + skew(&v) * (2.0 * q0)
 }
 
-/// Nearest rotation to `a` in the Frobenius norm (ALGORITHM.md S5):
+/// Nearest rotation to `a` in the Frobenius norm (docs/algorithm.md S5):
 /// `U diag(1, 1, sgn det(U V^T)) V^T` from the SVD `a = U S V^T` (sgn 0 taken as +1).
 ///
 /// Returns `None` if an entry is not finite or `a` is zero.
@@ -94,7 +94,7 @@ pub(crate) fn nearest_rotation(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
 }
 
 /// Non-planar candidate `r` (null-space vector, any scale and sign) to a rotation
-/// (ALGORITHM.md S5): reshape row-major, negate if the determinant is negative, project with
+/// (docs/algorithm.md S5): reshape row-major, negate if the determinant is negative, project with
 /// [`nearest_rotation`]. Returns `None` for non-finite or zero `r`.
 pub(crate) fn candidate_to_rotation(r: &[f64; 9]) -> Option<Matrix3<f64>> {
     let a = Matrix3::from_row_slice(r);
@@ -117,7 +117,7 @@ fn angle_between(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
     a.cross(b).norm().atan2(a.dot(b))
 }
 
-/// Rotation error in degrees (the paper's metric, ALGORITHM.md section 1): the largest angle
+/// Rotation error in degrees (the paper's metric, docs/algorithm.md section 1): the largest angle
 /// between corresponding columns of `a` and `b`, each computed as `atan2(|a x b|, a . b)`.
 ///
 /// Resolves errors down to about 1e-14 degrees and is well defined at 180 degrees (unlike
@@ -131,7 +131,7 @@ pub fn rotation_error_deg(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
     worst.to_degrees()
 }
 
-/// Translation error in percent: `100 |t - t_true| / |t_true|` (ALGORITHM.md section 1).
+/// Translation error in percent: `100 |t - t_true| / |t_true|` (docs/algorithm.md section 1).
 ///
 /// Infinite or NaN when `t_true` is zero.
 pub fn translation_error_pct(t: &Vector3<f64>, t_true: &Vector3<f64>) -> f64 {

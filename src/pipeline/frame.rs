@@ -1,4 +1,4 @@
-//! S1 of ALGORITHM.md: input validation and the normalised working frame.
+//! S1 of docs/algorithm.md: input validation and the normalised working frame.
 //!
 //! | symbol | meaning |
 //! |---|---|

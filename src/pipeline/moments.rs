@@ -1,4 +1,4 @@
-//! S2 of ALGORITHM.md: O(N) accumulation of the sums that give `M` (9 x 9) and `G` (3 x 9);
+//! S2 of docs/algorithm.md: O(N) accumulation of the sums that give `M` (9 x 9) and `G` (3 x 9);
 //! `W`, `V` and `K` are never formed.
 //!
 //! | symbol | meaning (sums over points with weight `w > 0`; `w = 1` without weights) |

@@ -1,4 +1,4 @@
-//! S6 of ALGORITHM.md: damped Newton on SO(3) in moving CGR coordinates.
+//! S6 of docs/algorithm.md: damped Newton on SO(3) in moving CGR coordinates.
 //!
 //! Minimises `f(R) = vec(R)^T M vec(R)` from a starting rotation. Every iteration works in the
 //! CGR chart centred on the current estimate `R_k` (`s -> R(s) R_k`, `s = 0` at `R_k`), so the
@@ -32,7 +32,7 @@ use crate::numeric::bounds::{Bound, Budget};
 use crate::numeric::mat3::{cholesky3, cholesky3_solve, min_eigenvalue_sym3};
 use crate::numeric::rotation::cgr_to_rotation;
 
-/// Options of [`refine_so3`] (ALGORITHM.md S0 table).
+/// Options of [`refine_so3`] (docs/algorithm.md S0 table).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct NewtonOptions {
     /// Maximum number of iterations. Default: 50.

@@ -1,7 +1,7 @@
-//! S4 of ALGORITHM.md: candidate rotations from the (approximate) null space of M, and the
+//! S4 of docs/algorithm.md: candidate rotations from the (approximate) null space of M, and the
 //! algebra of constrained null-space combinations that the planar branch (S4') shares.
 //!
-//! Non-planar branch (ALGORITHM.md S4): `r` is sought in the span of the eigenvectors of the four
+//! Non-planar branch (docs/algorithm.md S4): `r` is sought in the span of the eigenvectors of the four
 //! smallest eigenvalues of `M`, with the orthonormality constraints of a rotation:
 //! case 1 (`r = v1`), case 2 (`r = x v1 + y v2`, quartic in `beta = y^2`), case 3
 //! (`r = v1 + k1 v2 + k2 v3`, degree-9 resultant), case 4 (`r = v1 + k1 v2 + k2 v3 + k3 v4`,
@@ -55,7 +55,7 @@ pub(crate) struct Candidate {
 pub(crate) type Candidates = ArrayVec<Candidate, MAX_CANDIDATES>;
 
 /// Relative eigenvalue level below which an eigenvalue of `M` counts as zero for the
-/// `degenerate` diagnostic (ALGORITHM.md S0).
+/// `degenerate` diagnostic (docs/algorithm.md S0).
 const DEGENERATE_EIG: f64 = 1e-10;
 
 /// The four fixed extra starting rotations of S4'' (working frame).
@@ -127,13 +127,13 @@ pub(crate) fn extra_starts(out: &mut Candidates) {
     }
 }
 
-/// The row pairs (j, k) of R whose dot products are the constraints f1..f6 (ALGORITHM.md S0).
+/// The row pairs (j, k) of R whose dot products are the constraints f1..f6 (docs/algorithm.md S0).
 const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
-/// Tolerance on the imaginary part of accepted near-real roots (ALGORITHM.md S0, T8).
+/// Tolerance on the imaginary part of accepted near-real roots (docs/algorithm.md S0, T8).
 const IMAG_TOL: f64 = 1e-6;
 
-/// `Q^{jk}[a][b]` for basis vectors `v` (ALGORITHM.md S4): `row_j(r) . row_k(r) = alpha^T Q alpha`.
+/// `Q^{jk}[a][b]` for basis vectors `v` (docs/algorithm.md S4): `row_j(r) . row_k(r) = alpha^T Q alpha`.
 /// `block(v, j)` returns the j-th 3-block (a row of R, or a column in the planar case).
 pub(super) fn quad_form<const M: usize, const D: usize>(
     v: &[SVector<f64, D>; M],
@@ -308,7 +308,7 @@ pub(super) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidate
 }
 
 /// S4.4 with the hidden variable chosen at run time: each of k1, k2, k3 is tried as the hidden
-/// one and the choice whose constant matrix `Mm` is best conditioned is used (ALGORITHM.md S4.4,
+/// one and the choice whose constant matrix `Mm` is best conditioned is used (docs/algorithm.md S4.4,
 /// "Robustness"); skipped if even that one is numerically singular.
 /// `q4` are the forms of f4, f5, f6 over (v1..v4).
 fn case4(

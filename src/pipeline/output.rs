@@ -1,4 +1,4 @@
-//! S8 of ALGORITHM.md, with S9 before it in the default mode: a refined minimum in the working
+//! S8 of docs/algorithm.md, with S9 before it in the default mode: a refined minimum in the working
 //! frame becomes the returned [`Solution`]. S9 moves it to the minimum of the reprojection
 //! error ([`super::reprojection`]); the pose is carried back to the world frame, and its
 //! costs, cheirality and diagnostics are filled in. The only way out of the solver: a pose that
@@ -28,7 +28,7 @@ pub struct Solution {
     /// The minimised cost: the (weighted) sum of squared normalised reprojection residuals in
     /// [`Refinement::Reprojection`] mode, `f / trace(M)` in [`Refinement::Algebraic`] mode.
     pub cost: f64,
-    /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (ALGORITHM.md S7).
+    /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (docs/algorithm.md S7).
     pub algebraic_cost: f64,
     /// Root-mean-square normalised reprojection residual (weighted), in units of the focal
     /// length: multiply by `f` for pixels. `f64::INFINITY` if a point lies in the focal plane
@@ -38,7 +38,7 @@ pub struct Solution {
     /// More than half of the points (with non-zero weight) are in front of the camera.
     pub cheirality_ok: bool,
     /// More than four eigenvalues of `M` are below `1e-10 trace(M)`: the configuration is close
-    /// to degenerate and the pose may be ambiguous (ALGORITHM.md S7, section 6).
+    /// to degenerate and the pose may be ambiguous (docs/algorithm.md S7, section 6).
     pub degenerate: bool,
     /// Whether the planar branch produced this pose's starting candidate.
     pub planar: bool,

@@ -1,4 +1,4 @@
-//! S4' of ALGORITHM.md: the planar branch. For a (nearly) planar cloud the working-frame z
+//! S4' of docs/algorithm.md: the planar branch. For a (nearly) planar cloud the working-frame z
 //! coordinates vanish, so only the first two columns of `R` are observable: the flattened
 //! system's 6 x 6 `M_p` (the entries of `M` of those columns) gives candidate column pairs
 //! `r6 = [R11, R12, R21, R22, R31, R32]` from its two smallest eigenvectors (cases p1 and p2,
@@ -63,7 +63,7 @@ fn planar_eigen(sys_p: &System) -> Option<([f64; 2], [SVector<f64, 6>; 2])> {
 }
 
 /// The 6x6 planar `M_p`: `M` of the flattened system restricted to the entries of the first two
-/// columns of `R` (ALGORITHM.md S4' step 2).
+/// columns of `R` (docs/algorithm.md S4' step 2).
 fn planar_m(sys_p: &System) -> SMatrix<f64, 6, 6> {
     const IDX: [usize; 6] = [0, 1, 3, 4, 6, 7];
     SMatrix::<f64, 6, 6>::from_fn(|i, j| sys_p.m[(IDX[i], IDX[j])])
@@ -111,7 +111,7 @@ fn planar_vectors(
     });
 }
 
-/// The rotation of a planar candidate (ALGORITHM.md S4' step 5, without the depth test):
+/// The rotation of a planar candidate (docs/algorithm.md S4' step 5, without the depth test):
 /// `[c1 c2] = U V^T` of the 3x2 matrix of the two columns, `R = [c1, c2, c1 x c2]`.
 fn planar_rotation(r6: &SVector<f64, 6>) -> Option<Matrix3<f64>> {
     if !r6.iter().all(|x| x.is_finite()) || r6.norm() == 0.0 {

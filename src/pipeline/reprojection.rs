@@ -1,11 +1,11 @@
-//! S9 of ALGORITHM.md: Levenberg-Marquardt refinement of the reprojection error.
+//! S9 of docs/algorithm.md: Levenberg-Marquardt refinement of the reprojection error.
 //!
 //! Minimises `E(R, t) = sum_i w_i (wx e_ix^2 + wy e_iy^2)`, `e_i = m_i - pi(R P_i + t)`,
 //! `pi(x, y, z) = (x / z, y / z)`, over the working-frame pose `(R, t)` with the update
 //! `R := Exp(w) R`, `t := t + tau`. Nielsen's damping rule; a step is accepted only if it lowers
 //! `E` and keeps the sign of every depth, so `E` never increases and no point crosses `z = 0`
 //! (a tiny final step is accepted on proof of both instead of evaluation, see below).
-//! Reference: `shared/reference/reproj_refine.py`, function `refine`.
+//! Reference: the `refine` function of the numpy reference prototype (docs/algorithm.md, S9).
 //!
 //! The working-frame points `P_i = Rw (X_i - c) / d` (S1) are never materialised: every pass
 //! composes the frame into the pose, `p_i = A (X_i - c) + t` with `A = R Rw / d`, and
@@ -58,7 +58,7 @@ use pass::{pass, PassInputs};
 use crate::numeric::linalg::solve_damped6;
 use crate::numeric::rotation::exp_so3;
 
-/// Options of the reprojection refinement (S9). The defaults are ALGORITHM.md's values.
+/// Options of the reprojection refinement (S9). The defaults are docs/algorithm.md's values.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ReprojOptions {
     /// Hard cap on LM iterations (rejected steps and failed factorisations count). Default 50.

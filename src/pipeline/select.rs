@@ -1,4 +1,4 @@
-//! S7 of ALGORITHM.md: the refined local minima and the choice among them. The pose with the
+//! S7 of docs/algorithm.md: the refined local minima and the choice among them. The pose with the
 //! smallest algebraic cost `f` among the minima with more than half of the points in front of
 //! the camera; without any such minimum, the smallest `f`.
 

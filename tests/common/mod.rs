@@ -1,5 +1,5 @@
 //! Shared test infrastructure for the integration tests of `eopnp`: seeded RNG, the synthetic
-//! problem generator of ALGORITHM.md section 7 (`shared/reference/synth.py`), the error metrics
+//! problem generator of docs/algorithm.md section 7 (`shared/reference/synth.py`), the error metrics
 //! of section 1, and an independent Levenberg-Marquardt reference ("LM from ground truth", the
 //! maximum-likelihood floor).
 //!
@@ -15,7 +15,7 @@ use rand::{Rng, SeedableRng};
 use rand_distr::StandardNormal;
 use rand_pcg::Pcg64;
 
-/// Focal length of the synthetic camera, pixels (ALGORITHM.md section 7).
+/// Focal length of the synthetic camera, pixels (docs/algorithm.md section 7).
 pub const F: f64 = 800.0;
 /// Principal point x, pixels (640 x 480 image).
 pub const CX: f64 = 320.0;
@@ -132,7 +132,7 @@ pub fn rotation_near_180(rng: &mut Pcg64, max_dev_deg: f64) -> Matrix3<f64> {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Metrics (ALGORITHM.md section 1)
+// Metrics (docs/algorithm.md section 1)
 // ---------------------------------------------------------------------------------------------
 
 /// Rotation error: the largest angle between corresponding columns, degrees, via atan2.
@@ -195,7 +195,7 @@ pub fn max_of(v: &[f64]) -> f64 {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Problem generator (ALGORITHM.md section 7, synth.py)
+// Problem generator (docs/algorithm.md section 7, synth.py)
 // ---------------------------------------------------------------------------------------------
 
 /// Scene type.
@@ -487,12 +487,12 @@ pub fn reprojection_cost(
 ///   xtol=ftol=gtol=1e-14)`) on 40 numpy-generated problems of the paper protocol (N = 4, 5,
 ///   6, 10, 15 at sigma = 0.5, 2, 5 px, and planar N = 4, 6, 10 at 2 px): final costs agree to
 ///   2.3e-13 relative (ours lower where they differ most), rotations to 2.6e-7 deg (typically
-///   1e-9; the minimum is flat to rounding, cf. ALGORITHM.md S9), translations to 7.8e-10
+///   1e-9; the minimum is flat to rounding, cf. docs/algorithm.md S9), translations to 7.8e-10
 ///   relative; all 40 converged in 4-6 iterations;
 /// - noise-free problems (all scenes and rotation kinds, N = 4..100, 1,500 trials): returns
 ///   the truth to 2.3e-13 deg / 1.9e-15 relative;
 /// - paper protocol, N = 10, sigma = 2 px, 1,000 trials of [`Problem::generate`]: mean
-///   rotation error 0.384 +- 0.006 deg, mean translation error 0.267 +- 0.005 % (ALGORITHM.md
+///   rotation error 0.384 +- 0.006 deg, mean translation error 0.267 +- 0.005 % (docs/algorithm.md
 ///   section 7, LM-from-GT: 0.380 / 0.390 deg, 0.26 %); N = 4, 5, 6, 15: 1.05, 0.731, 0.580,
 ///   0.297 deg (section 7: 1.07, 0.746, 0.592, 0.286); sigma 0.5 / 5 px: 0.0959 / 0.954 deg
 ///   (0.097 / 0.948).

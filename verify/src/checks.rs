@@ -596,7 +596,7 @@ pub fn case2_cubics(n: usize) -> Measurement {
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case2_cubics",
-        "vs g1, g2 of ALGORITHM.md S4.2",
+        "vs g1, g2 of docs/algorithm.md S4.2",
         "max_n |d a_n| / |a_n|_abs",
         format!("{TOL_POLY:.0e}"),
     );
@@ -709,7 +709,7 @@ pub fn case3_cubics(n: usize) -> Measurement {
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case3_cubics",
-        "vs dC3/dx, dC3/dy of ALGORITHM.md S4.3",
+        "vs dC3/dx, dC3/dy of docs/algorithm.md S4.3",
         "max_n |d a_n| / |a_n|_abs",
         format!("{TOL_POLY:.0e}"),
     );
@@ -814,7 +814,7 @@ pub fn case4_matrix(n: usize) -> Measurement {
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case4_matrix",
-        "vs row_i, row_ii, row_iii of ALGORITHM.md S4.4",
+        "vs row_i, row_ii, row_iii of docs/algorithm.md S4.4",
         "max_ij |dM_ij| / |M|_abs,ij",
         format!("{TOL_POLY:.0e}"),
     );

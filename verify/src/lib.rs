@@ -1,7 +1,7 @@
 //! Independent numeric verification of the generated kernels of `eopnp` (`eopnp::kernels`).
 //!
 //! Nothing here calls `eopnp-codegen`: every kernel is compared with the mathematical definition
-//! in ALGORITHM.md evaluated numerically with nalgebra (`reference`), with finite differences and
+//! in docs/algorithm.md evaluated numerically with nalgebra (`reference`), with finite differences and
 //! complex-step derivatives (`fd`), and, for the resultants, with nalgebra's determinant of the
 //! numerically built Sylvester matrix and with systems constructed to have a known root.
 //!

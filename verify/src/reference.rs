@@ -1,4 +1,4 @@
-//! Direct numeric definitions (ALGORITHM.md sections 1, 3 and 4), written from the formulas
+//! Direct numeric definitions (docs/algorithm.md sections 1, 3 and 4), written from the formulas
 //! with nalgebra and never from `eopnp-codegen`.
 //!
 //! Symbols: `s = (s1, s2, s3)` the CGR parameters, `Rbar(s) = (1 - s^T s) I + 2 [s]x + 2 s s^T`,
@@ -38,7 +38,7 @@ fn c<T: ComplexField<RealField = f64>>(x: f64) -> T {
     T::from_real(x)
 }
 
-/// `[a]x` (ALGORITHM.md section 1).
+/// `[a]x` (docs/algorithm.md section 1).
 #[must_use]
 pub fn skew<T: ComplexField<RealField = f64> + Copy>(a: &[T; 3]) -> [[T; 3]; 3] {
     let z = c::<T>(0.0);
@@ -167,7 +167,7 @@ pub fn cost_g<T: ComplexField<RealField = f64> + Copy>(m: &M9, s: &[T; 3]) -> T 
     acc
 }
 
-/// `grad C(s) = 2 J(s)^T M rbar(s)` (ALGORITHM.md S0/G2), generic.
+/// `grad C(s) = 2 J(s)^T M rbar(s)` (docs/algorithm.md S0/G2), generic.
 #[must_use]
 pub fn grad_g<T: ComplexField<RealField = f64> + Copy>(m: &M9, s: &[T; 3]) -> [T; 3] {
     let r = rbar_g(s);
@@ -200,7 +200,7 @@ pub fn grad(m: &M9, s: &[f64; 3]) -> Vector3<f64> {
     2.0 * jac(s).transpose() * (m * rbar(s))
 }
 
-/// `hess C(s) = 2 J^T M J + 2 sum_a (M rbar)_a HR_a` (ALGORITHM.md S6/G2).
+/// `hess C(s) = 2 J^T M J + 2 sum_a (M rbar)_a HR_a` (docs/algorithm.md S6/G2).
 #[must_use]
 pub fn hess(m: &M9, s: &[f64; 3]) -> Matrix3<f64> {
     let j = jac(s);
@@ -231,7 +231,7 @@ pub fn cost_scales(m: &M9, s: &[f64; 3]) -> (f64, Vector3<f64>, Matrix3<f64>) {
     (ra.dot(&mra), 2.0 * ja.transpose() * mra, sh)
 }
 
-/// My own enumeration of the 35 cost monomials (ALGORITHM.md G1: degree 4, 3, 2, 1, 0; within a
+/// My own enumeration of the 35 cost monomials (docs/algorithm.md G1: degree 4, 3, 2, 1, 0; within a
 /// degree by decreasing power of `s1`, then of `s2`). Compared with `COST_MONOMIALS` in a test.
 #[must_use]
 pub fn cost_monomials() -> Vec<[u8; 3]> {
@@ -279,7 +279,7 @@ pub fn m_upper45(m: &M9) -> [f64; 45] {
     std::array::from_fn(|k| m[pairs[k]])
 }
 
-/// `PLANAR` (ALGORITHM.md S0): the entries of `r` in the first two columns of `R`.
+/// `PLANAR` (docs/algorithm.md S0): the entries of `r` in the first two columns of `R`.
 pub const PLANAR: [usize; 6] = [0, 1, 3, 4, 6, 7];
 
 /// The 21 planar upper-triangle entries of `M` (planar kernel input layout).
@@ -304,7 +304,7 @@ pub fn planar_restrict(m: &M9) -> M9 {
 // ----------------------------------------------------------------------------------------------
 // S6: the local model on SO(3)
 
-/// `D = blockdiag(R^T, R^T, R^T)` (ALGORITHM.md S6), so that `vec(A R) = D vec(A)`.
+/// `D = blockdiag(R^T, R^T, R^T)` (docs/algorithm.md S6), so that `vec(A R) = D vec(A)`.
 #[must_use]
 pub fn blockdiag_rt(r: &Matrix3<f64>) -> M9 {
     let mut d = M9::zeros();
@@ -370,7 +370,7 @@ pub struct LocalModel {
     pub sh: Matrix3<f64>,
 }
 
-/// `F(s) = f(R(s) R)`, `R(s) = Rbar(s) / (1 + s^T s)` (ALGORITHM.md S6), generic.
+/// `F(s) = f(R(s) R)`, `R(s) = Rbar(s) / (1 + s^T s)` (docs/algorithm.md S6), generic.
 #[must_use]
 pub fn chart_f<T: ComplexField<RealField = f64> + Copy>(m: &M9, r: &Matrix3<f64>, s: &[T; 3]) -> T {
     let rb = rbar_g(s);
@@ -512,7 +512,7 @@ pub fn sylvester(p: &[f64; 4], q: &[f64; 4]) -> DMatrix<f64> {
     s
 }
 
-/// 3 x 3 Bezout matrix of two cubics (ALGORITHM.md G7), `br(i, j) = p_i q_j - p_j q_i`.
+/// 3 x 3 Bezout matrix of two cubics (docs/algorithm.md G7), `br(i, j) = p_i q_j - p_j q_i`.
 #[must_use]
 pub fn bezout(p: &[f64; 4], q: &[f64; 4]) -> Matrix3<f64> {
     let br = |i: usize, j: usize| p[i] * q[j] - p[j] * q[i];
@@ -587,7 +587,7 @@ pub fn case2_inputs(a: &SMatrix<f64, 6, 3>, b: &SVector<f64, 6>) -> ([f64; 6], [
     )
 }
 
-/// The gradient cubics of `C2` at `y`, written out from ALGORITHM.md S4.2:
+/// The gradient cubics of `C2` at `y`, written out from docs/algorithm.md S4.2:
 ///
 /// `g1 = 4 Q00 x^3 + 6 Q01 y x^2 + (2 (Q11 + 2 Q02) y^2 - 4 p0) x + (2 Q12 y^3 - 2 p1 y)`,
 /// `g2 = 2 Q01 x^3 + 2 (Q11 + 2 Q02) y x^2 + (6 Q12 y^2 - 2 p1) x + (4 Q22 y^3 - 4 p2 y)`.
@@ -669,7 +669,7 @@ pub fn case3_table(c: &[f64; 15]) -> [[f64; 5]; 5] {
     t
 }
 
-/// The gradient cubics of `C3 = sum c_ij x^i y^j` at `y` (ALGORITHM.md S4.3, by the power
+/// The gradient cubics of `C3 = sum c_ij x^i y^j` at `y` (docs/algorithm.md S4.3, by the power
 /// rule on the table): `dC3/dx = sum_ij i c_ij x^(i-1) y^j`, `dC3/dy = sum_ij j c_ij x^i y^(j-1)`.
 /// Returns ascending coefficients in `x` of both cubics and their absolute-value scales.
 #[must_use]
@@ -725,7 +725,7 @@ pub fn case4_t_at(t: &[f64; 21], k1: f64) -> (Matrix3<f64>, Matrix3<f64>) {
     (tv, ta)
 }
 
-/// `M(k1)` from ALGORITHM.md S4.4 with numeric `T = T(k1)` (rows `T_i`):
+/// `M(k1)` from docs/algorithm.md S4.4 with numeric `T = T(k1)` (rows `T_i`):
 ///
 /// `row_i   = (T00 - T21) T2 + T01 T1 - T20 T0 + [-T22, T02, 0]`,
 /// `row_ii  = (T20 - T11) T2 + T21 T1 - T10 T0 + [-T12, T22, 0]`,

@@ -27,7 +27,7 @@ fn cost_value_vs_quadratic_form() {
     checks::cost_value(Variant::Planar, N_COST).assert_ok();
 }
 
-/// The layout tables of the kernels agree with my own enumeration of ALGORITHM.md G1/G3.
+/// The layout tables of the kernels agree with my own enumeration of docs/algorithm.md G1/G3.
 #[test]
 fn layouts_match_algorithm_md() {
     let mons: Vec<[u8; 3]> = rf::cost_monomials();

@@ -1,4 +1,4 @@
-//! Check 4: the resultant kernels of cases 2, 3, 4 (ALGORITHM.md S4.2-S4.4, G4-G7).
+//! Check 4: the resultant kernels of cases 2, 3, 4 (docs/algorithm.md S4.2-S4.4, G4-G7).
 //!
 //! - Against nalgebra's determinant of the numerically built matrix (6 x 6 Sylvester matrix of
 //!   eq. 22 for cases 2, 3, written from the S4.2 / S4.3 cubic formulas; `M(k1)` for case 4) at
@@ -9,7 +9,7 @@
 //!   with Hadamard-bounded cofactors). Errors are reported relative to Hadamard's bound.
 //! - Known roots: exactly representable systems with a built-in common root, where the exact
 //!   resultant vanishes, so the only error is the kernel's rounding.
-//! - The cubic / quartic / matrix kernels against the formulas of ALGORITHM.md (1e-12 of the
+//! - The cubic / quartic / matrix kernels against the formulas of docs/algorithm.md (1e-12 of the
 //!   absolute-value scale, as for the cost).
 
 use eopnp::kernels as k;
@@ -66,7 +66,7 @@ fn case4_known_root() {
     checks::case4_known_root(N_RESULTANT).assert_ok();
 }
 
-/// The input tables agree with my own enumeration of ALGORITHM.md G5 / G6.
+/// The input tables agree with my own enumeration of docs/algorithm.md G5 / G6.
 #[test]
 fn layouts_match_algorithm_md() {
     assert_eq!(rf::case3_monomials().as_slice(), &k::CASE3_MONOMIALS[..]);

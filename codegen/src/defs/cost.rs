@@ -1,4 +1,4 @@
-//! The EOPnP cost C(s) = rbar(s)^T M rbar(s) (ALGORITHM.md sections 1, 2 and 4: G1-G3, S6).
+//! The EOPnP cost C(s) = rbar(s)^T M rbar(s) (docs/algorithm.md sections 1, 2 and 4: G1-G3, S6).
 //!
 //! Defined once, from the Cayley map itself: `Rbar(s) = (1 - s^T s) I + 2 [s]x + 2 s s^T`,
 //! `rbar = vec(Rbar)` row-major. Every other cost kernel (coefficients, value, gradient, Hessian,
@@ -10,7 +10,7 @@ use crate::program::Kernel;
 
 const DEF: &str = "codegen/src/defs/cost.rs";
 
-/// Entries of r = vec(R) (row-major) in the first two columns of R (ALGORITHM.md S0 `PLANAR`).
+/// Entries of r = vec(R) (row-major) in the first two columns of R (docs/algorithm.md S0 `PLANAR`).
 pub const PLANAR: [usize; 6] = [0, 1, 3, 4, 6, 7];
 
 /// `rbar(s)` for symbolic `s = (s1, s2, s3)`.
@@ -103,7 +103,7 @@ fn monomial_table(k: &mut Kernel, name: &str) {
     k.table(
         name,
         "Exponents `[a, b, c]` of `s1^a s2^b s3^c` for each of the 35 cost coefficients, in order\n\
-         (ALGORITHM.md section 4, G1).",
+         (docs/algorithm.md section 4, G1).",
         "[u8; 3]",
         elems,
     );
@@ -169,7 +169,7 @@ pub fn cost_coefficients(planar: bool) -> Kernel {
     if planar {
         k.doc(
             "Coefficients of the planar EOPnP cost `C(s) = rbar(s)^T M rbar(s)` when only the \
-               first two columns of `R` enter the cost (ALGORITHM.md section 4, G3): `M` is the \
+               first two columns of `R` enter the cost (docs/algorithm.md section 4, G3): `M` is the \
                6x6 restriction of the 9x9 matrix to `PLANAR = [0, 1, 3, 4, 6, 7]`, every other \
                entry zero. All 35 coefficients stay non-zero; the gradient and Hessian at `s` \
                come from [`cost_gradient`] and [`cost_hessian`] (same monomials) or from \
@@ -179,7 +179,7 @@ pub fn cost_coefficients(planar: bool) -> Kernel {
         k.doc(
             "Coefficients of the EOPnP cost `C(s) = rbar(s)^T M rbar(s)`, a quartic in the three \
                Cayley (CGR) parameters `s = (s1, s2, s3)` with all 35 monomials of degree <= 4 \
-               (ALGORITHM.md section 4, G1; the paper prints only the 15 of degree 4).",
+               (docs/algorithm.md section 4, G1; the paper prints only the 15 of degree 4).",
         );
         k.doc("`rbar(s) = vec((1 - s^T s) I + 2 [s]x + 2 s s^T)`, row-major.");
     }
@@ -293,7 +293,7 @@ pub fn cost_at(order: Order) -> Kernel {
     let mut k = Kernel::new(name, DEF);
     k.doc(&format!(
         "{what} of the EOPnP cost `C(s) = sum_i c[i] s^COST_MONOMIALS[i]` at `s` \
-         (ALGORITHM.md section 4, G2), derived symbolically from the cost polynomial."
+         (docs/algorithm.md section 4, G2), derived symbolically from the cost polynomial."
     ));
     let (poly, sv) = cost_in_c(&mut k);
     for (n, p) in derivatives(&poly, sv, order) {
@@ -317,7 +317,7 @@ pub fn planar_cost_at(order: Order) -> Kernel {
     };
     let mut k = Kernel::new(name, DEF);
     k.doc(
-        "Derivative of the planar EOPnP cost (ALGORITHM.md section 4, G3) at `s`, from the 21 \
+        "Derivative of the planar EOPnP cost (docs/algorithm.md section 4, G3) at `s`, from the 21 \
            entries of the planar `M`: the 35 coefficients are formed first, then the derivative \
            of `sum_i c[i] s^COST_MONOMIALS[i]`.",
     );
@@ -355,13 +355,13 @@ pub fn so3_local_model() -> Kernel {
     let mut k = Kernel::new("so3_local_model", DEF);
     k.doc(
         "Local model of `f(R) = vec(R)^T M vec(R)` at the rotation `R` in the CGR chart \
-           centred on `R` (`s -> R(s) R`, ALGORITHM.md S6): the value, gradient and Hessian at \
+           centred on `R` (`s -> R(s) R`, docs/algorithm.md S6): the value, gradient and Hessian at \
            `s = 0` of `C_k(s) = rbar(s)^T M_k rbar(s)`, `M_k = D^T M D`, \
            `D = blockdiag(R^T, R^T, R^T)`.",
     );
     k.doc(
         "Since `C_k(s) = (1 + s^T s)^2 f(R(s) R)`, `g` is also the gradient of `f` in the chart \
-           and the exact Hessian of `f` is `H_C - 4 f I` (ALGORITHM.md S6, trap T3).",
+           and the exact Hessian of `f` is `H_C - 4 f I` (docs/algorithm.md S6, trap T3).",
     );
     let upper = upper_names("m", &(0..9).collect::<Vec<_>>());
     let names: Vec<String> = upper.iter().map(|(_, _, n)| n.clone()).collect();

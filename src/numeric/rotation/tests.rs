@@ -67,7 +67,7 @@ fn cgr_roundtrip_and_orthonormal() {
 
 #[test]
 fn cgr_matches_formula() {
-    // Against the literal formula Rbar(s) / (1 + s's) from ALGORITHM.md section 1.
+    // Against the literal formula Rbar(s) / (1 + s's) from docs/algorithm.md section 1.
     let s = Vector3::new(0.3, -0.7, 1.9);
     let (s1, s2, s3) = (s.x, s.y, s.z);
     #[rustfmt::skip]

@@ -118,7 +118,7 @@ fn matches_explicit_k_t_k() {
             };
             let (m, g) = explicit(&pf, &pr.image, &w);
             // Cancellation in V^T V - (W^T V)^T G; measured ~1e-15 relative to max |M|
-            // (ALGORITHM.md S2 quotes 9e-16); 1e-13 leaves room for N up to 33.
+            // (docs/algorithm.md S2 quotes 9e-16); 1e-13 leaves room for N up to 33.
             assert!(
                 rel_diff(&sys.m, &m) < 1e-13,
                 "{trial} {flatten}: {:e}",

@@ -305,7 +305,7 @@ fn noise_free_reaches_machine_precision() {
         max_it = max_it.max(out.iterations);
         assert!(!out.hit_limit);
     }
-    // ALGORITHM.md S6: the prototype reaches max 9.8e-14 deg (N = 6) and 7.3e-14 deg
+    // docs/algorithm.md S6: the prototype reaches max 9.8e-14 deg (N = 6) and 7.3e-14 deg
     // (N = 10) over 300 trials; without the acceptance floor it would be ~2e-7 deg.
     // Allow 1e-12 deg (10x the measured prototype maximum).
     assert!(worst < 1e-12, "worst {worst:e} deg");

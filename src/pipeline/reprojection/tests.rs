@@ -72,7 +72,7 @@ fn random_rotation(rng: &mut Pcg64) -> Matrix3<f64> {
         .matrix()
 }
 
-/// Rotation error of ALGORITHM.md section 1 (max column angle, degrees, via atan2).
+/// Rotation error of docs/algorithm.md section 1 (max column angle, degrees, via atan2).
 fn rot_err_deg(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
     (0..3)
         .map(|k| {
@@ -435,7 +435,7 @@ fn agrees_with_independent_lm() {
         assert!(out.e <= out.e0);
     }
     // E is flat to rounding at the minimum: two correct LMs agree to ~1e-7 deg
-    // (ALGORITHM.md S9); 1e-6 deg is the spec's comparison tolerance. Neither may end at
+    // (docs/algorithm.md S9); 1e-6 deg is the spec's comparison tolerance. Neither may end at
     // a cost noticeably above the other's (1e-10 relative: E is quadratic near the minimum
     // and both converge to ~1e-13 relative).
     eprintln!("S9 vs independent LM: {worst_deg:e} deg, t rel {worst_t:e}, E rel {worst_e:e}");
