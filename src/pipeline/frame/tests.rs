@@ -60,21 +60,7 @@ impl TriangularFactor {
 /// and [`svd3`] of its triangular factor), kept as the reference of the tests; its `sums` are
 /// those of [`crate::pipeline::moments::accumulate`] in its frame.
 ///
-/// Original documentation: validate the input and compute the working frame.
-///
-/// Checks, in this order (the first failing one is reported): lengths of world and image
-/// ([`PnpError::LengthMismatch`]); length of the weights ([`PnpError::WeightsLength`]);
-/// N >= 4 ([`PnpError::TooFewPoints`] with `got = N`); every coordinate and weight finite,
-/// scanning index by index, world before image before weight ([`PnpError::NonFinite`]); no
-/// negative weight ([`PnpError::InvalidWeight`]); at least 4 points with a weight > 0
-/// ([`PnpError::TooFewPoints`] with `got` = that count); world range
-/// ([`DegenerateKind::ScaleOutOfRange`] if a coordinate exceeds `f64::MAX / 4`); coincident
-/// world points; collinear world points (`sv1 <= 1e-8 sv0`); world spread below the normal
-/// range ([`DegenerateKind::ScaleOutOfRange`]); coincident image points (weighted RMS spread
-/// `<= 1e-12 max(1, max |m|)`). All range quantities are taken over points with weight > 0.
-///
-/// `align = false` keeps the user's axes (`rw = I`; a test option, valid for non-planar
-/// input only); every check still runs and `ratio` is still computed.
+/// Same checks in the same order as [`working_frame`], whose documentation applies.
 pub(crate) fn working_frame_qr(
     world: &[Point3<f64>],
     image: &[Point2<f64>],
