@@ -129,7 +129,7 @@ fn validation_errors_in_order() {
 
 #[test]
 fn collinearity_threshold() {
-    // ALGORITHM.md section 6: offset 0 to 1e-8 of the extent -> collinear error;
+    // The collinearity rule (sv1 <= 1e-8 sv0): offset 0 to 1e-8 of the extent -> collinear error;
     // offset 1e-7 and above -> solvable.
     let mut rng = Pcg64::seed_from_u64(14);
     let image: Vec<Point2<f64>> = (0..10)
