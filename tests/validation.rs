@@ -129,8 +129,8 @@ fn validation_errors_in_order() {
 
 #[test]
 fn collinearity_threshold() {
-    // The collinearity rule (sv1 <= 1e-8 sv0): offset 0 to 1e-8 of the extent -> collinear error;
-    // offset 1e-7 and above -> solvable.
+    // The collinearity rule (sv1 <= 1e-8 sv0): offset 0 to 1e-8 of the extent -> collinear
+    // error; offset 1e-7 and above -> solvable.
     let mut rng = Pcg64::seed_from_u64(14);
     let image: Vec<Point2<f64>> = (0..10)
         .map(|_| Point2::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5)))
