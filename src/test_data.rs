@@ -1,30 +1,62 @@
-//! Test fixtures shared by unit tests: the `general_N6_sigma2` problem of
-//! `shared/reference/test_vectors.json` (copied verbatim; also in `tests/data/`).
+//! Test fixtures shared by unit tests, read from `tests/data/`: the problems of
+//! `test_vectors.json` (the reference prototype's test vectors) with the intermediates it
+//! stored, and the prototype's S6 minima (`reference_newton.json`).
 
-/// World points of `general_N6_sigma2`.
-pub(crate) const GENERAL_N6_SIGMA2_WORLD: [[f64; 3]; 6] = [
-    [1.0868021275186281, -1.3378125690946359, -0.3716971277257549],
-    [
-        -0.08262245175874146,
-        2.1404394422295856,
-        0.09475780416357736,
-    ],
-    [0.9837802860864412, 0.6486714833868172, -1.163831730906571],
-    [
-        -0.16408937546260566,
-        -0.6368367668076029,
-        1.5540718637475532,
-    ],
-    [-1.281369717191685, -0.9806899121263071, 0.6735257094982209],
-    [-0.5425008691920372, 0.1662283224121397, -0.7868265187770254],
-];
+use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector3};
+use serde_json::Value;
 
-/// Normalised image points of `general_N6_sigma2`.
-pub(crate) const GENERAL_N6_SIGMA2_UV: [[f64; 2]; 6] = [
-    [-0.0016570055124605432, -0.3422231017892266],
-    [0.15776340718902354, -0.02316152452382859],
-    [0.07176707780774506, -0.2872221288450443],
-    [0.12902243078389844, 0.1406703442626368],
-    [0.4194096267170485, 0.024480318873897174],
-    [0.296668343841841, -0.20472434279129387],
-];
+/// One problem of `test_vectors.json` and its stored working-frame intermediates.
+pub(crate) struct Vector {
+    pub world: Vec<Point3<f64>>,
+    pub image: Vec<Point2<f64>>,
+    pub c: Vector3<f64>,
+    pub d: f64,
+    pub rw: Matrix3<f64>,
+    pub ratio: f64,
+    pub m: SMatrix<f64, 9, 9>,
+    pub g: SMatrix<f64, 3, 9>,
+}
+
+/// The numbers of a (nested) JSON array, row-major.
+pub(crate) fn numbers(v: &Value) -> Vec<f64> {
+    match v {
+        Value::Array(a) => a.iter().flat_map(numbers).collect(),
+        x => vec![x.as_f64().expect("a number")],
+    }
+}
+
+fn parse(text: &str) -> Value {
+    serde_json::from_str(text).expect("valid JSON")
+}
+
+/// The problem `name` of `tests/data/test_vectors.json`.
+pub(crate) fn vector(name: &str) -> Vector {
+    let all = parse(include_str!("../tests/data/test_vectors.json"));
+    let v = all
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|v| v["name"] == name)
+        .expect("a problem of that name");
+    let i = &v["intermediate"];
+    let pw = numbers(&v["P_world"]);
+    let uv = numbers(&v["uv"]);
+    Vector {
+        world: pw
+            .chunks(3)
+            .map(|p| Point3::new(p[0], p[1], p[2]))
+            .collect(),
+        image: uv.chunks(2).map(|p| Point2::new(p[0], p[1])).collect(),
+        c: Vector3::from_row_slice(&numbers(&i["c"])),
+        d: i["d"].as_f64().unwrap(),
+        rw: Matrix3::from_row_slice(&numbers(&i["Rw"])),
+        ratio: i["ratio"].as_f64().unwrap(),
+        m: SMatrix::from_row_slice(&numbers(&i["M"])),
+        g: SMatrix::from_row_slice(&numbers(&i["G"])),
+    }
+}
+
+/// `tests/data/reference_newton.json`.
+pub(crate) fn newton_reference() -> Value {
+    parse(include_str!("../tests/data/reference_newton.json"))
+}

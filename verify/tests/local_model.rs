@@ -84,3 +84,98 @@ proptest! {
         }
     }
 }
+
+/// The S6 local model as the solver assembles it (`f`, `g`, `H = H_C - 4 f I` from the kernel)
+/// on the `M` of realistic problems (8 points, 0.02 image noise, any rotation), at random
+/// rotations, against central and second differences of `F(s) = f(R(s) R_k)` with fixed
+/// tolerances relative to `trace(M)`. (Formerly a unit test of the solver's Newton stage.)
+#[test]
+fn solver_local_model_on_realistic_problems() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(31);
+    let rand_unit = |rng: &mut rand_pcg::Pcg64| {
+        Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+        .normalize()
+    };
+    let exp = |w: Vector3<f64>| nalgebra::Rotation3::from_scaled_axis(w).into_inner();
+    // Cayley (CGR) rotation of a small s.
+    let cgr = |s: &Vector3<f64>| {
+        let ss = s.norm_squared();
+        (Matrix3::identity() * (1.0 - ss) + s.cross_matrix() * 2.0 + s * s.transpose() * 2.0)
+            / (1.0 + ss)
+    };
+    for _ in 0..50 {
+        let r_true = exp(rand_unit(&mut rng) * rng.random_range(0.0..3.1));
+        let t = Vector3::new(
+            rng.random_range(-0.5..0.5),
+            rng.random_range(-0.5..0.5),
+            6.0,
+        );
+        let world: Vec<nalgebra::Point3<f64>> = (0..8)
+            .map(|_| {
+                nalgebra::Point3::new(
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                )
+            })
+            .collect();
+        let image: Vec<nalgebra::Point2<f64>> = world
+            .iter()
+            .map(|x| {
+                let p = r_true * x.coords + t;
+                nalgebra::Point2::new(
+                    p.x / p.z + 0.02 * rng.random_range(-1.0..1.0),
+                    p.y / p.z + 0.02 * rng.random_range(-1.0..1.0),
+                )
+            })
+            .collect();
+        let (m, ..) = eopnp::__internal::intermediates(&world, &image).unwrap();
+        let trace = m.trace();
+        let m45 = rf::m_upper45(&m);
+        let cost = |r: &Matrix3<f64>| {
+            let v = rf::vec_r(r);
+            (v.transpose() * m * v)[0]
+        };
+        let rk = exp(rand_unit(&mut rng) * 3.0);
+        let r9: [f64; 9] = std::array::from_fn(|x| rk[(x / 3, x % 3)]);
+        let o = k::so3_local_model(&m45, &r9);
+        let (f, g) = (o[0], Vector3::new(o[1], o[2], o[3]));
+        #[rustfmt::skip]
+        let hess = Matrix3::new(o[4], o[5], o[6], o[5], o[7], o[8], o[6], o[8], o[9])
+            - Matrix3::identity() * (4.0 * f);
+        // f: same quadratic form, different evaluation order.
+        assert!((f - cost(&rk)).abs() < 1e-13 * trace);
+        // Central differences, step 1e-4: truncation h^2 |F'''| ~ 1e-8 trace, rounding
+        // eps trace / h ~ 1e-12 trace; allow 1e-7 trace.
+        let h = 1e-4;
+        let fk = |s: &Vector3<f64>| cost(&(cgr(s) * rk));
+        let gfd = Vector3::from_fn(|i, _| {
+            let mut e = Vector3::zeros();
+            e[i] = h;
+            (fk(&e) - fk(&-e)) / (2.0 * h)
+        });
+        assert!((gfd - g).amax() < 1e-7 * trace, "{:e}", (gfd - g).amax());
+        // Fixed-chart Hessian by second differences of F: error h^2 ~ 1e-8, rounding
+        // eps trace / h^2 ~ 1e-8 trace; allow 1e-6 trace.
+        for i in 0..3 {
+            for j in 0..3 {
+                let mut ei = Vector3::zeros();
+                ei[i] = h;
+                let mut ej = Vector3::zeros();
+                ej[j] = h;
+                let d2 = (fk(&(ei + ej)) - fk(&(ei - ej)) - fk(&(ej - ei)) + fk(&(-ei - ej)))
+                    / (4.0 * h * h);
+                assert!(
+                    (d2 - hess[(i, j)]).abs() < 1e-6 * trace,
+                    "{i}{j}: {d2} {}",
+                    hess[(i, j)]
+                );
+            }
+        }
+    }
+}

@@ -1,5 +1,5 @@
 use super::*;
-use crate::numeric::rotation::exp_so3;
+use crate::numeric::rotation::{exp_so3, rotation_error_deg as rot_err_deg};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_distr::StandardNormal;
@@ -72,16 +72,6 @@ fn random_rotation(rng: &mut Pcg64) -> Matrix3<f64> {
         .matrix()
 }
 
-/// Rotation error of docs/algorithm.md section 1 (max column angle, degrees, via atan2).
-fn rot_err_deg(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
-    (0..3)
-        .map(|k| {
-            let (x, y) = (a.column(k), b.column(k));
-            x.cross(&y).norm().atan2(x.dot(&y)).to_degrees()
-        })
-        .fold(0.0, f64::max)
-}
-
 /// A world-frame problem with an arbitrary world similarity (offset, scale) so that the
 /// working frame is far from the identity, plus its S1 frame (c, d, Rw).
 struct Setup {
@@ -149,6 +139,27 @@ impl Setup {
         let r = exp_so3(w) * self.r_gt;
         let t = self.t_gt + (self.r_gt - r) * self.c + dt * self.scale;
         (r, t)
+    }
+
+    /// S9 from the working-frame pose `(rk, tk)` in this setup's frame.
+    fn refine(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: Option<&[f64]>,
+        rk: &Matrix3<f64>,
+        tk: &Vector3<f64>,
+        opts: &ReprojOptions,
+    ) -> ReprojOutcome {
+        refine_reprojection(
+            world, image, weights, &self.c, self.d, &self.rw, rk, tk, opts,
+        )
+    }
+
+    /// S9 with the default options, unweighted, from `(rk, tk)`.
+    fn refine_default(&self, rk: &Matrix3<f64>, tk: &Vector3<f64>) -> ReprojOutcome {
+        let opts = ReprojOptions::default();
+        self.refine(&self.world, &self.image, None, rk, tk, &opts)
     }
 
     /// S8: working-frame pose -> world pose.
@@ -410,7 +421,7 @@ fn agrees_with_independent_lm() {
             row_weights: rows,
             ..ReprojOptions::default()
         };
-        let out = refine_reprojection(&s.world, &s.image, None, &s.c, s.d, &s.rw, &rk, &tk, &opts);
+        let out = s.refine(&s.world, &s.image, None, &rk, &tk, &opts);
         assert!(
             matches!(
                 out.stop,
@@ -449,17 +460,7 @@ fn noise_free_start_stays_put() {
     for seed in 0..30 {
         let s = Setup::new(300 + seed, 4 + seed as usize % 20, 0.0);
         let (rk, tk) = s.to_work(&s.r_gt, &s.t_gt);
-        let out = refine_reprojection(
-            &s.world,
-            &s.image,
-            None,
-            &s.c,
-            s.d,
-            &s.rw,
-            &rk,
-            &tk,
-            &ReprojOptions::default(),
-        );
+        let out = s.refine_default(&rk, &tk);
         let (r1, t1) = s.to_world(&out.r, &out.t);
         // At the exact solution the residuals are rounding (~1e-16), so any step is at
         // rounding level too: 1e-12 deg is ~1e-14 rad, i.e. a few hundred ulps.
@@ -490,7 +491,7 @@ fn iteration_cap_is_reachable_and_reported() {
             max_iterations: cap,
             ..ReprojOptions::default()
         };
-        let out = refine_reprojection(&s.world, &s.image, None, &s.c, s.d, &s.rw, &rk, &tk, &opts);
+        let out = s.refine(&s.world, &s.image, None, &rk, &tk, &opts);
         assert_eq!(out.stop, ReprojStop::MaxIterations, "cap {cap}");
         assert_eq!(out.iterations, cap);
         assert!(out.e <= out.e0);
@@ -498,17 +499,7 @@ fn iteration_cap_is_reachable_and_reported() {
             assert!(out.e < out.e0, "cap {cap}: no progress");
         }
     }
-    let full = refine_reprojection(
-        &s.world,
-        &s.image,
-        None,
-        &s.c,
-        s.d,
-        &s.rw,
-        &rk,
-        &tk,
-        &ReprojOptions::default(),
-    );
+    let full = s.refine_default(&rk, &tk);
     assert!(matches!(
         full.stop,
         ReprojStop::Gradient | ReprojStop::Step | ReprojStop::FinalStep
@@ -529,24 +520,14 @@ fn zero_weight_equals_dropping_bitwise() {
         let (r_start, t_start) = s.perturbed(&(gauss3(&mut g) * 0.05), &(gauss3(&mut g) * 0.05));
         let (rk, tk) = s.to_work(&r_start, &t_start);
         let opts = ReprojOptions::default();
-        let a = refine_reprojection(
-            &s.world,
-            &s.image,
-            Some(&w),
-            &s.c,
-            s.d,
-            &s.rw,
-            &rk,
-            &tk,
-            &opts,
-        );
+        let a = s.refine(&s.world, &s.image, Some(&w), &rk, &tk, &opts);
         let mut world = s.world.clone();
         let mut image = s.image.clone();
         let mut w2 = w.clone();
         world.remove(k);
         image.remove(k);
         w2.remove(k);
-        let b = refine_reprojection(&world, &image, Some(&w2), &s.c, s.d, &s.rw, &rk, &tk, &opts);
+        let b = s.refine(&world, &image, Some(&w2), &rk, &tk, &opts);
         assert_eq!(a.r, b.r);
         assert_eq!(a.t, b.t);
         assert_eq!(a.e.to_bits(), b.e.to_bits());
@@ -555,17 +536,7 @@ fn zero_weight_equals_dropping_bitwise() {
         let mut world3 = s.world.clone();
         // Put point k on the camera's z = 0 plane: X = R^T (p - t) with p_z = 0.
         world3[k] = Point3::from(r_start.transpose() * (Vector3::new(1.0, 1.0, 0.0) - t_start));
-        let c3 = refine_reprojection(
-            &world3,
-            &s.image,
-            Some(&w),
-            &s.c,
-            s.d,
-            &s.rw,
-            &rk,
-            &tk,
-            &opts,
-        );
+        let c3 = s.refine(&world3, &s.image, Some(&w), &rk, &tk, &opts);
         assert_eq!(c3.stop, a.stop);
         assert_eq!(a.r, c3.r);
         assert_eq!(a.t, c3.t);
@@ -587,18 +558,8 @@ fn weights_scale_points() {
     }
     let (rk, tk) = s.to_work(&s.r_gt, &s.t_gt);
     let opts = ReprojOptions::default();
-    let a = refine_reprojection(
-        &s.world,
-        &s.image,
-        Some(&w),
-        &s.c,
-        s.d,
-        &s.rw,
-        &rk,
-        &tk,
-        &opts,
-    );
-    let b = refine_reprojection(&world, &image, None, &s.c, s.d, &s.rw, &rk, &tk, &opts);
+    let a = s.refine(&s.world, &s.image, Some(&w), &rk, &tk, &opts);
+    let b = s.refine(&world, &image, None, &rk, &tk, &opts);
     // Same minimum of the same cost: 1e-6 deg as in the spec's S9 comparisons.
     assert!(rot_err_deg(&a.r, &b.r) < 1e-6);
     assert!((a.e - b.e).abs() <= 1e-10 * b.e);
@@ -610,17 +571,7 @@ fn zero_depth_start_is_skipped() {
     // Point 3 on the plane z = 0 of the ground-truth camera.
     s.world[3] = Point3::from(s.r_gt.transpose() * (Vector3::new(0.5, -0.3, 0.0) - s.t_gt));
     let (rk, tk) = s.to_work(&s.r_gt, &s.t_gt);
-    let out = refine_reprojection(
-        &s.world,
-        &s.image,
-        None,
-        &s.c,
-        s.d,
-        &s.rw,
-        &rk,
-        &tk,
-        &ReprojOptions::default(),
-    );
+    let out = s.refine_default(&rk, &tk);
     assert_eq!(out.stop, ReprojStop::SkippedZeroDepth);
     assert_eq!(out.iterations, 0);
     assert_eq!(out.r, rk);
@@ -645,17 +596,7 @@ fn depth_signs_are_preserved() {
             .iter()
             .map(|x| (r_start * x.coords + s.t_gt).z > 0.0)
             .collect();
-        let out = refine_reprojection(
-            &s.world,
-            &s.image,
-            None,
-            &s.c,
-            s.d,
-            &s.rw,
-            &rk,
-            &tk,
-            &ReprojOptions::default(),
-        );
+        let out = s.refine_default(&rk, &tk);
         let (r1, t1) = s.to_world(&out.r, &out.t);
         for (x, s0) in s.world.iter().zip(&sign0) {
             assert_eq!((r1 * x.coords + t1).z > 0.0, *s0, "seed {seed}");

@@ -1,0 +1,146 @@
+//! Unit-level tests of the public polynomial root finders (`eopnp::roots`): known roots,
+//! multiple roots, zero and degree-0 polynomials, leading zeros, non-finite and extreme
+//! coefficients, near-real complex pairs, iteration. (Formerly `src/numeric/roots/tests.rs`.)
+
+use eopnp::roots::{
+    cubic_real_roots, quartic_real_roots, real_roots, real_roots_near, Roots, DEFAULT_IMAG_TOL,
+};
+
+fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| (x - y).abs() <= tol * (1.0 + y.abs()))
+}
+
+/// Ascending coefficients of prod (x - r_i).
+fn from_roots(r: &[f64]) -> Vec<f64> {
+    let mut c = vec![1.0];
+    for &ri in r {
+        let mut n = vec![0.0; c.len() + 1];
+        for (i, &ci) in c.iter().enumerate() {
+            n[i + 1] += ci;
+            n[i] -= ri * ci;
+        }
+        c = n;
+    }
+    c
+}
+
+#[test]
+fn known_simple_roots() {
+    let r = [-3.0, -1.0, 0.5, 2.0, 7.0];
+    let c = from_roots(&r);
+    assert!(close(real_roots(&c).as_slice(), &r, 1e-14));
+    let c4 = from_roots(&r[..4]);
+    let q = quartic_real_roots(&[c4[0], c4[1], c4[2], c4[3], c4[4]]);
+    assert!(close(q.as_slice(), &r[..4], 1e-14), "{q:?}");
+    let c3 = from_roots(&r[1..4]);
+    let q = cubic_real_roots(&[c3[0], c3[1], c3[2], c3[3]]);
+    assert!(close(q.as_slice(), &r[1..4], 1e-14), "{q:?}");
+    // degree 9
+    let r9 = [-4.0, -3.0, -2.0, -1.0, 0.25, 1.0, 2.0, 3.0, 4.0];
+    assert!(close(real_roots(&from_roots(&r9)).as_slice(), &r9, 1e-12));
+}
+
+#[test]
+fn double_and_triple_roots() {
+    let c = from_roots(&[1.0, 1.0, 3.0]);
+    let r = real_roots(&c);
+    assert!(close(r.as_slice(), &[1.0, 3.0], 1e-14), "{r:?}");
+    let r = cubic_real_roots(&[c[0], c[1], c[2], c[3]]);
+    assert!(close(r.as_slice(), &[1.0, 3.0], 1e-14), "{r:?}");
+    let c = from_roots(&[2.0, 2.0, 2.0, -1.0]);
+    let r = real_roots(&c);
+    assert!(close(r.as_slice(), &[-1.0, 2.0], 1e-14), "{r:?}");
+    let c = from_roots(&[0.3, 0.3, -0.7, -0.7]);
+    let r = quartic_real_roots(&[c[0], c[1], c[2], c[3], c[4]]);
+    assert!(close(r.as_slice(), &[-0.7, 0.3], 1e-14), "{r:?}");
+    assert!(close(real_roots(&c).as_slice(), &[-0.7, 0.3], 1e-14));
+    // (x^2 + 1)^2 has no real roots
+    assert!(real_roots(&[1.0, 0.0, 2.0, 0.0, 1.0]).is_empty());
+    assert!(quartic_real_roots(&[1.0, 0.0, 2.0, 0.0, 1.0]).is_empty());
+}
+
+#[test]
+fn zero_roots_and_degree_0() {
+    assert!(close(real_roots(&[0.0, 0.0, 1.0]).as_slice(), &[0.0], 0.0));
+    assert!(close(
+        real_roots(&[0.0, -4.0, 0.0, 1.0]).as_slice(),
+        &[-2.0, 0.0, 2.0],
+        1e-15
+    ));
+    assert!(real_roots(&[5.0]).is_empty());
+    assert!(real_roots(&[]).is_empty());
+    assert!(real_roots(&[0.0, 0.0]).is_empty());
+    assert!(cubic_real_roots(&[0.0; 4]).is_empty());
+    assert!(close(
+        cubic_real_roots(&[0.0, 0.0, 0.0, 2.0]).as_slice(),
+        &[0.0],
+        0.0
+    ));
+}
+
+#[test]
+fn leading_zeros_degrade() {
+    // 1e-20 x^3 + x^2 - 1: leading coefficient dropped.
+    let r = real_roots(&[-1.0, 0.0, 1.0, 1e-20]);
+    assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15), "{r:?}");
+    let r = cubic_real_roots(&[-1.0, 0.0, 1.0, 1e-20]);
+    assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15), "{r:?}");
+    let r = quartic_real_roots(&[-2.0, 1.0, 0.0, 0.0, 0.0]);
+    assert!(close(r.as_slice(), &[2.0], 0.0), "{r:?}");
+    // 1e-12 is kept: a far root near -1e12.
+    let r = real_roots(&[-1.0, 0.0, 1.0, 1e-12]);
+    assert_eq!(r.len(), 3);
+    assert!((r.as_slice()[0] + 1e12).abs() < 1e-3 * 1e12);
+}
+
+#[test]
+fn non_finite_and_extreme() {
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        assert!(real_roots(&[1.0, bad, 1.0]).is_empty());
+        assert!(cubic_real_roots(&[1.0, bad, 1.0, 1.0]).is_empty());
+        assert!(quartic_real_roots(&[bad, 0.0, 1.0, 1.0, 1.0]).is_empty());
+        assert!(real_roots_near(&[1.0, 0.0, bad], 1e-6).is_empty());
+    }
+    let r = real_roots(&[-1e300, 0.0, 1e300]);
+    assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15));
+    let r = real_roots(&[-5e-324, 0.0, 5e-324]);
+    assert!(close(r.as_slice(), &[-1.0, 1.0], 1e-15));
+    let r = real_roots(&[-f64::MAX, f64::MAX]);
+    assert!(close(r.as_slice(), &[1.0], 1e-15));
+    // Too long but negligible high part: fine; genuinely degree 10: empty.
+    let mut c = [0.0; 12];
+    c[0] = -1.0;
+    c[1] = 1.0;
+    c[11] = 1e-20;
+    assert!(close(real_roots(&c).as_slice(), &[1.0], 1e-15));
+    c[11] = 1.0;
+    assert!(real_roots(&c).is_empty());
+}
+
+#[test]
+fn near_real_pairs() {
+    // (x - 1)^2 + 1e-14: complex pair 1 +- 1e-7 i.
+    let c = [1.0 + 1e-14, -2.0, 1.0];
+    assert!(real_roots(&c).is_empty());
+    let r = real_roots_near(&c, DEFAULT_IMAG_TOL);
+    assert!(close(r.as_slice(), &[1.0], 1e-15), "{r:?}");
+    // (x - 1)^2 + 1e-4: Im = 1e-2: not near-real.
+    assert!(real_roots_near(&[1.0 + 1e-4, -2.0, 1.0], DEFAULT_IMAG_TOL).is_empty());
+    // Real roots unaffected, no duplicates.
+    let c = from_roots(&[1.0, 1.0 + 1e-9, 3.0]);
+    let r = real_roots_near(&c, DEFAULT_IMAG_TOL);
+    assert!(!r.is_empty() && r.len() <= 3);
+    assert!((r.as_slice()[r.len() - 1] - 3.0).abs() < 1e-14);
+    assert!(real_roots_near(&c, f64::NAN).len() == real_roots(&c).len());
+}
+
+#[test]
+fn iterators() {
+    let r = real_roots(&[-1.0, 0.0, 1.0]);
+    let v: Vec<f64> = (&r).into_iter().copied().collect();
+    assert_eq!(v, r.iter().copied().collect::<Vec<_>>());
+    assert_eq!(Roots::default().len(), 0);
+}
