@@ -187,4 +187,5 @@ impl fmt::Display for PnpError {
 impl std::error::Error for PnpError {}
 
 #[cfg(test)]
+#[path = "../tests/unit/error.rs"]
 mod tests;

@@ -57,6 +57,7 @@ mod pipeline;
 mod robust;
 mod solver;
 #[cfg(test)]
+#[path = "../tests/unit/test_data.rs"]
 mod test_data;
 
 pub use camera::Intrinsics;

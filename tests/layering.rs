@@ -46,7 +46,12 @@ fn production_code(text: &str) -> String {
         if t.starts_with("#[cfg(test)]") {
             // A test-only item: skip it (a `mod tests;` line, or a block to its closing brace
             // at the same indentation).
-            let Some(next) = lines.next() else { break };
+            // Further attributes (`#[path = ...]`) belong to the same item.
+            let Some(mut next) = lines.next() else { break };
+            while next.trim_start().starts_with("#[") {
+                let Some(n) = lines.next() else { break };
+                next = n;
+            }
             if next.trim_end().ends_with(';') {
                 continue;
             }

@@ -361,4 +361,5 @@ impl Camera {
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/camera.rs"]
 mod tests;

@@ -278,4 +278,5 @@ pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/cli/input.rs"]
 mod tests;

@@ -224,4 +224,5 @@ fn check_references(
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/colmap.rs"]
 mod tests;

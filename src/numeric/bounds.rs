@@ -174,4 +174,5 @@ pub(crate) mod hook {
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/numeric/bounds.rs"]
 mod tests;

@@ -319,4 +319,5 @@ pub(crate) fn solve_damped6(h: &[[f64; 6]; 6], lam: f64, g: &[f64; 6]) -> Option
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/numeric/linalg.rs"]
 mod tests;

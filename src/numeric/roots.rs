@@ -626,6 +626,3 @@ pub fn quartic_real_roots(c: &[f64; 5]) -> Roots {
         None => Roots::default(),
     }
 }
-
-#[cfg(test)]
-mod tests;

@@ -150,4 +150,5 @@ pub(crate) fn to_unit_quaternion(r: &Matrix3<f64>) -> UnitQuaternion<f64> {
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/numeric/rotation.rs"]
 mod tests;

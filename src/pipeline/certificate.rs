@@ -273,4 +273,5 @@ pub(crate) fn global_minimum_planar(m9: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, s
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/pipeline/certificate.rs"]
 mod tests;

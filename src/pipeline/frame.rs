@@ -456,4 +456,5 @@ fn frame_impl(
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/pipeline/frame.rs"]
 mod tests;

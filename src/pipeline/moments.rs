@@ -535,4 +535,5 @@ pub(crate) fn m_upper(m: &SMatrix<f64, 9, 9>) -> [f64; 45] {
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/pipeline/moments.rs"]
 pub(crate) mod tests;

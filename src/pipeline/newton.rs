@@ -247,4 +247,5 @@ pub(crate) fn refine_so3_until(
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/pipeline/newton.rs"]
 mod tests;

@@ -391,4 +391,5 @@ fn case4(
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/pipeline/nullspace.rs"]
 mod tests;

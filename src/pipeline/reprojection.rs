@@ -399,4 +399,5 @@ pub(crate) fn refine_reprojection(
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/pipeline/reprojection.rs"]
 mod tests;

@@ -380,4 +380,5 @@ fn triangle_frame(p: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
 }
 
 #[cfg(test)]
+#[path = "../../tests/unit/robust/p3p.rs"]
 mod tests;

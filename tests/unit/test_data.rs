@@ -31,7 +31,7 @@ fn parse(text: &str) -> Value {
 
 /// The problem `name` of `tests/data/test_vectors.json`.
 pub(crate) fn vector(name: &str) -> Vector {
-    let all = parse(include_str!("../tests/data/test_vectors.json"));
+    let all = parse(include_str!("../data/test_vectors.json"));
     let v = all
         .as_array()
         .unwrap()
@@ -58,5 +58,5 @@ pub(crate) fn vector(name: &str) -> Vector {
 
 /// `tests/data/reference_newton.json`.
 pub(crate) fn newton_reference() -> Value {
-    parse(include_str!("../tests/data/reference_newton.json"))
+    parse(include_str!("../data/reference_newton.json"))
 }

@@ -1,1 +1,0 @@
-//! The tests of the public root finders are integration tests: `tests/roots.rs`.
