@@ -1,19 +1,23 @@
 //! rust-cv's ARRSAC driving eopnp's P3P (and, as a second row, the `lambda-twist` crate's P3P),
-//! next to `eopnp::ransac`, on the bundled COLMAP model:
+//! next to `eopnp::ransac`, on the problems of the command line's outlier experiment:
 //!
 //! ```text
-//! cargo run --release --features sample-consensus --example arrsac_register [-- MODEL_DIR [SEED]]
+//! for L in 0 0.5 0.8; do
+//!   cargo run --release -- register data/colmap-boxes --outliers $L --seed 42 \
+//!     --export-problems target/problems-$L.json
+//! done
+//! cargo run --release --features sample-consensus --example arrsac_register -- \
+//!   target/problems-0.json target/problems-0.5.json target/problems-0.8.json
 //! ```
 //!
-//! For each outlier level (0 %, 50 %, 80 %) every image's correspondences get the injected
-//! wrong 3D points of `eopnp register --outliers L --seed S` ([`image_problem`]: the same
-//! [`eopnp::colmap::inject_outliers`] draw, noise 0.5 model units, seed mixed with the image
-//! id), then:
+//! Each file holds every image's correspondences with the injected wrong 3D points of
+//! `eopnp register --outliers L --seed S` (noise 0.5 model units, seed mixed with the image
+//! id), the camera and COLMAP's pose. Then, per image:
 //!
-//! - `eopnp::ransac`: [`register_image_ransac`] (threshold 4 px, seed `S`);
+//! - `eopnp::ransac`: [`Ransac::estimate_pixels`] (threshold 4 px, seed `S`);
 //! - `arrsac + P3pEstimator`: the pixels are undistorted, ARRSAC ([`Arrsac::new`] with its
-//!   default options, threshold 4 px on [`PoseModel`]'s pixel residual, a PCG generator seeded
-//!   with `S`) finds the inliers, and EOPnP ([`eopnp::camera::solve_pixels`]) refits on them;
+//!   default options, threshold 4 px on `PoseModel`'s pixel residual, a PCG generator seeded
+//!   with `S`) finds the inliers, and EOPnP ([`Solver::solve_pixels`]) refits on them;
 //! - `arrsac + lambda-twist`: the same with `lambda_twist::LambdaTwist` (0.7) as the minimal
 //!   solver. Its model's residual is cv-core's angular `1 - cos(angle)` between bearings, so
 //!   the threshold is `1 - cos(4 px / f)` (`f` the geometric mean focal length): the same
@@ -27,8 +31,7 @@
 use std::time::Instant;
 
 use arrsac::Arrsac;
-use eopnp::colmap::{image_problem, register_image_ransac, ImageProblem, Outliers};
-use eopnp::colmap::{read_model, Model};
+use eopnp::camera::Camera;
 use eopnp::metrics::{rotation_error_deg, translation_error_pct};
 use eopnp::ransac::consensus::{Correspondence, P3pEstimator};
 use eopnp::ransac::Ransac;
@@ -39,8 +42,6 @@ use sample_consensus::Consensus;
 
 /// Inlier threshold, pixels (the default of `eopnp register --threshold`).
 const THRESHOLD_PX: f64 = 4.0;
-/// Noise of the injected wrong points (`eopnp register`'s).
-const OUTLIER_NOISE: f64 = 0.5;
 /// Runs per image; the fastest is reported.
 const REPEATS: usize = 3;
 /// A pose with a larger rotation error counts as not solved.
@@ -90,43 +91,108 @@ impl Method {
 /// A world-to-camera pose `(R, t)`.
 type Pose = (Matrix3<f64>, Vector3<f64>);
 
+/// One image of an exported problem file.
+struct Problem {
+    camera: Camera,
+    world: Vec<Point3<f64>>,
+    pixels: Vec<Point2<f64>>,
+    reference: Pose,
+}
+
+/// The images of a file written by `eopnp register --export-problems`, and its outlier level
+/// and seed.
+fn read_problems(path: &str) -> Result<(f64, u64, Vec<Problem>), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{path}: {e}"))?;
+    let num = |x: &serde_json::Value| x.as_f64().ok_or_else(|| format!("{path}: not a number"));
+    let mut out = Vec::new();
+    for img in v["images"].as_array().ok_or(format!("{path}: no images"))? {
+        let c = &img["camera"];
+        let params: Vec<f64> = c["params"]
+            .as_array()
+            .ok_or(format!("{path}: no params"))?
+            .iter()
+            .map(num)
+            .collect::<Result<_, _>>()?;
+        let camera = Camera::from_colmap(
+            c["model"].as_str().unwrap_or(""),
+            c["width"].as_u64().unwrap_or(0),
+            c["height"].as_u64().unwrap_or(0),
+            params,
+        )
+        .map_err(|e| format!("{path}: {e}"))?;
+        let rows = |k: &str| -> Result<Vec<Vec<f64>>, String> {
+            img[k]
+                .as_array()
+                .ok_or(format!("{path}: no {k}"))?
+                .iter()
+                .map(|r| {
+                    r.as_array()
+                        .ok_or(format!("{path}: {k}"))?
+                        .iter()
+                        .map(num)
+                        .collect()
+                })
+                .collect()
+        };
+        let world = rows("points3d")?
+            .iter()
+            .map(|p| Point3::new(p[0], p[1], p[2]))
+            .collect();
+        let pixels = rows("points2d")?
+            .iter()
+            .map(|p| Point2::new(p[0], p[1]))
+            .collect();
+        let r = rows("reference_rotation")?;
+        let t: Vec<f64> = img["reference_translation"]
+            .as_array()
+            .ok_or(format!("{path}: no reference_translation"))?
+            .iter()
+            .map(num)
+            .collect::<Result<_, _>>()?;
+        out.push(Problem {
+            camera,
+            world,
+            pixels,
+            reference: (
+                Matrix3::from_fn(|i, j| r[i][j]),
+                Vector3::new(t[0], t[1], t[2]),
+            ),
+        });
+    }
+    let level = v["outliers"].as_f64().unwrap_or(0.0);
+    let seed = v["seed"].as_u64().unwrap_or(0);
+    Ok((level, seed, out))
+}
+
 /// Pose `(R, t)` of one image by `method` (`None` if it failed) and the time in
-/// milliseconds: `Ransac::estimate_pixels`'s own (undistortion included, the outlier injection
-/// of `register_image` excluded) for `eopnp::ransac`, undistortion + ARRSAC + refit otherwise.
-fn run(
-    method: Method,
-    model: &Model,
-    image_id: u32,
-    problem: &ImageProblem,
-    outliers: &Outliers,
-    seed: u64,
-) -> (Option<Pose>, f64) {
+/// milliseconds: `Ransac::estimate_pixels`'s own (undistortion included) for `eopnp::ransac`,
+/// undistortion + ARRSAC + refit otherwise.
+fn run(method: Method, problem: &Problem, seed: u64) -> (Option<Pose>, f64) {
     let solver = Solver::default();
     if method == Method::Eopnp {
         let ransac = Ransac::default().threshold_px(THRESHOLD_PX).seed(seed);
-        return match register_image_ransac(model, image_id, &ransac, &solver, Some(outliers)) {
-            Ok((reg, _, _)) => (
-                Some((reg.solution.rotation, reg.solution.pose.translation.vector)),
-                reg.micros * 1e-3,
+        return match ransac.estimate_pixels(
+            &solver,
+            &problem.camera,
+            &problem.world,
+            &problem.pixels,
+        ) {
+            Ok(sol) => (
+                Some((sol.solution.rotation, sol.solution.pose.translation.vector)),
+                sol.stats.micros * 1e-3,
             ),
             Err(_) => (None, f64::NAN),
         };
     }
     let start = Instant::now();
-    let pose = run_arrsac(method, model, image_id, problem, seed, &solver);
+    let pose = run_arrsac(method, problem, seed, &solver);
     (pose, start.elapsed().as_secs_f64() * 1e3)
 }
 
 /// The ARRSAC rows of [`run`].
-fn run_arrsac(
-    method: Method,
-    model: &Model,
-    image_id: u32,
-    problem: &ImageProblem,
-    seed: u64,
-    solver: &Solver,
-) -> Option<Pose> {
-    let cam = &model.cameras[&model.images[&image_id].camera_id];
+fn run_arrsac(method: Method, problem: &Problem, seed: u64, solver: &Solver) -> Option<Pose> {
+    let cam = &problem.camera;
     let (fx, fy) = cam.intrinsics_scale();
     // Undistort; a pixel that cannot be undistorted is dropped (as `Ransac::estimate_pixels`).
     let mut world: Vec<Point3<f64>> = Vec::new();
@@ -173,8 +239,8 @@ fn run_arrsac(
     };
     let w: Vec<Point3<f64>> = inliers.iter().map(|&i| world[i]).collect();
     let p: Vec<Point2<f64>> = inliers.iter().map(|&i| pixels[i]).collect();
-    let sol = solver.solve_camera(cam, &w, &p).ok()?;
-    Some((sol.solution.rotation, sol.solution.pose.translation.vector))
+    let sol = solver.solve_pixels(&w, &p, cam).ok()?;
+    Some((sol.rotation, sol.pose.translation.vector))
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -191,43 +257,32 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 fn main() {
-    let mut args = std::env::args().skip(1);
-    let dir = args
-        .next()
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-boxes").into());
-    let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(42);
-    let model = match read_model(&dir) {
-        Ok(m) => m,
-        Err(e) => {
-            eprintln!("cannot read {dir}: {e}");
-            std::process::exit(1);
-        }
-    };
-    let ids: Vec<u32> = model.images.keys().copied().collect();
+    let files: Vec<String> = std::env::args().skip(1).collect();
+    if files.is_empty() {
+        eprintln!("usage: arrsac_register PROBLEMS.json... (see the example's documentation)");
+        std::process::exit(2);
+    }
     println!(
-        "model {dir}: {} images; threshold {THRESHOLD_PX} px, seed {seed}; best of {REPEATS} runs per image\n",
-        ids.len()
-    );
-    println!(
-        "{:>8}  {:<22} {:>6}  {:>9} {:>9}  {:>9} {:>9}  {:>8}",
+        "threshold {THRESHOLD_PX} px; best of {REPEATS} runs per image\n\n{:>8}  {:<22} {:>6}  {:>9} {:>9}  {:>9} {:>9}  {:>8}",
         "outliers", "method", "solved", "rot max", "rot med", "tr% max", "tr% med", "ms/img"
     );
-    for level in [0.0, 0.5, 0.8] {
-        let outliers = Outliers {
-            fraction: level,
-            noise: OUTLIER_NOISE,
-            seed,
+    for path in &files {
+        let (level, seed, problems) = match read_problems(path) {
+            Ok(p) => p,
+            Err(e) => {
+                eprintln!("{e}");
+                std::process::exit(2);
+            }
         };
         for method in [Method::Eopnp, Method::ArrsacP3p, Method::ArrsacLambdaTwist] {
             let (mut rot, mut tra, mut ms) = (Vec::new(), Vec::new(), Vec::new());
             let mut solved = 0;
-            for &id in &ids {
-                let problem = image_problem(&model, id, Some(&outliers));
-                let (r_ref, t_ref) = model.images[&id].pose();
+            for problem in &problems {
+                let (r_ref, t_ref) = problem.reference;
                 let mut best = f64::INFINITY;
                 let mut pose = None;
                 for _ in 0..REPEATS {
-                    let (p, t) = run(method, &model, id, &problem, &outliers, seed);
+                    let (p, t) = run(method, problem, seed);
                     pose = p;
                     best = best.min(t);
                 }
@@ -251,7 +306,7 @@ fn main() {
                 level * 100.0,
                 method.label(),
                 solved,
-                ids.len(),
+                problems.len(),
                 max(&rot),
                 median(&mut rot),
                 max(&tra),

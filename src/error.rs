@@ -109,13 +109,12 @@ pub enum PnpError {
     },
     /// The input configuration is degenerate; see [`DegenerateKind`].
     Degenerate(DegenerateKind),
-    /// Camera intrinsics with a non-finite value or a focal length that is not positive.
-    InvalidIntrinsics,
     /// No candidate rotation survived (numerical failure); not observed on valid input.
     NoSolution,
     /// A [`crate::ransac::Ransac`] option is outside its range: `threshold_px` must be finite
     /// and > 0, `confidence` in (0, 1), `max_iterations` >= 1, `final_threshold_factor` finite
-    /// and >= 1.
+    /// and >= 1; or the focal lengths given to [`crate::ransac::Ransac::estimate`] are not
+    /// finite and > 0 (`"focal"`).
     InvalidOption {
         /// The option's field name.
         option: &'static str,
@@ -154,9 +153,6 @@ impl fmt::Display for PnpError {
                 "weight {index} is negative; weights must be >= 0 (use 0 to ignore a point)"
             ),
             PnpError::Degenerate(kind) => write!(f, "degenerate input: {kind}"),
-            PnpError::InvalidIntrinsics => f.write_str(
-                "invalid intrinsics: fx, fy, cx, cy and skew must be finite and fx, fy > 0",
-            ),
             PnpError::NoSolution => f.write_str(
                 "no solution found (numerical failure on every candidate); the input may be \
                  extremely ill-conditioned",
@@ -167,6 +163,7 @@ impl fmt::Display for PnpError {
                     "confidence" => "a probability strictly between 0 and 1",
                     "max_iterations" => "at least 1",
                     "final_threshold_factor" => "finite and >= 1",
+                    "focal" => "two finite focal lengths > 0, in pixels",
                     _ => "see the option's documentation",
                 };
                 write!(

@@ -37,8 +37,8 @@
 //! # Ok::<(), eopnp::PnpError>(())
 //! ```
 //!
-//! Image points are normalised coordinates; for pixels use [`Solver::solve_pixels`] with
-//! [`Intrinsics`]. The pose maps world to camera: `x_cam = R X + t`.
+//! Image points are normalised coordinates; for pixels use [`Solver::solve_pixels`] with a
+//! [`camera::Camera`]. The pose maps world to camera: `x_cam = R X + t`.
 #![warn(missing_docs)]
 // `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -60,14 +60,13 @@ mod solver;
 #[path = "../tests/unit/test_data.rs"]
 mod test_data;
 
-pub use camera::Intrinsics;
 pub use error::{DegenerateKind, InputKind, PnpError};
 pub use numeric::roots;
 #[doc(hidden)]
 pub use pipeline::bench_hooks;
 pub use pipeline::{CandidateSource, PlanarDetection, Refinement, Solution, Solutions};
 pub use robust::{p3p, ransac};
-pub use solver::{solve, CameraSolution, Solver};
+pub use solver::{solve, Solver};
 
 /// Error metrics of docs/algorithm.md section 1 (the paper's).
 pub mod metrics {

@@ -3,7 +3,7 @@
 
 use nalgebra::{Point2, Point3};
 
-use crate::camera::{Camera, Intrinsics};
+use crate::camera::Camera;
 use crate::error::PnpError;
 use crate::pipeline::{
     self, Options, PlanarDetection, Refinement, ReprojOptions, Solution, Solutions,
@@ -13,19 +13,6 @@ use crate::pipeline::{
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Solver {
     opts: Options,
-}
-
-/// The result of [`Solver::solve_camera`].
-#[derive(Clone, Copy, Debug)]
-#[non_exhaustive]
-pub struct CameraSolution {
-    /// The pose (world to camera).
-    pub solution: Solution,
-    /// Correspondences used.
-    pub used: usize,
-    /// Correspondences skipped because their pixel could not be undistorted
-    /// ([`Camera::undistort_weighted`] failed).
-    pub skipped: usize,
 }
 
 impl Solver {
@@ -133,45 +120,9 @@ impl Solver {
         Ok(all)
     }
 
-    /// The pose from pixel coordinates and pinhole intrinsics (no lens distortion). In the
-    /// default mode the reprojection error is measured in pixels (rows weighted by `fx^2` and
-    /// `fy^2`; the skew term is not weighted).
-    ///
-    /// # Errors
-    /// [`PnpError::InvalidIntrinsics`] for non-finite or non-positive focal lengths, and as
-    /// [`Solver::solve`].
-    pub fn solve_pixels(
-        &self,
-        world: &[Point3<f64>],
-        pixels: &[Point2<f64>],
-        k: &Intrinsics,
-    ) -> Result<Solution, PnpError> {
-        let ok = [k.fx, k.fy, k.cx, k.cy, k.skew]
-            .iter()
-            .all(|x| x.is_finite())
-            && k.fx > 0.0
-            && k.fy > 0.0;
-        if !ok {
-            return Err(PnpError::InvalidIntrinsics);
-        }
-        if world.len() != pixels.len() {
-            return Err(PnpError::LengthMismatch {
-                world: world.len(),
-                image: pixels.len(),
-            });
-        }
-        // Normalise on the stack in chunks is not possible for arbitrary N without allocating;
-        // the normalised points are needed by every pass, so this entry point allocates once.
-        let image: Vec<Point2<f64>> = pixels.iter().map(|p| k.normalize(p)).collect();
-        let scale = k.fx.max(k.fy);
-        let mut opts = self.opts.reproj;
-        opts.row_weights = ((k.fx / scale).powi(2), (k.fy / scale).powi(2));
-        self.run(world, &image, None, &opts, None)
-    }
-
     /// As [`Solver::solve_weighted`] (weights optional) with the x and y residual rows of the
     /// reprojection refinement weighted by `row_weights` (e.g. `(fx^2, fy^2)` normalised, as
-    /// in [`Solver::solve_pixels`]). Used by `colmap::register_image`. Non-finite or
+    /// in [`Solver::solve_pixels`]). Used by RANSAC's fits. Non-finite or
     /// non-positive row weights fall back to `(1, 1)`.
     pub(crate) fn solve_with_row_weights(
         &self,
@@ -188,25 +139,46 @@ impl Solver {
         self.run(world, image, weights, &opts, None)
     }
 
-    /// The pose from observed (distorted) pixels and a camera model.
+    /// The pose from observed (distorted) pixels and a camera model ([`Camera`]: any of the
+    /// supported models, pinhole included, e.g. [`Camera::pinhole`]).
     ///
-    /// The pixels are undistorted to normalised coordinates ([`Camera::undistort`]; a pixel that
-    /// cannot be undistorted is skipped and counted) and solved there. In the default
-    /// (reprojection) mode the residual of point `i` is weighted by `|det J_i| / (fx fy)`, `J_i`
-    /// the Jacobian of [`Camera::project`] at the point ([`Camera::project_jacobian`]), and the x
-    /// and y rows by `fx^2` and `fy^2` (normalised, as [`Solver::solve_pixels`]): to first order
-    /// the minimised error is the pixel reprojection error through the lens distortion (exactly,
-    /// for models without distortion; isotropically approximated per point otherwise).
+    /// The pixels are undistorted to normalised coordinates ([`Camera::undistort`]); a pixel
+    /// that cannot be undistorted is left out and counted in [`Solution::skipped`]. In the
+    /// default (reprojection) mode the residual of point `i` is weighted by `|det J_i| / (fx fy)`,
+    /// `J_i` the Jacobian of [`Camera::project`] at the point ([`Camera::project_jacobian`]),
+    /// and the x and y rows by `fx^2` and `fy^2` (normalised): to first order the minimised error
+    /// is the pixel reprojection error through the lens distortion (exactly, for models without
+    /// distortion; isotropically approximated per point otherwise).
+    ///
+    /// ```
+    /// use eopnp::{camera::Camera, Solver};
+    /// use nalgebra::{Point2, Point3, Vector3};
+    ///
+    /// let cam = Camera::pinhole(800.0, 800.0, 320.0, 240.0)?;
+    /// let t = Vector3::new(0.1, -0.2, 6.0);
+    /// let world = [
+    ///     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    ///     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// ];
+    /// let pixels: Vec<Point2<f64>> = world
+    ///     .iter()
+    ///     .map(|x| { let p = x.coords + t; cam.project(Point2::new(p.x / p.z, p.y / p.z)) })
+    ///     .collect();
+    /// let sol = Solver::default().solve_pixels(&world, &pixels, &cam)?;
+    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+    /// assert_eq!((sol.used, sol.skipped), (6, 0));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     ///
     /// # Errors
     /// [`PnpError::LengthMismatch`] if the slices differ in length, otherwise as
     /// [`Solver::solve_weighted`] on the undistorted points.
-    pub fn solve_camera(
+    pub fn solve_pixels(
         &self,
-        camera: &Camera,
         world: &[Point3<f64>],
         pixels: &[Point2<f64>],
-    ) -> Result<CameraSolution, PnpError> {
+        camera: &Camera,
+    ) -> Result<Solution, PnpError> {
         if world.len() != pixels.len() {
             return Err(PnpError::LengthMismatch {
                 world: world.len(),
@@ -227,12 +199,9 @@ impl Solver {
         }
         let fmax = fx.max(fy);
         let rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
-        let solution = self.solve_with_row_weights(&w, &image, Some(&weights), rows)?;
-        Ok(CameraSolution {
-            solution,
-            used: w.len(),
-            skipped: world.len() - w.len(),
-        })
+        let mut sol = self.solve_with_row_weights(&w, &image, Some(&weights), rows)?;
+        sol.skipped = world.len() - w.len();
+        Ok(sol)
     }
 
     fn run(

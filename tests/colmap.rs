@@ -56,7 +56,7 @@ fn bundled_model_has_the_expected_content() {
 fn default_mode_reproduces_colmap_poses() {
     let m = text_model();
     for id in m.images.keys() {
-        let r = register_image(&m, *id, &Solver::default()).expect("registers");
+        let r = register_image(&m, *id, &Solver::default(), None).expect("registers");
         assert_eq!(r.skipped, 0, "image {id}: every observation undistorts");
         assert!(
             r.rotation_error_deg <= 0.01,
@@ -88,7 +88,7 @@ fn algebraic_mode_is_close_to_colmap_poses() {
     let m = text_model();
     let solver = Solver::default().refinement(Refinement::Algebraic);
     for id in m.images.keys() {
-        let r = register_image(&m, *id, &solver).expect("registers");
+        let r = register_image(&m, *id, &solver, None).expect("registers");
         assert!(
             r.rotation_error_deg <= 0.05,
             "image {id}: rotation differs by {} degrees",

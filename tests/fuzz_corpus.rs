@@ -125,7 +125,7 @@ fn seeds_reach_the_parsers_and_registration() {
         let model = parse(files[0], files[1], files[2]).unwrap();
         assert_eq!(model.images.len(), 2, "{target}");
         for &id in model.images.keys() {
-            let reg = eopnp::colmap::register_image(&model, id, &eopnp::Solver::default())
+            let reg = eopnp::colmap::register_image(&model, id, &eopnp::Solver::default(), None)
                 .unwrap_or_else(|e| panic!("{target}: image {id}: {e}"));
             // Twelve observations: the maximum-likelihood pose fits them at least as well as
             // the model's pose (a few degrees apart at most).

@@ -39,40 +39,6 @@ pub use model::{CameraError, CameraModel, SUPPORTED_MODELS};
 
 /// Hard bound on the Newton iterations of [`Camera::undistort`].
 pub const UNDISTORT_MAX_ITERATIONS: u32 = crate::numeric::bounds::UNDISTORT_MAX_ITERATIONS;
-/// Pinhole intrinsics: `px = fx x + skew y + cx`, `py = fy y + cy` for normalised `(x, y)`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Intrinsics {
-    /// Focal length in x, pixels.
-    pub fx: f64,
-    /// Focal length in y, pixels.
-    pub fy: f64,
-    /// Principal point x, pixels.
-    pub cx: f64,
-    /// Principal point y, pixels.
-    pub cy: f64,
-    /// Skew, pixels (0 for almost every camera).
-    pub skew: f64,
-}
-
-impl Intrinsics {
-    /// Normalised image coordinates of a pixel.
-    #[must_use]
-    pub fn normalize(&self, px: &Point2<f64>) -> Point2<f64> {
-        let y = (px.y - self.cy) / self.fy;
-        let x = (px.x - self.cx - self.skew * y) / self.fx;
-        Point2::new(x, y)
-    }
-
-    /// Pixel of a normalised image point.
-    #[must_use]
-    pub fn project(&self, p: &Point2<f64>) -> Point2<f64> {
-        Point2::new(
-            self.fx * p.x + self.skew * p.y + self.cx,
-            self.fy * p.y + self.cy,
-        )
-    }
-}
-
 /// A camera: model, image size and parameters (validated on construction).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
@@ -137,6 +103,24 @@ impl Camera {
         Camera::new(CameraModel::from_name(model_name)?, width, height, params)
     }
 
+    /// A pinhole camera without distortion (COLMAP's `PINHOLE`; image size 0, i.e. unknown):
+    /// `px = fx x + cx`, `py = fy y + cy` for normalised `(x, y)`.
+    ///
+    /// ```
+    /// use eopnp::camera::Camera;
+    /// use nalgebra::Point2;
+    ///
+    /// let cam = Camera::pinhole(800.0, 800.0, 320.0, 240.0)?;
+    /// assert_eq!(cam.project(Point2::new(0.1, -0.05)), Point2::new(400.0, 200.0));
+    /// # Ok::<(), eopnp::camera::CameraError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`CameraError::InvalidParams`] for non-finite parameters or non-positive focal lengths.
+    pub fn pinhole(fx: f64, fy: f64, cx: f64, cy: f64) -> Result<Self, CameraError> {
+        Camera::new(CameraModel::Pinhole, 0, 0, vec![fx, fy, cx, cy])
+    }
+
     /// The camera model.
     #[must_use]
     pub fn model(&self) -> CameraModel {
@@ -181,20 +165,6 @@ impl Camera {
             (p[1], p[2])
         } else {
             (p[2], p[3])
-        }
-    }
-
-    /// The pinhole part of the camera (focal lengths and principal point, no distortion).
-    #[must_use]
-    pub fn intrinsics(&self) -> Intrinsics {
-        let (fx, fy) = self.intrinsics_scale();
-        let (cx, cy) = self.principal_point();
-        Intrinsics {
-            fx,
-            fy,
-            cx,
-            cy,
-            skew: 0.0,
         }
     }
 

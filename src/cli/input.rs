@@ -236,16 +236,15 @@ fn truncate(s: &str) -> String {
 
 /// Solves the problem and renders the pose JSON.
 pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
-    // Undistortion failures are input errors here (`solve_pixels` would skip the point).
+    // Undistortion failures are input errors here (`Solver::solve_pixels` would skip the point).
     for (k, px) in p.pixels.iter().enumerate() {
         p.camera
             .undistort_weighted(*px)
             .map_err(|e| Failure::input(format!("correspondence {}: {e}", k + 1)))?;
     }
     let sol = solver
-        .solve_camera(&p.camera, &p.world, &p.pixels)
-        .map_err(|e| Failure::solver(format!("no pose: {e}")))?
-        .solution;
+        .solve_pixels(&p.world, &p.pixels, &p.camera)
+        .map_err(|e| Failure::solver(format!("no pose: {e}")))?;
 
     let r = sol.rotation;
     let t = sol.pose.translation.vector;

@@ -1,5 +1,6 @@
 //! Command-line interface of the `eopnp` binary.
 
+mod experiment;
 pub mod input;
 mod register;
 

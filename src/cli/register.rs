@@ -5,8 +5,8 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use super::experiment::{self, ImageProblem, Outliers};
 use crate::colmap::{self, Model, RegisterError, Registration};
-use crate::colmap::{ImageProblem, Outliers};
 use crate::ransac::{Ransac, RansacStats};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
@@ -60,20 +60,28 @@ fn estimate(
     // machine's scheduling noise otherwise dominates single ~1 ms measurements.
     let solver = opts.solver();
     let spec = opts.outlier_spec();
-    if !opts.ransac && spec.is_none() {
-        let run = || colmap::register_image(model, image_id, &solver);
+    if spec.is_none() {
+        let ransac = opts.ransac.then(|| opts.ransac_options());
+        let run = || colmap::register_image(model, image_id, &solver, ransac.as_ref());
         let result = run().and_then(|mut best| {
             for _ in 0..2 {
                 best.micros = best.micros.min(run()?.micros);
             }
             Ok(best)
         });
-        return (result, None);
+        // Without injected outliers every correspondence is a true one.
+        let extra = result.as_ref().ok().and_then(|reg| {
+            reg.ransac.map(|stats| Extra {
+                stats: Some(stats),
+                true_correspondences: reg.n,
+                true_inliers: Some(reg.inliers),
+                floor: None,
+            })
+        });
+        return (result, extra);
     }
-    let problem = colmap::image_problem(model, image_id, spec.as_ref());
-    let floor = spec
-        .as_ref()
-        .and_then(|_| colmap::floor(model, image_id, &problem, &solver).ok());
+    let problem = experiment::image_problem(model, image_id, spec.as_ref());
+    let floor = experiment::floor(model, image_id, &problem, &solver).ok();
     let mut extra = Extra {
         stats: None,
         true_correspondences: problem.truth.iter().filter(|b| **b).count(),
@@ -82,8 +90,8 @@ fn estimate(
     };
     let result = if opts.ransac {
         let r = opts.ransac_options();
-        let run = || colmap::register_image_ransac(model, image_id, &r, &solver, spec.as_ref());
-        run().and_then(|(mut best, sol, _)| {
+        let run = || experiment::ransac_on_problem(model, image_id, &problem, &r, &solver);
+        run().and_then(|(mut best, sol)| {
             for _ in 0..2 {
                 best.micros = best.micros.min(run()?.0.micros);
             }
@@ -119,12 +127,12 @@ fn plain_on_problem(
     let mut sol = None;
     for _ in 0..3 {
         let start = Instant::now();
-        let s = solver.solve_camera(cam, &problem.world, &problem.pixels)?;
+        let s = solver.solve_pixels(&problem.world, &problem.pixels, cam)?;
         best = best.min(start.elapsed().as_secs_f64() * 1e6);
         sol = Some(s);
     }
     let s = sol.ok_or(RegisterError::UnknownImage(image_id))?;
-    let mut reg = colmap::registration(model, image_id, problem, &s.solution, s.used)?;
+    let mut reg = experiment::registration(model, image_id, problem, &s, s.used)?;
     reg.micros = best;
     Ok(reg)
 }
@@ -145,7 +153,7 @@ fn export_problems(model: &Model, opts: &RegisterOptions) -> String {
         .iter()
         .filter_map(|(id, img)| {
             let cam = model.cameras.get(&img.camera_id)?;
-            let p = colmap::image_problem(model, *id, spec.as_ref());
+            let p = experiment::image_problem(model, *id, spec.as_ref());
             let (r, t) = img.pose();
             Some(json!({
                 "image_id": id,

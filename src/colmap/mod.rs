@@ -14,7 +14,6 @@
 mod binary;
 mod model;
 mod register;
-mod robust;
 mod text;
 
 use std::collections::BTreeMap;
@@ -25,10 +24,6 @@ use crate::camera::Camera;
 pub use binary::write_model_binary;
 pub use model::{quaternion_to_matrix, Image, Location, Model, ModelError, Point3D, RegisterError};
 pub use register::{register_image, Registration};
-pub use robust::{
-    floor, image_problem, image_seed, inject_outliers, register_image_ransac, registration,
-    ImageProblem, Outliers,
-};
 
 use model::Images;
 

@@ -48,6 +48,11 @@ pub struct Solution {
     pub newton_iterations: u32,
     /// Levenberg-Marquardt iterations of the reprojection refinement (S9; 0 in algebraic mode).
     pub reprojection_iterations: u32,
+    /// Correspondences that entered the solve (those with a weight > 0).
+    pub used: usize,
+    /// Correspondences left out because their pixel could not be undistorted
+    /// ([`crate::Solver::solve_pixels`]; 0 for normalised input).
+    pub skipped: usize,
 }
 
 /// Every distinct local minimum found, best first (see [`crate::Solver::solve_all`]).
@@ -147,6 +152,8 @@ impl Output<'_> {
             source: m.source,
             newton_iterations: m.iterations,
             reprojection_iterations: iters,
+            used: self.fr.n_active,
+            skipped: 0,
         };
         // Reprojection mode promises the maximum-likelihood pose; a pose with a point at depth
         // 0 has an infinite reprojection error and is not one (found by fuzzing, with an image

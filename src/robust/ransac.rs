@@ -245,13 +245,13 @@ impl Ransac {
     /// The pixel reprojection error of point `i` is `sqrt(w_i (fx^2 dx^2 + fy^2 dy^2))`,
     /// `(dx, dy)` the normalised residual, `focal = (fx, fy)` in pixels and `w_i` the optional
     /// per-point weight (1 if `None`; [`Ransac::estimate_pixels`] passes the lens distortion's
-    /// local scale, as [`crate::camera::solve_pixels`]). EOPnP fits minimise the same error.
+    /// local scale, as [`Solver::solve_pixels`]). EOPnP fits minimise the same error.
     ///
     /// # Errors
     /// [`PnpError::LengthMismatch`], [`PnpError::WeightsLength`], [`PnpError::TooFewPoints`]
     /// (fewer than 4), [`PnpError::NonFinite`], [`PnpError::InvalidWeight`],
-    /// [`PnpError::InvalidIntrinsics`] for a non-positive focal length,
-    /// [`PnpError::InvalidOption`] for an option out of its range (checked first), and
+    /// [`PnpError::InvalidOption`] for an option out of its range (checked first) and for a
+    /// focal length that is not finite and positive (`"focal"`), and
     /// [`PnpError::NoConsensus`] if no hypothesis has enough inliers for an EOPnP fit.
     pub fn estimate(
         &self,
@@ -267,7 +267,7 @@ impl Ransac {
         crate::pipeline::check_lengths(n, image.len(), weights)?;
         let (fx, fy) = focal;
         if !(fx.is_finite() && fy.is_finite() && fx > 0.0 && fy > 0.0) {
-            return Err(PnpError::InvalidIntrinsics);
+            return Err(PnpError::InvalidOption { option: "focal" });
         }
         for (i, (x, p)) in world.iter().zip(image).enumerate() {
             if !x.coords.iter().all(|v| v.is_finite()) {
@@ -427,7 +427,7 @@ impl Ransac {
     }
 
     /// Robust pose from observed (distorted) pixels and a camera model: the pixels are
-    /// undistorted and weighted as in [`crate::camera::solve_pixels`], then
+    /// undistorted and weighted as in [`Solver::solve_pixels`], then
     /// [`Ransac::estimate`] runs in normalised coordinates with the camera's focal lengths, so
     /// the threshold applies to (first-order) pixel reprojection errors through the lens
     /// distortion. A pixel that cannot be undistorted is an outlier (`false` in the mask).
@@ -473,6 +473,7 @@ impl Ransac {
             sol.inliers = full;
             sol.stats.inlier_ratio = sol.num_inliers as f64 / world.len() as f64;
         }
+        sol.solution.skipped = world.len() - used.len();
         sol.stats.micros = start.elapsed().as_secs_f64() * 1e6;
         Ok(sol)
     }

@@ -1,6 +1,7 @@
-//! Registration with RANSAC, and the outlier experiment of `eopnp register --outliers`: wrong
-//! 3D points injected into an image's correspondences, the pose re-estimated robustly, and the
-//! floor (EOPnP on the true correspondences alone) to compare it with.
+//! The outlier experiment of `eopnp register --outliers`: wrong 3D points injected into an
+//! image's correspondences, the pose re-estimated (robustly with `--ransac`), and the floor
+//! (EOPnP on the true correspondences alone) to compare it with. Part of the command line
+//! only, not of the library.
 
 use std::time::Instant;
 
@@ -8,8 +9,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use rand_core::SeedableRng;
 use rand_pcg::Pcg64;
 
-use super::model::{Model, RegisterError};
-use super::register::Registration;
+use crate::colmap::{Model, RegisterError, Registration};
 use crate::robust::ransac::{index, normal, Ransac, RansacSolution};
 use crate::{Solution, Solver};
 
@@ -19,7 +19,7 @@ use crate::{Solution, Solver};
 /// `seed`. Returns the mask of the **true** (unchanged) correspondences. A test and
 /// benchmarking tool (`eopnp register --outliers`); `fraction` is clamped to `[0, 1]`, an
 /// empty cloud changes nothing.
-pub fn inject_outliers(
+pub(crate) fn inject_outliers(
     world: &mut [Point3<f64>],
     cloud: &[Point3<f64>],
     fraction: f64,
@@ -52,7 +52,7 @@ pub fn inject_outliers(
 /// The per-image seed of [`register_image`]'s outlier injection: `seed` mixed with the image
 /// id (SplitMix64 finaliser), so images get independent wrong points.
 #[must_use]
-pub fn image_seed(seed: u64, image_id: u32) -> u64 {
+pub(crate) fn image_seed(seed: u64, image_id: u32) -> u64 {
     let mut z = seed ^ u64::from(image_id).wrapping_mul(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -61,7 +61,7 @@ pub fn image_seed(seed: u64, image_id: u32) -> u64 {
 
 /// Injected outliers for [`register_image`] (see [`inject_outliers`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Outliers {
+pub(crate) struct Outliers {
     /// Fraction of each image's correspondences replaced by wrong 3D points.
     pub fraction: f64,
     /// Standard deviation of the noise added to the wrong points (model units).
@@ -73,7 +73,7 @@ pub struct Outliers {
 /// One image's 2D-3D problem of a model, with injected outliers.
 #[derive(Clone, Debug)]
 #[non_exhaustive]
-pub struct ImageProblem {
+pub(crate) struct ImageProblem {
     /// World points (wrong ones where `truth` is false).
     pub world: Vec<Point3<f64>>,
     /// Observed pixels.
@@ -85,7 +85,11 @@ pub struct ImageProblem {
 /// The correspondences of image `image_id` ([`Model::correspondences`]) with
 /// `outliers.fraction` of them replaced by random points of the model's cloud plus noise.
 #[must_use]
-pub fn image_problem(model: &Model, image_id: u32, outliers: Option<&Outliers>) -> ImageProblem {
+pub(crate) fn image_problem(
+    model: &Model,
+    image_id: u32,
+    outliers: Option<&Outliers>,
+) -> ImageProblem {
     let (mut world, pixels) = model.correspondences(image_id);
     let truth = match outliers {
         Some(o) => {
@@ -107,27 +111,26 @@ pub fn image_problem(model: &Model, image_id: u32, outliers: Option<&Outliers>) 
     }
 }
 
-/// [`crate::colmap::register_image`] with RANSAC ([`Ransac::estimate_pixels`]) on the image's
-/// correspondences, optionally with injected outliers ([`image_problem`]).
+/// RANSAC ([`Ransac::estimate_pixels`]) on the image's correspondences, optionally with
+/// injected outliers ([`image_problem`]).
 /// `registration.inliers` is the RANSAC inlier count; the pixel RMSEs are over the true
 /// correspondences.
 ///
 /// # Errors
 /// As [`crate::colmap::register_image`].
-pub fn register_image_ransac(
+pub(crate) fn ransac_on_problem(
     model: &Model,
     image_id: u32,
+    problem: &ImageProblem,
     ransac: &Ransac,
     solver: &Solver,
-    outliers: Option<&Outliers>,
-) -> Result<(Registration, RansacSolution, ImageProblem), RegisterError> {
+) -> Result<(Registration, RansacSolution), RegisterError> {
     let (_, cam) = model.image_and_camera(image_id)?;
-    let problem = image_problem(model, image_id, outliers);
     let sol = ransac.estimate_pixels(solver, cam, &problem.world, &problem.pixels)?;
-    let reg = registration(model, image_id, &problem, &sol.solution, sol.num_inliers)?;
-    let mut reg = reg;
+    let mut reg = registration(model, image_id, problem, &sol.solution, sol.num_inliers)?;
     reg.micros = sol.stats.micros;
-    Ok((reg, sol, problem))
+    reg.ransac = Some(sol.stats);
+    Ok((reg, sol))
 }
 
 /// A [`Registration`] of `solution` for image `image_id` (errors against the model's pose,
@@ -135,7 +138,7 @@ pub fn register_image_ransac(
 ///
 /// # Errors
 /// [`RegisterError::UnknownImage`], [`RegisterError::UnknownCamera`].
-pub fn registration(
+pub(crate) fn registration(
     model: &Model,
     image_id: u32,
     problem: &ImageProblem,
@@ -172,7 +175,8 @@ pub fn registration(
         name: img.name.clone(),
         n: problem.world.len(),
         inliers,
-        skipped: 0,
+        skipped: solution.skipped,
+        ransac: None,
         solution: *solution,
         rotation_error_deg: crate::metrics::rotation_error_deg(&r, &r_ref),
         translation_error_pct: crate::metrics::translation_error_pct(&t, &t_ref),
@@ -182,12 +186,12 @@ pub fn registration(
     })
 }
 
-/// The floor of an image problem: EOPnP ([`crate::camera::solve_pixels`] with `solver`) on the
+/// The floor of an image problem: EOPnP ([`Solver::solve_pixels`] with `solver`) on the
 /// true correspondences only, as a [`Registration`].
 ///
 /// # Errors
 /// As [`crate::colmap::register_image`].
-pub fn floor(
+pub(crate) fn floor(
     model: &Model,
     image_id: u32,
     problem: &ImageProblem,
@@ -207,9 +211,9 @@ pub fn floor(
         }
     }
     let start = Instant::now();
-    let sol = solver.solve_camera(cam, &w, &p)?;
+    let sol = solver.solve_pixels(&w, &p, cam)?;
     let micros = start.elapsed().as_secs_f64() * 1e6;
-    let mut reg = registration(model, image_id, problem, &sol.solution, sol.used)?;
+    let mut reg = registration(model, image_id, problem, &sol, sol.used)?;
     reg.micros = micros;
     Ok(reg)
 }
