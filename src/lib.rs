@@ -62,6 +62,7 @@ mod test_data;
 
 pub use error::{DegenerateKind, InputKind, PnpError};
 pub use numeric::roots;
+#[cfg(eopnp_bench)]
 #[doc(hidden)]
 pub use pipeline::bench_hooks;
 pub use pipeline::{CandidateSource, PlanarDetection, Refinement, Solution, Solutions};
@@ -71,20 +72,4 @@ pub use solver::{solve, Solver};
 /// Error metrics of docs/algorithm.md section 1 (the paper's).
 pub mod metrics {
     pub use crate::numeric::rotation::{rotation_error_deg, translation_error_pct};
-}
-
-/// Internal intermediates exposed for tests against the reference prototype. Not a stable API.
-#[doc(hidden)]
-pub mod __internal {
-    use nalgebra::{Matrix3, Point2, Point3, SMatrix};
-
-    /// `(M, G, Rw, ratio)`: the S1-S2 intermediates in the working frame.
-    pub type Intermediates = (SMatrix<f64, 9, 9>, SMatrix<f64, 3, 9>, Matrix3<f64>, f64);
-
-    /// `(M, G, Rw, ratio)` of docs/algorithm.md S1-S2 in the working frame, or `None` on invalid
-    /// input.
-    #[must_use]
-    pub fn intermediates(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Intermediates> {
-        crate::pipeline::intermediates(world, image)
-    }
 }

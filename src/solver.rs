@@ -66,15 +66,6 @@ impl Solver {
         self
     }
 
-    /// Test hook: `false` keeps the user's world axes instead of the principal axes in the
-    /// working frame (only valid for non-planar scenes). Default: `true`.
-    #[doc(hidden)]
-    #[must_use]
-    pub fn align_world_axes(mut self, align: bool) -> Self {
-        self.opts.align_world_axes = align;
-        self
-    }
-
     /// The pose from `world` points and their normalised image points `(x/z, y/z)`.
     ///
     /// # Errors

@@ -11,9 +11,9 @@
 //! quick run is not a pass of this suite).
 //!
 //! 1. Noise-free: 10,000 trials per (N, scene, rotation kind), N = 4, 5, 6, 10, 100, 1000,
-//!    scenes General / Planar / QuasiSingular, rotations Uniform / Near180, plus General
-//!    Near180 with `.align_world_axes(false)` (the solver's own frame is then near 180 deg, the
-//!    CGR singularity). Rotation error < 1e-6 deg and |t - t_gt| / |t_gt| < 1e-8. The same
+//!    scenes General / Planar / QuasiSingular, rotations Uniform / Near180 (the same at the
+//!    CGR singularity of the solver's own frame: `tests/unit/pipeline/driver.rs`). Rotation
+//!    error < 1e-6 deg and |t - t_gt| / |t_gt| < 1e-8. The same
 //!    for algebraic mode (S0-S8) with 1,000 trials per configuration.
 //! 2. Noisy (paper protocol, General, Uniform): N = 6..15 at sigma = 2 px and N = 10 at
 //!    sigma = 0.5, 1, 2, 3, 5 px, 1,000 trials each: default mode mean and median rotation and
@@ -191,25 +191,6 @@ fn noise_free_general_near180() {
         Scene::General,
         RotationKind::Near180,
         &Solver::default(),
-        NOISE_FREE_TRIALS,
-    )
-    .assert_none();
-}
-
-#[test]
-#[cfg_attr(
-    debug_assertions,
-    ignore = "release-mode suite: cargo test --release --test accuracy"
-)]
-fn noise_free_general_near180_unaligned() {
-    // Without the principal-axes rotation of S1 the working-frame rotation is the world one,
-    // i.e. within 1e-3 deg of 180 deg (exactly 180 in 5 % of the trials): the CGR singularity.
-    let solver = Solver::default().align_world_axes(false);
-    noise_free(
-        "unaligned",
-        Scene::General,
-        RotationKind::Near180,
-        &solver,
         NOISE_FREE_TRIALS,
     )
     .assert_none();

@@ -16,6 +16,9 @@
 //! case-1 start through S6, the certificate and S7's depth test) and, when that does not settle
 //! the solve, the full search (S4, S4', S6 from every start, S7); either ends in S9 and S8.
 
+/// The stages one at a time, for `benches/stages.rs` only: compiled only with
+/// `RUSTFLAGS="--cfg eopnp_bench"`, never part of the library's API.
+#[cfg(eopnp_bench)]
 #[doc(hidden)]
 pub mod bench_hooks;
 pub(crate) mod certificate;
@@ -256,19 +259,6 @@ impl<'a> Search<'a> {
     }
 }
 
-/// `(M, G, Rw, ratio)` of S1-S2 in the working frame, or `None` on invalid input (for the tests
-/// against the reference prototype).
-#[allow(clippy::type_complexity)]
-pub(crate) fn intermediates(
-    world: &[Point3<f64>],
-    image: &[Point2<f64>],
-) -> Option<(
-    nalgebra::SMatrix<f64, 9, 9>,
-    nalgebra::SMatrix<f64, 3, 9>,
-    Matrix3<f64>,
-    f64,
-)> {
-    let fr = frame::working_frame(world, image, None, true).ok()?;
-    let sys = fr.sums.system(false)?;
-    Some((sys.m, sys.g, fr.rw, fr.ratio))
-}
+#[cfg(test)]
+#[path = "../../tests/unit/pipeline/driver.rs"]
+pub(crate) mod tests;

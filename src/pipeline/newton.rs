@@ -132,6 +132,7 @@ fn local_model(m45: &[f64; 45], r: &Matrix3<f64>) -> (f64, Vector3<f64>, Matrix3
 /// (values that are not positive and finite are replaced by 1e-300, as in the prototype).
 /// `r0` must be a rotation. The returned `f` never exceeds `f(r0) + k * accept_floor * scale`
 /// after `k` accepted steps (it decreases except within the rounding floor).
+#[cfg(any(test, eopnp_bench))]
 pub(crate) fn refine_so3(
     m45: &[f64; 45],
     scale: f64,

@@ -56,6 +56,16 @@ pub(crate) fn vector(name: &str) -> Vector {
     }
 }
 
+/// The names of every problem of `tests/data/test_vectors.json`.
+pub(crate) fn vector_names() -> Vec<String> {
+    let all = parse(include_str!("../data/test_vectors.json"));
+    all.as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v["name"].as_str().unwrap().to_string())
+        .collect()
+}
+
 /// `tests/data/reference_newton.json`.
 pub(crate) fn newton_reference() -> Value {
     parse(include_str!("../data/reference_newton.json"))

@@ -134,7 +134,7 @@ fn solver_local_model_on_realistic_problems() {
                 )
             })
             .collect();
-        let (m, ..) = eopnp::__internal::intermediates(&world, &image).unwrap();
+        let m = explicit_m(&world, &image);
         let trace = m.trace();
         let m45 = rf::m_upper45(&m);
         let cost = |r: &Matrix3<f64>| {
@@ -178,4 +178,34 @@ fn solver_local_model_on_realistic_problems() {
             }
         }
     }
+}
+
+/// `M = V^T V - (W^T V)^T (W^T W)^-1 W^T V` of the problem, from the explicit rows of each point
+/// (`W_i = [[1, 0, -u], [0, 1, -v]]`, `V_i = [[X^T, 0, -u X^T], [0, X^T, -v X^T]]`) in the
+/// user's frame: an independent S2, for realistic (rank-deficient, structured) matrices.
+fn explicit_m(world: &[nalgebra::Point3<f64>], image: &[nalgebra::Point2<f64>]) -> rf::M9 {
+    let n = world.len();
+    let mut w = nalgebra::DMatrix::<f64>::zeros(2 * n, 3);
+    let mut v = nalgebra::DMatrix::<f64>::zeros(2 * n, 9);
+    for (i, (x, m)) in world.iter().zip(image).enumerate() {
+        let (u, vv) = (m.x, m.y);
+        w[(2 * i, 0)] = 1.0;
+        w[(2 * i, 2)] = -u;
+        w[(2 * i + 1, 1)] = 1.0;
+        w[(2 * i + 1, 2)] = -vv;
+        for k in 0..3 {
+            v[(2 * i, k)] = x[k];
+            v[(2 * i, 6 + k)] = -u * x[k];
+            v[(2 * i + 1, 3 + k)] = x[k];
+            v[(2 * i + 1, 6 + k)] = -vv * x[k];
+        }
+    }
+    let wtv = w.transpose() * &v;
+    let g = (w.transpose() * &w)
+        .try_inverse()
+        .expect("W^T W invertible")
+        * &wtv;
+    let m = v.transpose() * &v - wtv.transpose() * g;
+    let m = (&m + m.transpose()) * 0.5;
+    rf::M9::from_fn(|i, j| m[(i, j)])
 }

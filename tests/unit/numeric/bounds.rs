@@ -136,7 +136,7 @@ fn hessian_eigen_sweeps() {
 fn newton_damping() {
     // No damping step at all: Newton accepts nothing and returns its start.
     let (w, i, r) = problem(10, false, 4);
-    let (m, ..) = crate::__internal::intermediates(&w, &i).unwrap();
+    let (m, ..) = crate::pipeline::tests::intermediates(&w, &i).unwrap();
     let m45 = crate::pipeline::moments::m_upper(&m);
     let r0 = Rotation3::new(Vector3::new(0.3, -0.2, 0.1)).into_inner() * r;
     let (out, hit) = with_limit(Bound::NewtonDamping, 0, || {
