@@ -3,7 +3,8 @@
 
 use core::fmt;
 
-/// A COLMAP camera model.
+/// A camera model: COLMAP's models, and OpenCV's full perspective model
+/// ([`CameraModel::OpenCvThinPrismTilted`], not a COLMAP model).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[non_exhaustive]
 pub enum CameraModel {
@@ -27,9 +28,25 @@ pub enum CameraModel {
     SimpleRadialFisheye,
     /// `f, cx, cy, k1, k2`: equidistant fisheye with two radial terms (COLMAP id 9).
     RadialFisheye,
+    /// `fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6, s1, s2, s3, s4, tau_x, tau_y`:
+    /// OpenCV's full perspective model (`cv2.projectPoints` with 14 distortion coefficients:
+    /// rational radial, tangential, thin-prism and tilted-sensor terms; the tilt angles in
+    /// radians, `|tau| < pi/2`).
+    ///
+    /// **Not a COLMAP model**: it has no COLMAP id ([`CameraModel::colmap_id`] is `None`),
+    /// COLMAP's readers never produce it, [`CameraModel::from_name`] does not accept its name
+    /// `"OPENCV_THIN_PRISM_TILTED"` (parsing with [`str::parse`] does), and
+    /// [`crate::colmap::write_model_binary`] refuses it. Built by
+    /// [`crate::camera::Camera::from_opencv`] for 12 and 14 coefficients.
+    ///
+    /// The map is OpenCV's: the distortion `(u, v) + D(u, v)` of the rational model plus
+    /// `(s1 r^2 + s2 r^4, s3 r^2 + s4 r^4)`, then the projective tilt `(a, b) -> (X/W, Y/W)`,
+    /// `(X, Y, W) = T (a, b, 1)` with OpenCV's `computeTiltProjectionMatrix(tau_x, tau_y)`.
+    OpenCvThinPrismTilted,
 }
 
-/// Every supported model, in COLMAP id order.
+/// Every supported COLMAP model, in COLMAP id order (all models except
+/// [`CameraModel::OpenCvThinPrismTilted`], which is not a COLMAP model).
 pub const SUPPORTED_MODELS: [CameraModel; 9] = [
     CameraModel::SimplePinhole,
     CameraModel::Pinhole,
@@ -56,7 +73,8 @@ const KNOWN_UNSUPPORTED: [(i32, &str); 9] = [
 ];
 
 impl CameraModel {
-    /// COLMAP's name of the model, e.g. `"SIMPLE_RADIAL"`.
+    /// COLMAP's name of the model, e.g. `"SIMPLE_RADIAL"` (for
+    /// [`CameraModel::OpenCvThinPrismTilted`], this crate's name `"OPENCV_THIN_PRISM_TILTED"`).
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
@@ -69,22 +87,31 @@ impl CameraModel {
             CameraModel::FullOpenCv => "FULL_OPENCV",
             CameraModel::SimpleRadialFisheye => "SIMPLE_RADIAL_FISHEYE",
             CameraModel::RadialFisheye => "RADIAL_FISHEYE",
+            CameraModel::OpenCvThinPrismTilted => "OPENCV_THIN_PRISM_TILTED",
         }
     }
 
-    /// COLMAP's numeric model id (used by the binary model format).
+    /// COLMAP's numeric model id (used by the binary model format); `None` for
+    /// [`CameraModel::OpenCvThinPrismTilted`], which is not a COLMAP model.
+    ///
+    /// ```
+    /// use eopnp::camera::CameraModel;
+    /// assert_eq!(CameraModel::FullOpenCv.colmap_id(), Some(6));
+    /// assert_eq!(CameraModel::OpenCvThinPrismTilted.colmap_id(), None);
+    /// ```
     #[must_use]
-    pub fn colmap_id(self) -> i32 {
+    pub fn colmap_id(self) -> Option<i32> {
         match self {
-            CameraModel::SimplePinhole => 0,
-            CameraModel::Pinhole => 1,
-            CameraModel::SimpleRadial => 2,
-            CameraModel::Radial => 3,
-            CameraModel::OpenCv => 4,
-            CameraModel::OpenCvFisheye => 5,
-            CameraModel::FullOpenCv => 6,
-            CameraModel::SimpleRadialFisheye => 8,
-            CameraModel::RadialFisheye => 9,
+            CameraModel::SimplePinhole => Some(0),
+            CameraModel::Pinhole => Some(1),
+            CameraModel::SimpleRadial => Some(2),
+            CameraModel::Radial => Some(3),
+            CameraModel::OpenCv => Some(4),
+            CameraModel::OpenCvFisheye => Some(5),
+            CameraModel::FullOpenCv => Some(6),
+            CameraModel::SimpleRadialFisheye => Some(8),
+            CameraModel::RadialFisheye => Some(9),
+            CameraModel::OpenCvThinPrismTilted => None,
         }
     }
 
@@ -98,6 +125,7 @@ impl CameraModel {
             CameraModel::Radial | CameraModel::RadialFisheye => 5,
             CameraModel::OpenCv | CameraModel::OpenCvFisheye => 8,
             CameraModel::FullOpenCv => 12,
+            CameraModel::OpenCvThinPrismTilted => 18,
         }
     }
 
@@ -112,6 +140,9 @@ impl CameraModel {
             CameraModel::OpenCv => "fx, fy, cx, cy, k1, k2, p1, p2",
             CameraModel::OpenCvFisheye => "fx, fy, cx, cy, k1, k2, k3, k4",
             CameraModel::FullOpenCv => "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6",
+            CameraModel::OpenCvThinPrismTilted => {
+                "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6, s1, s2, s3, s4, tau_x, tau_y"
+            }
         }
     }
 
@@ -137,7 +168,7 @@ impl CameraModel {
         if let Some(m) = SUPPORTED_MODELS
             .iter()
             .copied()
-            .find(|m| m.colmap_id() == id)
+            .find(|m| m.colmap_id() == Some(id))
         {
             return Ok(m);
         }
@@ -179,9 +210,14 @@ impl fmt::Display for CameraModel {
     }
 }
 
+/// Parses [`CameraModel::name`]: COLMAP's names (as [`CameraModel::from_name`]) and
+/// `"OPENCV_THIN_PRISM_TILTED"`, so that `model.to_string().parse()` gives `model` back.
 impl core::str::FromStr for CameraModel {
     type Err = CameraError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s == CameraModel::OpenCvThinPrismTilted.name() {
+            return Ok(CameraModel::OpenCvThinPrismTilted);
+        }
         CameraModel::from_name(s)
     }
 }

@@ -266,14 +266,24 @@ pub(super) fn parse_points_bin(
 /// model.
 ///
 /// # Errors
-/// Any I/O error.
+/// Any I/O error; [`std::io::ErrorKind::InvalidInput`] for a camera whose model has no COLMAP
+/// id ([`CameraModel::OpenCvThinPrismTilted`]), before anything is written.
 pub fn write_model_binary(model: &Model, dir: impl AsRef<Path>) -> std::io::Result<()> {
     let dir = dir.as_ref();
     let mut b = Vec::new();
     b.extend_from_slice(&(model.cameras.len() as u64).to_le_bytes());
     for (id, cam) in &model.cameras {
+        let model_id = cam.model().colmap_id().ok_or_else(|| {
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "camera {id}: model {} is not a COLMAP model (no COLMAP model id)",
+                    cam.model()
+                ),
+            )
+        })?;
         b.extend_from_slice(&id.to_le_bytes());
-        b.extend_from_slice(&cam.model().colmap_id().to_le_bytes());
+        b.extend_from_slice(&model_id.to_le_bytes());
         b.extend_from_slice(&cam.width().to_le_bytes());
         b.extend_from_slice(&cam.height().to_le_bytes());
         for p in cam.params() {

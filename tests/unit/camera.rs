@@ -27,9 +27,78 @@ fn cameras() -> Vec<Camera> {
         ("SIMPLE_RADIAL_FISHEYE", vec![700.0, 600.0, 800.0, 0.03]),
         ("RADIAL_FISHEYE", vec![700.0, 600.0, 800.0, 0.03, -0.004]),
     ];
-    spec.into_iter()
+    let mut cams: Vec<Camera> = spec
+        .into_iter()
         .map(|(m, p)| Camera::from_colmap(m, w, h, p).unwrap())
-        .collect()
+        .collect();
+    // OpenCV's full model (not a COLMAP model): rational, tangential, thin prism and a tilt
+    // of about 2 and -3 degrees.
+    cams.push(
+        Camera::new(
+            CameraModel::OpenCvThinPrismTilted,
+            w,
+            h,
+            vec![
+                1245.0, 1251.0, 601.5, 797.25, -0.1, 0.02, 0.001, -0.0007, 0.001, 0.05, -0.01,
+                0.002, 0.0015, -0.0004, -0.001, 0.0003, 0.035, -0.052,
+            ],
+        )
+        .unwrap(),
+    );
+    cams
+}
+
+#[test]
+fn tilt_matrix_is_the_identity_at_zero_and_keeps_the_axis() {
+    let t = distortion::tilt_matrix(0.0, 0.0);
+    assert_eq!(t, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+    // Any tilt: the optical axis (0, 0) stays at (0, 0); the tilt is a projective map with
+    // det T = cos^2(tau_x) cos^2(tau_y) > 0.
+    let (tx, ty) = (0.04_f64, -0.03_f64);
+    let t = distortion::tilt_matrix(tx, ty);
+    assert!(t[0][2].abs() < 1e-17 && t[1][2].abs() < 1e-17, "{t:?}");
+    let det = t[0][0] * (t[1][1] * t[2][2] - t[1][2] * t[2][1])
+        - t[0][1] * (t[1][0] * t[2][2] - t[1][2] * t[2][0])
+        + t[0][2] * (t[1][0] * t[2][1] - t[1][1] * t[2][0]);
+    let expected = (tx.cos() * ty.cos()).powi(2);
+    assert!((det - expected).abs() < 1e-15, "{det} vs {expected}");
+}
+
+#[test]
+fn tilt_only_camera_is_the_homography() {
+    // No lens distortion, only the tilt: project(n) = K (X/W, Y/W), (X, Y, W) = T (n, 1).
+    let (tx, ty) = (0.05, -0.02);
+    let mut params = vec![1000.0, 1000.0, 600.0, 400.0];
+    params.extend([0.0; 12]);
+    params.extend([tx, ty]);
+    let cam = Camera::new(CameraModel::OpenCvThinPrismTilted, 1200, 800, params).unwrap();
+    let t = distortion::tilt_matrix(tx, ty);
+    for n in [
+        Point2::new(0.0, 0.0),
+        Point2::new(0.3, -0.2),
+        Point2::new(-0.45, 0.35),
+    ] {
+        let w = t[2][0] * n.x + t[2][1] * n.y + t[2][2];
+        let x = (t[0][0] * n.x + t[0][1] * n.y + t[0][2]) / w;
+        let y = (t[1][0] * n.x + t[1][1] * n.y + t[1][2]) / w;
+        let p = cam.project(n);
+        assert!((p.x - (1000.0 * x + 600.0)).abs() < 1e-9, "{p}");
+        assert!((p.y - (1000.0 * y + 400.0)).abs() < 1e-9, "{p}");
+        // A real perspective effect: not the identity away from the axis.
+        if n.x != 0.0 {
+            assert!((p.x - (1000.0 * n.x + 600.0)).abs() > 1.0);
+        }
+        assert!((cam.undistort(p).unwrap() - n).norm() <= 1e-12);
+    }
+}
+
+#[test]
+fn tilt_of_ninety_degrees_is_rejected() {
+    let mut params = vec![1000.0, 1000.0, 600.0, 400.0];
+    params.extend([0.0; 12]);
+    params.extend([0.0, -core::f64::consts::FRAC_PI_2]);
+    let e = Camera::new(CameraModel::OpenCvThinPrismTilted, 1200, 800, params).unwrap_err();
+    assert!(matches!(e, CameraError::InvalidParams(_)), "{e}");
 }
 
 #[test]
