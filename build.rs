@@ -42,8 +42,8 @@ fn kernels() -> Vec<(String, String)> {
     let dir = Path::new(&root).join("generated");
     // A directory: cargo reruns this script when any file under it changes.
     println!("cargo:rerun-if-changed=generated");
-    let entries = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", dir.display()));
+    let entries =
+        std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("cannot read {}: {e}", dir.display()));
     let mut files = Vec::new();
     for entry in entries {
         let path = entry.expect("generated/ entry").path();

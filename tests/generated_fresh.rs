@@ -66,7 +66,11 @@ fn differences(
 #[test]
 fn committed_generated_code_matches_a_fresh_rendering() {
     let rendered: BTreeMap<String, String> = eopnp_codegen::render_all().into_iter().collect();
-    assert!(rendered.len() >= 16, "render_all gave {} files", rendered.len());
+    assert!(
+        rendered.len() >= 16,
+        "render_all gave {} files",
+        rendered.len()
+    );
     let (stale, missing, extra) = differences(&rendered, &committed());
     assert!(
         stale.is_empty() && missing.is_empty() && extra.is_empty(),
@@ -83,7 +87,11 @@ fn compiled_generated_code_is_the_committed_copy() {
     } else {
         "copied by build.rs from generated/"
     };
-    assert!(built.len() >= 16, "OUT_DIR holds {} kernels {how}", built.len());
+    assert!(
+        built.len() >= 16,
+        "OUT_DIR holds {} kernels {how}",
+        built.len()
+    );
     let (stale, missing, extra) = differences(&built, &committed());
     assert!(
         stale.is_empty() && missing.is_empty() && extra.is_empty(),
