@@ -11,7 +11,10 @@
 #      `default-features = false` (a library user): clean debug and release builds, each with a
 #      fresh target directory, run (the binary solves a synthetic problem and asserts the
 #      pose), and prints their wall times.
-#   3. The same scratch crate with feature `regenerate` (eopnp-codegen from its unpacked .crate
+#   3. Runs the library's unit tests (the one test target the package keeps; its #[path]
+#      modules and data under tests/unit/, tests/data/ ship) in the unpacked package, with
+#      eopnp-codegen (a dev-dependency) from its unpacked .crate until it is on crates.io.
+#   4. The same scratch crate with feature `regenerate` (eopnp-codegen from its unpacked .crate
 #      through [patch.crates-io]): the published feature builds and renders the same kernels.
 #      Prints how long the build script runs with and without `regenerate`.
 #
@@ -129,6 +132,18 @@ build_script_ms() {
   OUT_DIR="$out" CARGO_MANIFEST_DIR="$tmp/eopnp-$version" "$script" >/dev/null
   echo $(($(now_ms) - start))
 }
+
+echo "== unit tests of the unpacked package (cargo test --lib --release)"
+# The repository's target directory: the dependencies are already built there.
+unit_log="$tmp/unit-tests.log"
+if ! (cd "$tmp/eopnp-$version" && CARGO_TARGET_DIR="$target_dir" cargo test --offline --release \
+  --lib --config "patch.crates-io.eopnp-codegen.path='$tmp/eopnp-codegen-$codegen_version'" \
+  >"$unit_log" 2>&1); then
+  cat "$unit_log" >&2
+  echo "the unit tests of the unpacked package failed" >&2
+  exit 1
+fi
+grep -E '^test result' "$unit_log"
 
 echo "== scratch crate: eopnp $version by path, default-features = false"
 user="$tmp/scratch"
