@@ -6,11 +6,11 @@
 use std::time::Instant;
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
-use rand_core::SeedableRng;
+use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg64;
 
 use crate::colmap::{Model, RegisterError, Registration};
-use crate::robust::ransac::{index, normal, Ransac, RansacSolution};
+use crate::robust::ransac::{index, Ransac, RansacSolution};
 use crate::{Solution, Solver};
 
 /// Replaces `round(fraction * N)` of the correspondences' world points, chosen uniformly
@@ -216,4 +216,11 @@ pub(crate) fn floor(
     let mut reg = registration(model, image_id, problem, &sol, sol.used)?;
     reg.micros = micros;
     Ok(reg)
+}
+
+/// Standard normal deviate (Box-Muller on two uniform draws).
+fn normal(rng: &mut Pcg64) -> f64 {
+    let u1 = ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    let u2 = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
 }

@@ -484,7 +484,7 @@ impl Ransac {
 /// consensus's inliers with [`Solver`] (EOPnP) afterwards, as [`Ransac`] does.
 mod score;
 
-pub(crate) use score::{index, normal};
+pub(crate) use score::index;
 use score::{sample3, FitBuffers, Problem, Scored};
 
 #[cfg(feature = "sample-consensus")]

@@ -170,13 +170,6 @@ pub(crate) fn index(rng: &mut Pcg64, n: usize) -> usize {
     ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
 }
 
-/// Standard normal deviate (Box-Muller on two uniform draws).
-pub(crate) fn normal(rng: &mut Pcg64) -> f64 {
-    let u1 = ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-    let u2 = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-    (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
-}
-
 /// Three distinct indices in `0..n`, or `None` (n < 3, or the bounded attempts ran out).
 pub(super) fn sample3(rng: &mut Pcg64, n: usize) -> Option<[usize; 3]> {
     if n < 3 {
