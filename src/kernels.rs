@@ -21,6 +21,30 @@
 //!
 //! Symbols follow docs/algorithm.md: `s1, s2, s3` are the CGR parameters, `mIJ` the entry `M[I][J]`,
 //! `rIJ` the rotation entry `R[I-1][J-1]`.
+//!
+//! The solver calls `so3_local_model` (S6) and the case kernels (S4, S4'). The global-chart
+//! cost kernels (`cost_coefficients`, `cost`, `cost_gradient`, `cost_hessian` and their
+//! planar analogues) are the paper's form of the same cost, kept as an exactly and numerically
+//! checked reference (the solver works in a chart centred on each iterate instead).
+//!
+//! ```
+//! use eopnp::kernels::{cost, cost_coefficients};
+//!
+//! // M = I (upper triangle, row-major): f(R) = |vec(R)|^2 = 3 for every rotation, so the
+//! // cost polynomial C(s) = (1 + |s|^2)^2 f(R(s)) = 3 (1 + |s|^2)^2.
+//! let mut m45 = [0.0; 45];
+//! let mut k = 0;
+//! for i in 0..9 {
+//!     for j in i..9 {
+//!         m45[k] = if i == j { 1.0 } else { 0.0 };
+//!         k += 1;
+//!     }
+//! }
+//! let c = cost_coefficients(&m45);
+//! let s = [0.1, -0.2, 0.3];
+//! let n2: f64 = s.iter().map(|x| x * x).sum();
+//! assert!((cost(&c, &s) - 3.0 * (1.0 + n2).powi(2)).abs() < 1e-12);
+//! ```
 
 /// Operation counts of one generated kernel, as emitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

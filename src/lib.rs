@@ -60,6 +60,9 @@ mod solver;
 #[path = "../tests/unit/test_data.rs"]
 mod test_data;
 
+/// The fixed-capacity list type of [`Solutions`] and [`p3p::P3pSolutions`] (the `arrayvec`
+/// crate's), re-exported so that callers need not depend on `arrayvec` themselves.
+pub use arrayvec::ArrayVec;
 pub use error::{DegenerateKind, InputKind, PnpError};
 pub use numeric::roots;
 #[cfg(eopnp_bench)]

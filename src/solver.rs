@@ -9,7 +9,32 @@ use crate::pipeline::{
     self, Options, PlanarDetection, Refinement, ReprojOptions, Solution, Solutions,
 };
 
-/// Solver options. `Solver::default()` is the recommended configuration.
+/// Solver options, as a builder. `Solver::default()` is the recommended configuration: EOPnP
+/// followed by the maximum-likelihood refinement of the reprojection error.
+///
+/// ```
+/// use eopnp::{PlanarDetection, Refinement, Solver};
+/// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
+/// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
+/// # let t = Vector3::new(0.1, -0.2, 6.0);
+/// # let world = [
+/// #     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+/// #     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+/// # ];
+/// # let image: Vec<Point2<f64>> = world
+/// #     .iter()
+/// #     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
+/// #     .collect();
+///
+/// // The paper's algorithm alone, the planar branch chosen by the data, more Newton steps.
+/// let solver = Solver::default()
+///     .refinement(Refinement::Algebraic)
+///     .planar_detection(PlanarDetection::Auto)
+///     .newton_iterations(100);
+/// let sol = solver.solve(&world, &image)?;
+/// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+/// # Ok::<(), eopnp::PnpError>(())
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Solver {
     opts: Options,
@@ -68,6 +93,26 @@ impl Solver {
 
     /// The pose from `world` points and their normalised image points `(x/z, y/z)`.
     ///
+    /// ```
+    /// use eopnp::Solver;
+    /// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
+    /// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
+    /// # let t = Vector3::new(0.1, -0.2, 6.0);
+    /// # let world = [
+    /// #     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    /// #     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// # ];
+    /// # let image: Vec<Point2<f64>> = world
+    /// #     .iter()
+    /// #     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
+    /// #     .collect();
+    ///
+    /// let sol = Solver::default().solve(&world, &image)?;
+    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+    /// assert!(sol.cheirality_ok && !sol.degenerate);
+    /// # Ok::<(), eopnp::PnpError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`PnpError`] for too few points, mismatched lengths, non-finite values and degenerate
     /// configurations; see its variants.
@@ -81,6 +126,32 @@ impl Solver {
 
     /// As [`Solver::solve`] with a non-negative weight per point (a point of weight 0 is
     /// ignored; weights scale each point's squared residuals).
+    ///
+    /// ```
+    /// use eopnp::Solver;
+    /// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
+    /// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
+    /// # let t = Vector3::new(0.1, -0.2, 6.0);
+    /// # let world = [
+    /// #     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    /// #     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// # ];
+    /// # let image: Vec<Point2<f64>> = world
+    /// #     .iter()
+    /// #     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
+    /// #     .collect();
+    ///
+    /// // A wrong seventh point with weight 0 changes nothing.
+    /// let mut world = world.to_vec();
+    /// let mut image = image.clone();
+    /// world.push(Point3::new(5.0, 5.0, 5.0));
+    /// image.push(Point2::new(0.9, -0.9));
+    /// let weights = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0];
+    /// let sol = Solver::default().solve_weighted(&world, &image, &weights)?;
+    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+    /// assert_eq!(sol.used, 6);
+    /// # Ok::<(), eopnp::PnpError>(())
+    /// ```
     ///
     /// # Errors
     /// As [`Solver::solve`], plus [`PnpError::WeightsLength`], [`PnpError::InvalidWeight`] and
@@ -98,6 +169,26 @@ impl Solver {
     /// others, then by increasing reprojection error. For N <= 6 and for planar scenes several
     /// poses can explain the data about equally well; this lists them. Bounded (at most 32), no
     /// allocation.
+    ///
+    /// ```
+    /// use eopnp::Solver;
+    /// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
+    /// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
+    /// # let t = Vector3::new(0.1, -0.2, 6.0);
+    /// # let world = [
+    /// #     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    /// #     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// # ];
+    /// # let image: Vec<Point2<f64>> = world
+    /// #     .iter()
+    /// #     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
+    /// #     .collect();
+    ///
+    /// let all = Solver::default().solve_all(&world[..4], &image[..4])?;
+    /// // Four points: one or more poses fit them; the true one is among them.
+    /// assert!(all.iter().any(|s| (s.pose.translation.vector - t).norm() < 1e-8));
+    /// # Ok::<(), eopnp::PnpError>(())
+    /// ```
     ///
     /// # Errors
     /// As [`Solver::solve`].
@@ -208,6 +299,24 @@ impl Solver {
 }
 
 /// The pose from world points and normalised image points with the default [`Solver`].
+///
+/// ```
+/// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
+/// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
+/// # let t = Vector3::new(0.1, -0.2, 6.0);
+/// # let world = [
+/// #     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+/// #     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+/// # ];
+/// # let image: Vec<Point2<f64>> = world
+/// #     .iter()
+/// #     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
+/// #     .collect();
+///
+/// let sol = eopnp::solve(&world, &image)?;
+/// assert!((sol.rotation - r.matrix()).norm() < 1e-9);
+/// # Ok::<(), eopnp::PnpError>(())
+/// ```
 ///
 /// # Errors
 /// See [`Solver::solve`].

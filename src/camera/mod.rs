@@ -1,6 +1,18 @@
 //! COLMAP camera models: projection of normalised image points to pixels and iterative
 //! undistortion of pixels back to normalised image points.
 //!
+//! ```
+//! use eopnp::camera::Camera;
+//! use nalgebra::Point2;
+//!
+//! // The bundled model's camera: SIMPLE_RADIAL f, cx, cy, k.
+//! let cam = Camera::from_colmap("SIMPLE_RADIAL", 1200, 1600, vec![1245.65, 600.0, 800.0, 0.0577])?;
+//! let n = Point2::new(0.2, -0.3);
+//! let px = cam.project(n);
+//! assert!((cam.undistort(px)? - n).norm() < 1e-12);
+//! # Ok::<(), eopnp::camera::CameraError>(())
+//! ```
+//!
 //! The models, their parameter orders and their distortion formulas are COLMAP's
 //! (`src/colmap/sensor/models.h`), so a camera read from a COLMAP reconstruction
 //! ([`crate::colmap`]) maps points exactly as COLMAP does:
@@ -518,7 +530,7 @@ impl Camera {
         }
     }
 
-    /// [`Camera::undistort`] and the weight of the point in [`solve_pixels`]:
+    /// [`Camera::undistort`] and the weight of the point in [`crate::Solver::solve_pixels`]:
     /// `|det J| / (fx fy)`, `J` the Jacobian of [`Camera::project`] at the normalised point (to
     /// first order, the squared scale of a pixel error in normalised units relative to the
     /// undistorted pinhole camera).

@@ -242,7 +242,7 @@ pub enum CameraError {
     /// The pixel (or the normalised point) is NaN or infinite.
     NonFinite,
     /// The undistortion of the pixel did not converge within
-    /// [`UNDISTORT_MAX_ITERATIONS`] Newton iterations, or converged to a point where the
+    /// [`super::UNDISTORT_MAX_ITERATIONS`] Newton iterations, or converged to a point where the
     /// distortion map folds over (the pixel is outside the region where the model is
     /// invertible).
     NoConvergence {

@@ -262,7 +262,7 @@ pub(super) fn parse_points_bin(
 }
 
 /// Writes `model` in COLMAP's binary format (`cameras.bin`, `images.bin`, `points3D.bin`) to
-/// `dir`, which must exist. Reading it back with [`read_model_binary`] gives an identical
+/// `dir`, which must exist. Reading it back with [`super::read_model_binary`] gives an identical
 /// model.
 ///
 /// # Errors

@@ -82,7 +82,7 @@ impl Model {
 
     /// The 2D-3D correspondences of an image: world points and their observed (distorted)
     /// pixels, in the order of the image's observations. Empty for an unknown image id.
-    /// (Every referenced 3D point exists: [`read_model`] checks this.)
+    /// (Every referenced 3D point exists: [`super::read_model`] checks this.)
     #[must_use]
     pub fn correspondences(&self, image_id: u32) -> (Vec<Point3<f64>>, Vec<Point2<f64>>) {
         let Some(img) = self.images.get(&image_id) else {
@@ -99,7 +99,7 @@ impl Model {
 }
 
 /// Rotation matrix of a quaternion `(w, x, y, z)` (normalised first), closed form.
-/// A zero or non-finite quaternion gives a NaN matrix ([`read_model`] rejects those).
+/// A zero or non-finite quaternion gives a NaN matrix ([`super::read_model`] rejects those).
 #[must_use]
 pub fn quaternion_to_matrix(q: [f64; 4]) -> Matrix3<f64> {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
@@ -168,7 +168,7 @@ pub(crate) fn check_quaternion(q: &[f64; 4]) -> Result<(), String> {
     }
 }
 
-/// Errors of [`register_image`].
+/// Errors of [`super::register_image`].
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum RegisterError {
@@ -190,7 +190,14 @@ impl fmt::Display for RegisterError {
     }
 }
 
-impl std::error::Error for RegisterError {}
+impl std::error::Error for RegisterError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            RegisterError::Solver(e) => Some(e),
+            _ => None,
+        }
+    }
+}
 
 impl From<PnpError> for RegisterError {
     fn from(e: PnpError) -> Self {

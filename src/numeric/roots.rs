@@ -56,6 +56,19 @@
 //! tiny (see its documentation), so that noise turning a double real root into a close complex
 //! pair does not lose it.
 
+//!
+//! ```
+//! use eopnp::roots::{quartic_real_roots, real_roots};
+//!
+//! // (x - 1)(x - 2)(x + 3) = x^3 - 7x + 6, ascending coefficients.
+//! let r = real_roots(&[6.0, -7.0, 0.0, 1.0]);
+//! assert_eq!(r.len(), 3);
+//! let s = r.as_slice();
+//! assert!((s[0] + 3.0).abs() < 1e-14 && (s[1] - 1.0).abs() < 1e-14 && (s[2] - 2.0).abs() < 1e-14);
+//! // x^4 + 1 has no real root.
+//! assert!(quartic_real_roots(&[1.0, 0.0, 0.0, 0.0, 1.0]).is_empty());
+//! ```
+
 use crate::numeric::bounds::{Bound, Budget};
 
 mod closed;

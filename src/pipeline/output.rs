@@ -55,7 +55,47 @@ pub struct Solution {
     pub skipped: usize,
 }
 
-/// Every distinct local minimum found, best first (see [`crate::Solver::solve_all`]).
+impl Solution {
+    /// The rotation as OpenCV's rotation vector (`rvec` of `cv2.solvePnP`,
+    /// `cv2.Rodrigues`): the axis times the angle in radians, the angle in `[0, pi]`. Accurate
+    /// at every angle (computed from the unit quaternion as `2 atan2(|v|, |w|)`, not from an
+    /// arc cosine), 180 degrees included.
+    ///
+    /// ```
+    /// use eopnp::solve;
+    /// use nalgebra::{Point2, Point3, Rotation3, Vector3};
+    ///
+    /// let rvec_true = Vector3::new(0.3, -0.2, 0.1);
+    /// let r = Rotation3::new(rvec_true);
+    /// let t = Vector3::new(0.1, -0.2, 6.0);
+    /// let world = [
+    ///     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    ///     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// ];
+    /// let image: Vec<Point2<f64>> = world
+    ///     .iter()
+    ///     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
+    ///     .collect();
+    /// let sol = solve(&world, &image)?;
+    /// assert!((sol.rvec() - rvec_true).norm() < 1e-9);
+    /// # Ok::<(), eopnp::PnpError>(())
+    /// ```
+    #[must_use]
+    pub fn rvec(&self) -> Vector3<f64> {
+        let q = self.pose.rotation.quaternion();
+        let (w, v) = (q.w, q.imag());
+        let n = v.norm();
+        if n == 0.0 {
+            return Vector3::zeros();
+        }
+        let sign = if w < 0.0 { -1.0 } else { 1.0 };
+        v * (sign * 2.0 * n.atan2(w.abs()) / n)
+    }
+}
+
+/// Every distinct local minimum found, best first (see [`crate::Solver::solve_all`]): a
+/// fixed-capacity list ([`arrayvec::ArrayVec`], re-exported as [`crate::ArrayVec`]), no heap
+/// allocation.
 pub type Solutions = ArrayVec<Solution, MAX_CANDIDATES>;
 
 /// What S8 and S9 need of the problem.

@@ -31,6 +31,20 @@
 //! is a rotation to rounding without a projection step.
 //!
 //! Everything is fixed-size (no heap allocation) and every loop is bounded.
+//!
+//! ```
+//! use eopnp::p3p::p3p;
+//! use nalgebra::{Point3, Rotation3, Vector3};
+//!
+//! let r = Rotation3::from_euler_angles(0.2, -0.1, 0.3);
+//! let t = Vector3::new(0.1, 0.2, 5.0);
+//! let world = [Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.5), Point3::new(-1.0, -0.5, 0.2)];
+//! let bearing = world.map(|x| (r * x + t).coords.normalize());
+//! // Up to four poses; the true one is among them.
+//! let poses = p3p(&world, &bearing);
+//! assert!(poses.iter().any(|p| (p.rotation - r.matrix()).norm() < 1e-9
+//!     && (p.translation - t).norm() < 1e-9));
+//! ```
 
 use crate::numeric::bounds::{converged, limit, Bound};
 use arrayvec::ArrayVec;
