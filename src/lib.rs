@@ -76,3 +76,8 @@ pub use solver::{solve, Solver};
 pub mod metrics {
     pub use crate::numeric::rotation::{rotation_error_deg, translation_error_pct};
 }
+
+/// The README's code, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

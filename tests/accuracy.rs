@@ -32,16 +32,16 @@ use eopnp::{Refinement, Solver};
 
 /// Noise-free suite: rotation error bound, degrees. The reference prototype's worst case over
 /// 1000 trials per cell is 5.5e-10 deg (planar N = 4; typically 1e-13); 1e-6 deg is the
-/// requirement of the issue, and far above rounding, so a failure is an algorithmic miss.
+/// accuracy promised for noise-free input, and far above rounding, so a failure is an algorithmic miss.
 const NOISE_FREE_ROT_DEG: f64 = 1e-6;
-/// Noise-free suite: relative translation error bound |t - t_gt| / |t_gt| (the issue's
+/// Noise-free suite: relative translation error bound |t - t_gt| / |t_gt| (the promised
 /// "relative translation error < 1e-8"; the prototype's worst case is 1e-12 relative).
 const NOISE_FREE_T_REL: f64 = 1e-8;
 /// Trials per noise-free configuration.
 const NOISE_FREE_TRIALS: u64 = 10_000;
 /// Trials per noise-free configuration in algebraic mode (an extra check; see its test).
 const NOISE_FREE_ALGEBRAIC_TRIALS: u64 = 1_000;
-/// Trials per noisy configuration (the issue asks for >= 1,000). At 1,000 trials the sampling
+/// Trials per noisy configuration (at least 1,000). At 1,000 trials the sampling
 /// noise of a *median* ratio is comparable to the gap between the algebraic mode's inherent
 /// bias (3-6 %, docs/algorithm.md S9) and the 8 % bound: measured, N = 13 sigma = 2 gave a median
 /// rotation ratio of 1.084 with 1,000 trials and 1.061 with 4,000 (all other ratios 1.025-1.056).
@@ -387,7 +387,7 @@ fn check_noisy(n: usize, sigma: f64, failures: &mut Failures) {
             // trials for N >= 5 (docs/algorithm.md S9), so the statistics coincide; 1 % is the
             // requirement. Algebraic mode: S0-S8 minimise f, whose minimiser is 3-5 % worse
             // (docs/algorithm.md S9: ratio of means 1.030-1.049; per-configuration ratios of means
-            // and medians in analyses/noisy_*.json: 0.995-1.065 for these configurations);
+            // and medians of the reference prototype's noisy runs: 0.995-1.065 for these configurations);
             // 8 % is the requirement.
             if !((ratio - 1.0).abs() <= tol) {
                 failures.push(format!(

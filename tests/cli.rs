@@ -67,7 +67,7 @@ fn register_json_on_the_binary_copy() {
     let images = v["images"].as_array().unwrap();
     assert_eq!(images.len(), 6);
     for im in images {
-        // The default-mode bounds (see tests/colmap.rs).
+        // The default-mode bounds of tests/colmap.rs.
         assert!(im["rotation_error_deg"].as_f64().unwrap() <= 0.01, "{im}");
         assert!(
             im["translation_error_pct"].as_f64().unwrap() <= 0.05,
@@ -124,7 +124,7 @@ fn solve_csv_and_json_give_the_model_pose() {
         assert!(out.status.success(), "{}", stderr(&out));
         let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
         let r = rotation_of(&v);
-        // Same pixel weighting as `register`: the default-mode bound.
+        // Same pixel weighting as `register`: the default-mode bound of tests/colmap.rs.
         assert!(
             eopnp::metrics::rotation_error_deg(&r, &r_model) <= 0.01,
             "{v}"

@@ -49,7 +49,7 @@ fn bundled_model_has_the_expected_content() {
 }
 
 /// Default mode (reprojection refinement, pixel-weighted): every image, all correspondences,
-/// against COLMAP's bundle-adjusted pose. The bounds are the issue's acceptance criteria:
+/// against COLMAP's bundle-adjusted pose. The bounds are the README's claims:
 /// 0.01 degrees (max column angle) and 0.05 % translation. (Measured: <= 0.0010 degrees and
 /// <= 0.0025 %.)
 #[test]
@@ -80,8 +80,8 @@ fn default_mode_reproduces_colmap_poses() {
     }
 }
 
-/// Algebraic mode (the paper's cost, no reprojection refinement): the issue's bound of 0.05
-/// degrees. (Measured: <= 0.013 degrees.) The issue sets no translation bound for this mode;
+/// Algebraic mode (the paper's cost, no reprojection refinement): a bound of 0.05
+/// degrees. (Measured: <= 0.013 degrees.) No translation bound is claimed for this mode;
 /// 0.1 % is a regression guard (measured <= 0.055 %).
 #[test]
 fn algebraic_mode_is_close_to_colmap_poses() {

@@ -1,4 +1,4 @@
-//! Zero heap allocations per solve in the core path (issue 5).
+//! Zero heap allocations per solve in the core path.
 //!
 //! A counting global allocator (this test binary only) counts the allocations made by the
 //! current thread while counting is switched on; `eopnp::solve`, `Solver::solve` (algebraic and

@@ -20,7 +20,7 @@ use eopnp::ransac::Ransac;
 use eopnp::{PlanarDetection, PnpError, Refinement, Solution, Solver};
 use nalgebra::{Matrix3, Point2, Point3, Rotation3, Vector3};
 
-/// Largest N the decoder builds (the issue asks for N up to 10,000).
+/// Largest N the decoder builds (N up to 10,000).
 pub const MAX_POINTS: usize = 10_000;
 
 /// A little-endian byte reader that yields zeros once the input is exhausted, so every input

@@ -1,5 +1,5 @@
 //! Shared test infrastructure for the integration tests of `eopnp`: seeded RNG, the synthetic
-//! problem generator of docs/algorithm.md section 7 (`shared/reference/synth.py`), the error metrics
+//! problem generator of docs/algorithm.md section 7 (the reference prototype's), the error metrics
 //! of section 1, and an independent Levenberg-Marquardt reference ("LM from ground truth", the
 //! maximum-likelihood floor).
 //!
@@ -483,7 +483,7 @@ pub fn reprojection_cost(
 /// iterations.
 ///
 /// Validation (scratch checks, recorded here):
-/// - against scipy (`shared/reference/synth.py` `lm_from_gt`, `least_squares(method='lm',
+/// - against scipy (the reference prototype's `lm_from_gt`, `least_squares(method='lm',
 ///   xtol=ftol=gtol=1e-14)`) on 40 numpy-generated problems of the paper protocol (N = 4, 5,
 ///   6, 10, 15 at sigma = 0.5, 2, 5 px, and planar N = 4, 6, 10 at 2 px): final costs agree to
 ///   2.3e-13 relative (ours lower where they differ most), rotations to 2.6e-7 deg (typically
