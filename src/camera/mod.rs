@@ -63,10 +63,46 @@ mod model;
 use distortion::{iterative_undistortion, tilt_matrix, Distortion};
 pub use model::{CameraError, CameraModel, SUPPORTED_MODELS};
 
+/// The serialized form of a [`Camera`]: its fields, checked by [`Camera::new`] on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CameraFields {
+    model: CameraModel,
+    width: u64,
+    height: u64,
+    params: Vec<f64>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<CameraFields> for Camera {
+    type Error = CameraError;
+    fn try_from(c: CameraFields) -> Result<Self, CameraError> {
+        Camera::new(c.model, c.width, c.height, c.params)
+    }
+}
+
+#[cfg(feature = "serde")]
+impl From<Camera> for CameraFields {
+    fn from(c: Camera) -> Self {
+        CameraFields {
+            model: c.model,
+            width: c.width,
+            height: c.height,
+            params: c.params,
+        }
+    }
+}
+
 /// Hard bound on the Newton iterations of [`Camera::undistort`].
 pub const UNDISTORT_MAX_ITERATIONS: u32 = crate::numeric::bounds::UNDISTORT_MAX_ITERATIONS;
-/// A camera: model, image size and parameters (validated on construction).
+/// A camera: model, image size and parameters (validated on construction; with feature
+/// `serde`, deserialization validates the same way).
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(try_from = "CameraFields", into = "CameraFields")
+)]
 pub struct Camera {
     model: CameraModel,
     width: u64,

@@ -6,6 +6,11 @@ use core::fmt;
 /// A camera model: COLMAP's models, and OpenCV's full perspective model
 /// ([`CameraModel::OpenCvThinPrismTilted`], not a COLMAP model).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(into = "&'static str", try_from = "String")
+)]
 #[non_exhaustive]
 pub enum CameraModel {
     /// `f, cx, cy`: pinhole, one focal length, no distortion (COLMAP id 0).
@@ -309,3 +314,18 @@ impl fmt::Display for CameraError {
 }
 
 impl std::error::Error for CameraError {}
+
+/// The model's name (serialized form).
+impl From<CameraModel> for &'static str {
+    fn from(m: CameraModel) -> Self {
+        m.name()
+    }
+}
+
+/// A model from its name, as [`core::str::FromStr`] parses it (serialized form).
+impl TryFrom<String> for CameraModel {
+    type Error = CameraError;
+    fn try_from(s: String) -> Result<Self, CameraError> {
+        s.parse()
+    }
+}

@@ -23,6 +23,7 @@ use crate::numeric::roots::{self, Roots};
 use crate::numeric::rotation::candidate_to_rotation;
 
 /// Which generator produced a candidate (reported in [`crate::Solution`]).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum CandidateSource {

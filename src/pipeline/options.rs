@@ -5,6 +5,7 @@ use super::newton::NewtonOptions;
 use super::reprojection::ReprojOptions;
 
 /// Which cost the returned pose minimises.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Refinement {
@@ -17,6 +18,7 @@ pub enum Refinement {
 }
 
 /// How the planar branch (S4') is chosen.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum PlanarDetection {

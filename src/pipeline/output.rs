@@ -17,6 +17,7 @@ use crate::error::PnpError;
 use crate::numeric::rotation::to_unit_quaternion;
 
 /// A camera pose and how it was found.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct Solution {

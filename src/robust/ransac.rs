@@ -89,6 +89,7 @@ const MIN_FIT_POINTS: usize = 6;
 
 /// RANSAC options. `Ransac::default()` is the recommended configuration; the fields can also
 /// be set directly.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct Ransac {
@@ -125,6 +126,7 @@ impl Default for Ransac {
 }
 
 /// Statistics of a RANSAC run.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[non_exhaustive]
 pub struct RansacStats {
@@ -145,6 +147,7 @@ pub struct RansacStats {
 }
 
 /// The result of [`Ransac::estimate`].
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug)]
 #[non_exhaustive]
 pub struct RansacSolution {

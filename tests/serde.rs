@@ -1,0 +1,84 @@
+//! Feature `serde`: the public data types survive a JSON round trip unchanged, and a
+//! deserialized `Camera` is validated like `Camera::new`.
+
+use eopnp::camera::{Camera, CameraModel};
+use eopnp::ransac::{Ransac, RansacSolution};
+use eopnp::{Refinement, Solution, Solver};
+use nalgebra::{Point2, Point3, Rotation3, Vector3};
+
+fn round_trip<T: serde::Serialize + serde::de::DeserializeOwned>(x: &T) -> T {
+    let text = serde_json::to_string(x).expect("serialize");
+    serde_json::from_str(&text).expect("deserialize")
+}
+
+fn problem() -> (Vec<Point3<f64>>, Vec<Point2<f64>>) {
+    let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
+    let t = Vector3::new(0.1, -0.2, 6.0);
+    let world: Vec<Point3<f64>> = (0..12)
+        .map(|i| {
+            Point3::new(
+                (i % 3) as f64 - 1.0,
+                (i % 4) as f64 * 0.5 - 0.7,
+                (i % 5) as f64 * 0.3,
+            )
+        })
+        .collect();
+    let image = world
+        .iter()
+        .map(|x| {
+            let p = r * x + t;
+            Point2::new(p.x / p.z, p.y / p.z)
+        })
+        .collect();
+    (world, image)
+}
+
+#[test]
+fn solution_and_options_round_trip() {
+    let (world, image) = problem();
+    for solver in [
+        Solver::default(),
+        Solver::default().refinement(Refinement::Algebraic),
+    ] {
+        let sol = solver.solve(&world, &image).unwrap();
+        let back: Solution = round_trip(&sol);
+        assert_eq!(back, sol);
+    }
+    assert_eq!(round_trip(&Refinement::Algebraic), Refinement::Algebraic);
+    let r = Ransac::default().threshold_px(3.0).seed(9);
+    assert_eq!(round_trip(&r), r);
+    let sol = r
+        .estimate(&Solver::default(), &world, &image, (800.0, 800.0), None)
+        .unwrap();
+    let back: RansacSolution = round_trip(&sol);
+    assert_eq!(back.solution, sol.solution);
+    assert_eq!(back.inliers, sol.inliers);
+    assert_eq!(back.stats, sol.stats);
+}
+
+#[test]
+fn camera_round_trips_and_is_validated() {
+    let cam = Camera::from_colmap(
+        "SIMPLE_RADIAL",
+        1200,
+        1600,
+        vec![1245.65, 600.0, 800.0, 0.0577],
+    )
+    .unwrap();
+    let text = serde_json::to_string(&cam).unwrap();
+    assert!(text.contains("\"SIMPLE_RADIAL\""), "{text}");
+    assert_eq!(serde_json::from_str::<Camera>(&text).unwrap(), cam);
+    assert_eq!(
+        round_trip(&CameraModel::OpenCvFisheye),
+        CameraModel::OpenCvFisheye
+    );
+    // A negative focal length, a wrong parameter count and an unknown model are refused.
+    for bad in [
+        r#"{"model":"PINHOLE","width":0,"height":0,"params":[-1.0,1.0,0.0,0.0]}"#,
+        r#"{"model":"PINHOLE","width":0,"height":0,"params":[1.0,1.0,0.0]}"#,
+        r#"{"model":"NO_SUCH_MODEL","width":0,"height":0,"params":[1.0,1.0,0.0,0.0]}"#,
+    ] {
+        let e = serde_json::from_str::<Camera>(bad).unwrap_err().to_string();
+        assert!(!e.is_empty(), "{bad}");
+    }
+}
