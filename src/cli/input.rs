@@ -1,5 +1,6 @@
 //! `eopnp solve`: correspondence files (CSV, JSON) in, pose JSON out.
 
+use std::io::Read;
 use std::path::Path;
 
 use crate::camera::Camera;
@@ -60,19 +61,89 @@ fn line_of(text: &str, needle: &str) -> Option<usize> {
         .map(|at| 1 + text[..at].bytes().filter(|&b| b == b'\n').count())
 }
 
-/// Reads a CSV or JSON problem file.
-pub(crate) fn read_problem(path: &Path, camera_arg: Option<&str>) -> Result<Problem, Failure> {
-    let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| Failure::input(format!("{name}: {e}")))?;
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    parse_problem(&name, &bytes, ext.as_deref(), camera_arg)
+/// The largest input `eopnp solve` reads, from a file or from standard input: 1 GiB.
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// The name standard input goes by in messages.
+pub const STDIN_NAME: &str = "<stdin>";
+
+/// An input format named by `--format`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Comma-, semicolon- or tab-separated values with a header.
+    Csv,
+    /// `{"camera": ..., "points2d": [...], "points3d": [...]}`.
+    Json,
+}
+
+impl Format {
+    fn ext(self) -> &'static str {
+        match self {
+            Format::Csv => "csv",
+            Format::Json => "json",
+        }
+    }
+}
+
+/// Reads a CSV or JSON problem from the file `path`, or from standard input if `path` is `-`.
+///
+/// The format is `format` if given; otherwise the file's extension (`.csv`, `.json`) or, for
+/// standard input and other extensions, the content (JSON if it starts with `{`). Inputs
+/// larger than [`MAX_INPUT_BYTES`] are refused.
+pub(crate) fn read_problem(
+    path: &Path,
+    format: Option<Format>,
+    camera_arg: Option<&str>,
+) -> Result<Problem, Failure> {
+    let (name, bytes, ext) = if path.as_os_str() == "-" {
+        let bytes = read_capped(STDIN_NAME, std::io::stdin().lock(), MAX_INPUT_BYTES)?;
+        (STDIN_NAME.to_string(), bytes, None)
+    } else {
+        let name = path.display().to_string();
+        let file = std::fs::File::open(path).map_err(|e| Failure::input(format!("{name}: {e}")))?;
+        if let Ok(meta) = file.metadata() {
+            if meta.is_file() && meta.len() > MAX_INPUT_BYTES {
+                return Err(too_large(&name, MAX_INPUT_BYTES));
+            }
+        }
+        let bytes = read_capped(&name, file, MAX_INPUT_BYTES)?;
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        (name, bytes, ext)
+    };
+    let ext = format.map(Format::ext).or(ext.as_deref());
+    parse_problem(&name, &bytes, ext, camera_arg)
+}
+
+/// Reads all of `r`, refusing more than `cap` bytes.
+fn read_capped(name: &str, r: impl Read, cap: u64) -> Result<Vec<u8>, Failure> {
+    let mut bytes = Vec::new();
+    r.take(cap.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Failure::input(format!("{name}: {e}")))?;
+    if bytes.len() as u64 > cap {
+        return Err(too_large(name, cap));
+    }
+    Ok(bytes)
+}
+
+fn too_large(name: &str, cap: u64) -> Failure {
+    const GIB: u64 = 1 << 30;
+    let limit = if cap % GIB == 0 {
+        format!("{} GiB", cap / GIB)
+    } else {
+        format!("{cap} bytes")
+    };
+    Failure::input(format!(
+        "{name}: larger than {limit}, the input size limit of `eopnp solve`"
+    ))
 }
 
 /// Parses the contents of a problem file named `name` (for messages) with extension `ext`
-/// (`"json"`, `"csv"`, or anything else: JSON when the text starts with `{`).
+/// (`"json"`, `"csv"`, or anything else: JSON when the text starts with `{`). A UTF-8
+/// byte-order mark at the start is ignored.
 pub fn parse_problem(
     name: &str,
     bytes: &[u8],
@@ -86,6 +157,7 @@ pub fn parse_problem(
             .count();
         Failure::input(format!("{name}:{line}: invalid UTF-8"))
     })?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let camera_arg = camera_arg.map(parse_camera_arg).transpose()?;
     let is_json = match ext {
         Some("json") => true,
@@ -160,46 +232,181 @@ fn read_json(name: &str, text: &str, camera_arg: Option<Camera>) -> Result<Probl
     })
 }
 
+/// The CSV columns, in the order of `Problem`'s coordinates: pixel x, y, world X, Y, Z.
+const COLUMNS: [&str; 5] = ["x", "y", "X", "Y", "Z"];
+
+/// The accepted CSV delimiters, in the order they are tried, and their names for messages.
+const DELIMITERS: [(u8, &str); 3] = [(b',', "comma"), (b';', "semicolon"), (b'\t', "tab")];
+
+/// A CSV reader over `text` with delimiter `delim`: no header handling (done here), any
+/// number of fields per record (checked here), records end at `\n` (a `\r` before it is
+/// trimmed with the field), lines starting with `#` skipped.
+fn csv_reader(text: &str, delim: u8) -> csv::Reader<&[u8]> {
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .delimiter(delim)
+        .terminator(csv::Terminator::Any(b'\n'))
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes())
+}
+
+/// Whether a line is skipped: blank, or a comment (`#` after optional whitespace).
+fn skipped(line: &str) -> bool {
+    let l = line.trim();
+    l.is_empty() || l.starts_with('#')
+}
+
+/// Maps the header's fields to the columns: `at[k]` is the index of the field named
+/// `COLUMNS[k]`. `None` unless the fields are exactly the five names, in any order.
+fn header_columns(fields: &[&str]) -> Option<[usize; 5]> {
+    if fields.len() != 5 {
+        return None;
+    }
+    let mut at = [usize::MAX; 5];
+    for (i, f) in fields.iter().enumerate() {
+        let k = COLUMNS.iter().position(|c| c == f)?;
+        if at[k] != usize::MAX {
+            return None;
+        }
+        at[k] = i;
+    }
+    Some(at)
+}
+
+/// The header error for the header line `line` (number `n`): what was expected and, for the
+/// delimiter that splits it most, what is missing, unknown or repeated.
+fn header_error(name: &str, n: usize, line: &str) -> Failure {
+    let mut best: Vec<String> = vec![line.trim().to_string()];
+    for (d, _) in DELIMITERS {
+        let fields = first_record(line, d);
+        if fields.len() > best.len() {
+            best = fields;
+        }
+    }
+    let mut problems = Vec::new();
+    if best.len() > 1 {
+        let missing: Vec<&str> = COLUMNS
+            .iter()
+            .copied()
+            .filter(|c| !best.iter().any(|f| f == c))
+            .collect();
+        let mut unknown = Vec::new();
+        let mut repeated = Vec::new();
+        for (i, f) in best.iter().enumerate() {
+            let shown = format!("`{}`", shown(f));
+            if !COLUMNS.contains(&f.as_str()) {
+                unknown.push(shown);
+            } else if best[..i].contains(f) && !repeated.contains(&shown) {
+                repeated.push(shown);
+            }
+        }
+        if !missing.is_empty() {
+            let s = if missing.len() == 1 { "" } else { "s" };
+            problems.push(format!("missing column{s} {}", missing.join(", ")));
+        }
+        if !unknown.is_empty() {
+            let s = if unknown.len() == 1 { "" } else { "s" };
+            problems.push(format!("unknown column{s} {}", unknown.join(", ")));
+        }
+        if !repeated.is_empty() {
+            let s = if repeated.len() == 1 { "" } else { "s" };
+            problems.push(format!("repeated column{s} {}", repeated.join(", ")));
+        }
+    }
+    let problems = if problems.is_empty() {
+        String::new()
+    } else {
+        format!(": {}", problems.join("; "))
+    };
+    Failure::input(format!(
+        "{name}:{n}: expected the header `x,y,X,Y,Z` (pixel x, pixel y, world X, Y, Z; \
+         separated by `,`, `;` or tab; in any order), found `{}`{problems}",
+        shown(line.trim())
+    ))
+}
+
+/// The fields (trimmed) of the first record of `line` split at `delim`.
+fn first_record(line: &str, delim: u8) -> Vec<String> {
+    let mut rec = csv::StringRecord::new();
+    match csv_reader(line, delim).read_record(&mut rec) {
+        Ok(true) => rec.iter().map(|f| f.trim().to_string()).collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// Reads CSV: a header naming the columns x, y, X, Y, Z (any order, separated by `,`, `;` or
+/// tab, which is then the delimiter of the whole file), then one correspondence per line.
+/// Fields may be quoted and are trimmed; blank lines and lines starting with `#` are skipped.
 fn read_csv(name: &str, text: &str, camera: Camera) -> Result<Problem, Failure> {
+    // The header line: the first line not skipped.
+    let Some((header_n, header_line)) = text
+        .split('\n')
+        .enumerate()
+        .map(|(i, l)| (i + 1, l))
+        .find(|(_, l)| !skipped(l))
+    else {
+        return Err(Failure::input(format!(
+            "{name}: empty file; expected the header `x,y,X,Y,Z` and one correspondence per line"
+        )));
+    };
+    let Some(&(delim, delim_name)) = DELIMITERS.iter().find(|(d, _)| {
+        let fields = first_record(header_line, *d);
+        header_columns(&fields.iter().map(String::as_str).collect::<Vec<_>>()).is_some()
+    }) else {
+        return Err(header_error(name, header_n, header_line));
+    };
+
     let mut pixels = Vec::new();
     let mut world = Vec::new();
-    let mut header = false;
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let l = raw.trim();
-        if l.is_empty() || l.starts_with('#') {
+    // The header's fields, in file order, once read.
+    let mut header: Option<(Vec<String>, [usize; 5])> = None;
+    let mut rdr = csv_reader(text, delim);
+    let mut rec = csv::StringRecord::new();
+    // Line counting: the number of the line starting at byte `counted`.
+    let (mut counted, mut line) = (0, 1);
+    let bytes = text.as_bytes();
+    loop {
+        let start = rdr.position().byte() as usize;
+        match rdr.read_record(&mut rec) {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => return Err(Failure::input(format!("{name}: {e}"))),
+        }
+        let end = (rdr.position().byte() as usize).min(bytes.len());
+        // The reader skips empty lines and `#` lines before a record, as `record_start` does.
+        let start = record_start(bytes, start.min(end));
+        line += bytes[counted..start]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        counted = start;
+        // Whitespace-only lines and indented comments reach here as records.
+        if skipped(&text[start..end]) {
             continue;
         }
-        let fields: Vec<&str> = l.split(',').map(str::trim).collect();
-        if !header {
-            if fields != ["x", "y", "X", "Y", "Z"] {
-                return Err(Failure::input(format!(
-                    "{name}:{line}: expected the header `x,y,X,Y,Z` (pixel x, pixel y, world \
-                     X, Y, Z), found `{}`",
-                    truncate(l)
-                )));
-            }
-            header = true;
+        let fields: Vec<&str> = rec.iter().map(str::trim).collect();
+        let Some((names, at)) = &header else {
+            let at = header_columns(&fields).ok_or_else(|| {
+                header_error(name, line, text[start..end].lines().next().unwrap_or(""))
+            })?;
+            header = Some((fields.iter().map(|f| f.to_string()).collect(), at));
             continue;
-        }
+        };
         if fields.len() != 5 {
             return Err(Failure::input(format!(
-                "{name}:{line}: expected 5 comma-separated numbers x,y,X,Y,Z, found {} field{} \
+                "{name}:{line}: expected 5 {delim_name}-separated numbers ({}), found {} field{} \
                  (truncated line?)",
+                names.join(", "),
                 fields.len(),
                 if fields.len() == 1 { "" } else { "s" }
             )));
         }
         let mut v = [0.0; 5];
-        for (k, f) in fields.iter().enumerate() {
-            let what = format!(
-                "{name}:{line}: field {} ({})",
-                k + 1,
-                ["x", "y", "X", "Y", "Z"][k]
-            );
-            // Debug-escaped, so that invisible characters in the field show.
-            let shown = truncate(&f.escape_debug().to_string());
-            v[k] = match f.parse::<f64>() {
+        for (i, f) in fields.iter().enumerate() {
+            let what = format!("{name}:{line}: field {} ({})", i + 1, names[i]);
+            let shown = shown(f);
+            let x = match f.parse::<f64>() {
                 Ok(x) if x.is_finite() => x,
                 Ok(_) => {
                     return Err(Failure::input(format!(
@@ -208,13 +415,16 @@ fn read_csv(name: &str, text: &str, camera: Camera) -> Result<Problem, Failure> 
                 }
                 Err(_) => return Err(Failure::input(format!("{what} is not a number: `{shown}`"))),
             };
+            let k = at.iter().position(|&a| a == i).unwrap_or(i);
+            v[k] = x;
         }
         pixels.push(Point2::new(v[0], v[1]));
         world.push(Point3::new(v[2], v[3], v[4]));
     }
-    if !header {
+    if pixels.is_empty() {
         return Err(Failure::input(format!(
-            "{name}: empty file; expected the header `x,y,X,Y,Z` and one correspondence per line"
+            "{name}:{header_n}: no correspondences: the header is not followed by any data line \
+             (one correspondence per line expected)"
         )));
     }
     Ok(Problem {
@@ -222,6 +432,37 @@ fn read_csv(name: &str, text: &str, camera: Camera) -> Result<Problem, Failure> 
         pixels,
         world,
     })
+}
+
+/// Where the record the CSV reader reads from byte `at` starts: past empty lines and lines
+/// starting with `#` (which the reader skips).
+fn record_start(bytes: &[u8], mut at: usize) -> usize {
+    loop {
+        while bytes.get(at) == Some(&b'\n') {
+            at += 1;
+        }
+        if bytes.get(at) != Some(&b'#') {
+            return at;
+        }
+        at = bytes[at..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(bytes.len(), |p| at + p + 1);
+    }
+}
+
+/// `s` for a message: control and other invisible characters escaped (`\u{1}`, `\t`), quotes
+/// as they are; at most 60 characters.
+fn shown(s: &str) -> String {
+    let mut escaped = String::with_capacity(s.len());
+    for c in s.chars() {
+        if c == '"' || c == '\'' {
+            escaped.push(c);
+        } else {
+            escaped.extend(c.escape_debug());
+        }
+    }
+    truncate(&escaped)
 }
 
 fn truncate(s: &str) -> String {

@@ -36,17 +36,23 @@ enum Command {
 }
 
 const SOLVE_HELP: &str =
-    "Solve one PnP problem from a file of correspondences; prints the pose as JSON.
+    "Solve one PnP problem from a file of correspondences, or from standard input if FILE is
+`-`; prints the pose as JSON.
 
-Input formats (chosen by the extension .csv or .json; otherwise by content):
+Input formats (chosen by --format; otherwise by the extension .csv or .json; otherwise, and
+for standard input, by content: JSON if it starts with `{`):
 
-  CSV: a header line `x,y,X,Y,Z`, then one correspondence per line: pixel x, pixel y and the
-  3D point X, Y, Z. Blank lines and lines starting with # are ignored. The camera is given with
-  --camera.
+  CSV: a header naming the columns x, y, X, Y, Z (pixel x, pixel y and the 3D point X, Y, Z;
+  names case-sensitive, in any order), then one correspondence per line. The separator is
+  `,`, `;` or a tab, whichever splits the header into those five names. Fields may be quoted
+  (\"x\",\"y\",...) and surrounding spaces are ignored; a UTF-8 byte-order mark is accepted.
+  Blank lines and lines starting with # are ignored. The camera is given with --camera.
 
   JSON: {\"camera\": {\"model\": \"SIMPLE_RADIAL\", \"params\": [1245.65, 600, 800, 0.0577]},
          \"points2d\": [[x, y], ...], \"points3d\": [[X, Y, Z], ...]}
   (--camera, if given, replaces the file's camera.)
+
+Inputs larger than 1 GiB are refused.
 
 Camera models and parameter orders are COLMAP's: SIMPLE_PINHOLE f,cx,cy; PINHOLE fx,fy,cx,cy;
 SIMPLE_RADIAL f,cx,cy,k; RADIAL f,cx,cy,k1,k2; OPENCV fx,fy,cx,cy,k1,k2,p1,p2; OPENCV_FISHEYE
@@ -143,8 +149,13 @@ impl RegisterOptions {
 /// Options of `solve`.
 #[derive(Debug, Args)]
 struct SolveArgs {
-    /// Correspondence file (.csv or .json).
+    /// Correspondence file (.csv or .json), or `-` for standard input (`./-` is a file named
+    /// `-`).
     file: PathBuf,
+    /// Input format; by default from the extension, or for standard input and other
+    /// extensions from the content.
+    #[arg(long, value_enum)]
+    format: Option<input::Format>,
     /// Camera as "MODEL P1 P2 ...", e.g. "SIMPLE_RADIAL 1245.65 600 800 0.0577" (COLMAP's model
     /// names and parameter orders). Required for CSV input.
     #[arg(long, allow_hyphen_values = true)]
@@ -205,7 +216,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             } else {
                 Solver::default()
             };
-            let problem = input::read_problem(&a.file, a.camera.as_deref())?;
+            let problem = input::read_problem(&a.file, a.format, a.camera.as_deref())?;
             let json = input::solve(&problem, &solver)?;
             emit(&json)
         }
