@@ -1,7 +1,8 @@
 //! End-to-end tests of the `eopnp` binary (feature `cli`).
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
 
 use eopnp::colmap::read_model;
 
@@ -10,6 +11,28 @@ fn eopnp(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("runs the eopnp binary")
+}
+
+/// Runs the binary with `input` on standard input.
+fn eopnp_stdin(args: &[&str], input: &[u8]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_eopnp"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs the eopnp binary");
+    let mut stdin = child.stdin.take().unwrap();
+    let input = input.to_vec();
+    // A writer thread: the binary may exit (bad input) before reading everything.
+    let writer = std::thread::spawn(move || {
+        let _ = stdin.write_all(&input);
+    });
+    let out = child
+        .wait_with_output()
+        .expect("waits for the eopnp binary");
+    writer.join().unwrap();
+    out
 }
 
 fn stdout(o: &Output) -> String {
@@ -101,9 +124,12 @@ fn image2_files() -> (PathBuf, PathBuf, String, nalgebra::Matrix3<f64>) {
         "points2d": pixels.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>(),
         "points3d": world.iter().map(|w| [w.x, w.y, w.z]).collect::<Vec<_>>(),
     });
+    // Distinct names per call: tests run in parallel.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     (
-        scratch_file("img2.csv", &csv),
-        scratch_file("img2.json", &json.to_string()),
+        scratch_file(&format!("img2-{k}.csv"), &csv),
+        scratch_file(&format!("img2-{k}.json"), &json.to_string()),
         camera,
         img.pose().0,
     )
@@ -216,4 +242,112 @@ fn malformed_model_reports_file_and_line() {
     .unwrap();
     let o = eopnp(&["register", dir.to_str().unwrap()]);
     assert_input_error(&o, &["cameras.txt:2:", "truncated"]);
+}
+
+/// Checks a `solve` run's pose against the model's rotation.
+fn assert_model_pose(out: &Output, r_model: &nalgebra::Matrix3<f64>) {
+    assert!(out.status.success(), "{}", stderr(out));
+    let v: serde_json::Value = serde_json::from_str(&stdout(out)).unwrap();
+    assert!(
+        eopnp::metrics::rotation_error_deg(&rotation_of(&v), r_model) <= 0.01,
+        "{v}"
+    );
+}
+
+#[test]
+fn solve_reads_standard_input() {
+    let (csv, json, camera, r_model) = image2_files();
+    let csv = std::fs::read(csv).unwrap();
+    let json = std::fs::read(json).unwrap();
+    // Format sniffed from the content, or named.
+    assert_model_pose(
+        &eopnp_stdin(&["solve", "-", "--camera", &camera], &csv),
+        &r_model,
+    );
+    assert_model_pose(&eopnp_stdin(&["solve", "-"], &json), &r_model);
+    assert_model_pose(
+        &eopnp_stdin(&["solve", "-", "--format", "json"], &json),
+        &r_model,
+    );
+    assert_model_pose(
+        &eopnp_stdin(
+            &["solve", "--format", "csv", "--camera", &camera, "-"],
+            &csv,
+        ),
+        &r_model,
+    );
+    // The wrong format is an input error naming standard input.
+    let o = eopnp_stdin(&["solve", "-", "--format", "json"], &csv);
+    assert_input_error(&o, &["<stdin>:1:"]);
+    let o = eopnp_stdin(
+        &["solve", "-", "--format", "csv", "--camera", &camera],
+        &json,
+    );
+    assert_input_error(&o, &["<stdin>:1:", "expected the header"]);
+    // Empty input, and CSV without --camera.
+    let o = eopnp_stdin(&["solve", "-", "--camera", &camera], b"");
+    assert_input_error(&o, &["<stdin>", "empty"]);
+    let o = eopnp_stdin(&["solve", "-"], &csv);
+    assert_input_error(&o, &["--camera"]);
+    // An unknown --format is a usage error (clap's exit status 2).
+    let o = eopnp_stdin(&["solve", "-", "--format", "xml"], &json);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("xml"), "{}", stderr(&o));
+}
+
+#[test]
+fn solve_reads_csv_dialects() {
+    let (csv, _, camera, r_model) = image2_files();
+    let csv = std::fs::read_to_string(csv).unwrap();
+    // Byte-order mark and CRLF (a spreadsheet's export).
+    let p = scratch_file("bom.csv", &format!("\u{feff}{}", csv.replace('\n', "\r\n")));
+    assert_model_pose(
+        &eopnp(&["solve", p.to_str().unwrap(), "--camera", &camera]),
+        &r_model,
+    );
+    // Semicolons with decimal points, quoted header, columns reordered, a comment.
+    let mut semi = String::from("# image 2\n\"X\";\"Y\";\"Z\";\"x\";\"y\"\n");
+    for l in csv.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        semi += &format!("{};{};{};{};{}\n", f[2], f[3], f[4], f[0], f[1]);
+    }
+    let p = scratch_file("semi.csv", &semi);
+    assert_model_pose(
+        &eopnp(&["solve", p.to_str().unwrap(), "--camera", &camera]),
+        &r_model,
+    );
+    // Tabs, on standard input.
+    assert_model_pose(
+        &eopnp_stdin(
+            &["solve", "-", "--camera", &camera],
+            csv.replace(',', "\t").as_bytes(),
+        ),
+        &r_model,
+    );
+}
+
+#[test]
+fn csv_errors_name_line_and_field() {
+    let camera = ["--camera", "SIMPLE_PINHOLE 1000 600 800"];
+    let text = "# comment\n\nx;y;X;Y;Z\n1;2;3;4;5\n\n1;2,5;3;4;5\n";
+    let p = scratch_file("semi-bad.csv", text);
+    let o = eopnp(&["solve", p.to_str().unwrap(), camera[0], camera[1]]);
+    assert_input_error(&o, &["semi-bad.csv:6: field 2 (y) is not a number: `2,5`"]);
+    let o = eopnp_stdin(&["solve", "-", camera[0], camera[1]], text.as_bytes());
+    assert_input_error(&o, &["<stdin>:6: field 2 (y) is not a number: `2,5`"]);
+    // Reordered columns: the field's name is its header's.
+    let o = eopnp_stdin(
+        &["solve", "-", camera[0], camera[1]],
+        b"Z\tY\tX\ty\tx\n1\t2\t3\t4\t5\n1\t2\t3\t4\t\x01\n",
+    );
+    assert_input_error(&o, &["<stdin>:3: field 5 (x) is not a number: `\\u{1}`"]);
+    // Header only; a header with a missing column.
+    let p = scratch_file(
+        "header-only.csv",
+        "\u{feff}\"x\",\"y\",\"X\",\"Y\",\"Z\"\n\n",
+    );
+    let o = eopnp(&["solve", p.to_str().unwrap(), camera[0], camera[1]]);
+    assert_input_error(&o, &["header-only.csv:1:", "no correspondences"]);
+    let o = eopnp_stdin(&["solve", "-", camera[0], camera[1]], b"x;y;X;Z\n1;2;3;4\n");
+    assert_input_error(&o, &["<stdin>:1:", "missing column Y"]);
 }
