@@ -163,6 +163,44 @@ def cli_seeds(rng):
     write("cli_input", "json", bytes([0]) + js.encode())
     write("cli_input", "json-noext", bytes([3]) + js.encode())
 
+    # CSV dialects (the csv crate's path): byte-order mark, quotes, `;` and tab delimiters,
+    # columns in another order, CRLF, comments and blank lines; then a few malformed ones.
+    bom = "\ufeff".encode()
+    cam = b"PINHOLE 800 800 320 240\n"
+    rows = [(u, v, X, Y, Z) for (u, v), (X, Y, Z) in zip(px, world)]
+
+    def dialect(delim, quote="", order=(0, 1, 2, 3, 4), eol="\n"):
+        names = ["x", "y", "X", "Y", "Z"]
+        line = lambda vals: delim.join(f"{quote}{vals[k]}{quote}" for k in order) + eol
+        return line(names) + "".join(line([f"{v:.4f}" for v in r]) for r in rows)
+
+    write("cli_input", "csv-bom", bytes([1 | 4]) + cam + bom + csv.encode())
+    write("cli_input", "csv-quoted", bytes([1 | 4]) + cam + dialect(",", '"').encode())
+    write(
+        "cli_input",
+        "csv-semicolon",
+        bytes([1 | 4]) + cam + dialect(";", '"', order=(2, 3, 4, 0, 1)).encode(),
+    )
+    write(
+        "cli_input",
+        "csv-tab-crlf-noext",
+        bytes([3 | 4]) + cam + bom + dialect("\t", order=(4, 1, 0, 3, 2), eol="\r\n").encode(),
+    )
+    lines = dialect(", ").splitlines()
+    commented = "\n".join(
+        ["# exported", ""] + lines[:1] + ["  # indented", "\t"] + lines[1:4] + ["", "#x,y"] + lines[4:]
+    )
+    write("cli_input", "csv-comments", bytes([1 | 4]) + cam + commented.encode() + b"\n")
+    write("cli_input", "json-bom", bytes([3]) + bom + js.encode())
+    # Malformed: header only; a quoted field spanning lines; a control character; a mixed
+    # header.
+    write("cli_input", "bad-header-only", bytes([1 | 4]) + cam + b'"x";"y";"X";"Y";"Z"\n\n')
+    head, first, *rest = dialect(";", '"').split("\n")
+    first = ";".join(f if k != 1 else '"1\n2"' for k, f in enumerate(first.split(";")))
+    write("cli_input", "bad-quoted-newline", bytes([1 | 4]) + cam + "\n".join([head, first] + rest).encode())
+    write("cli_input", "bad-control", bytes([1 | 4]) + cam + dialect("\t").replace(".", "\x01", 1).encode())
+    write("cli_input", "bad-header-mixed", bytes([1 | 4]) + cam + b"x,y;X\tY,Z\n1,2;3\t4,5\n")
+
 
 def main():
     rng = random.Random(7)

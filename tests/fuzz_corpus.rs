@@ -142,7 +142,7 @@ fn seeds_reach_the_parsers_and_registration() {
             );
         }
     }
-    for name in ["csv", "json", "json-noext", "csv-radial"] {
+    let cli_input = |name: &str| {
         let data = seed("cli_input", name);
         let mode = data[0];
         let (camera, body) = if mode & 4 != 0 {
@@ -155,11 +155,47 @@ fn seeds_reach_the_parsers_and_registration() {
             (None, &data[1..])
         };
         let ext = [Some("json"), Some("csv"), Some("txt"), None][usize::from(mode & 3)];
-        let p = eopnp::cli::input::parse_problem(name, body, ext, camera)
-            .unwrap_or_else(|f| panic!("{name}: {}", f.message));
+        eopnp::cli::input::parse_problem(name, body, ext, camera)
+    };
+    for name in [
+        "csv",
+        "json",
+        "json-noext",
+        "csv-radial",
+        "csv-bom",
+        "csv-quoted",
+        "csv-semicolon",
+        "csv-tab-crlf-noext",
+        "csv-comments",
+        "json-bom",
+    ] {
+        let p = cli_input(name).unwrap_or_else(|f| panic!("{name}: {}", f.message));
         let json = eopnp::cli::input::solve(&p, &eopnp::Solver::default())
             .unwrap_or_else(|f| panic!("{name}: {}", f.message));
-        assert!(json.contains("translation"));
+        let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(v["n"], 8, "{name}");
+        assert!(v["translation"].is_array(), "{name}");
+    }
+    // The malformed CSV seeds fail where they are meant to: line and reason.
+    for (name, expected) in [
+        ("bad-header-only", "bad-header-only:1: no correspondences"),
+        (
+            "bad-quoted-newline",
+            "bad-quoted-newline:2: field 2 (y) is not a number",
+        ),
+        (
+            "bad-control",
+            "bad-control:2: field 1 (x) is not a number: `257\\u{1}1570`",
+        ),
+        (
+            "bad-header-mixed",
+            "bad-header-mixed:1: expected the header",
+        ),
+    ] {
+        match cli_input(name) {
+            Ok(_) => panic!("{name}: accepted"),
+            Err(f) => assert!(f.message.starts_with(expected), "{name}: {}", f.message),
+        }
     }
 }
 

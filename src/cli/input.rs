@@ -49,7 +49,7 @@ fn parse_camera_arg(s: &str) -> Result<Camera, Failure> {
             .parse()
             .ok()
             .filter(|v: &f64| v.is_finite())
-            .ok_or_else(|| Failure::input(format!("--camera: bad parameter \"{tok}\"")))?;
+            .ok_or_else(|| Failure::input(format!("--camera: bad parameter \"{}\"", shown(tok))))?;
         params.push(v);
     }
     Camera::from_colmap(model, 0, 0, params).map_err(|e| Failure::input(format!("--camera: {e}")))
