@@ -131,7 +131,7 @@ fn read_capped(name: &str, r: impl Read, cap: u64) -> Result<Vec<u8>, Failure> {
 
 fn too_large(name: &str, cap: u64) -> Failure {
     const GIB: u64 = 1 << 30;
-    let limit = if cap % GIB == 0 {
+    let limit = if cap.is_multiple_of(GIB) {
         format!("{} GiB", cap / GIB)
     } else {
         format!("{cap} bytes")
