@@ -4,8 +4,8 @@
 //!   repository (`data/colmap-boxes`), with an explanation of the output.
 //! - `eopnp register MODEL_DIR [--json] [--algebraic]`: re-estimates every image's pose of a
 //!   COLMAP model (text or binary) and compares it with the model's.
-//! - `eopnp solve FILE [--camera "MODEL P1 P2 ..."]`: correspondences (CSV or JSON) in, pose
-//!   JSON out.
+//! - `eopnp solve FILE|- [--format csv|json] [--camera "MODEL P1 P2 ..."]`: correspondences
+//!   (CSV or JSON, a file or standard input) in, pose JSON out.
 //!
 //! Exit codes: 0 success, 1 the solver failed on valid input, 2 bad input (unreadable or
 //! malformed file, with the line number and the reason; bad arguments).
