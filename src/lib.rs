@@ -73,6 +73,17 @@ pub use robust::{p3p, ransac};
 pub use solver::{solve, Solver};
 
 /// Error metrics of docs/algorithm.md section 1 (the paper's).
+///
+/// ```
+/// use eopnp::metrics::{rotation_error_deg, translation_error_pct};
+/// use nalgebra::{Rotation3, Vector3};
+///
+/// let r = Rotation3::from_euler_angles(0.0, 0.0, 0.01_f64.to_radians());
+/// // The largest angle between corresponding columns: 0.01 degrees.
+/// assert!((rotation_error_deg(r.matrix(), &Rotation3::identity().into_inner()) - 0.01).abs() < 1e-12);
+/// let t = Vector3::new(0.0, 0.0, 10.0);
+/// assert!((translation_error_pct(&Vector3::new(0.0, 0.1, 10.0), &t) - 1.0).abs() < 1e-12);
+/// ```
 pub mod metrics {
     pub use crate::numeric::rotation::{rotation_error_deg, translation_error_pct};
 }
