@@ -3,8 +3,7 @@
 //! fixed pseudo-random numbers in [-1, 1] (the kernels are straight-line code, so their time
 //! does not depend on the values). 64 inputs per kernel, cycled inside the timed closure.
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use eopnp_testkit as common;
 mod support;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};

@@ -1,8 +1,7 @@
 //! Full solves: N = 4 ... 10000, general and planar scenes, default (reprojection) and
 //! algebraic refinement. Each benchmark cycles through a fixed, pre-generated problem set.
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use eopnp_testkit as common;
 mod support;
 
 use common::Scene;

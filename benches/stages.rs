@@ -12,8 +12,7 @@
 //! are computed outside the timed closure.
 
 #[cfg(eopnp_bench)]
-#[path = "../tests/common/mod.rs"]
-mod common;
+use eopnp_testkit as common;
 #[cfg(eopnp_bench)]
 mod support;
 

@@ -2,15 +2,14 @@
 //!
 //! The paper's synthetic protocol (docs/algorithm.md section 7; f = 800 px, 640x480, points in
 //! [-2,2]x[-2,2]x[4,8] in the camera frame, Haar-uniform rotations, Gaussian pixel noise), the
-//! same seeded generator as the test suite (`tests/common`). For every trial: eopnp default
+//! same seeded generator as the test suite (`eopnp-testkit`, `testkit/`). For every trial: eopnp default
 //! mode (EOPnP + reprojection refinement), `Refinement::Algebraic` (the paper's algorithm), and
 //! Levenberg-Marquardt started at the ground truth (the maximum-likelihood floor, not a usable
 //! method). Prints Markdown: mean / median rotation error (degrees, max column angle),
 //! translation error (%), failures (rotation error > 5 degrees), and which candidate generator
 //! produced the winning start.
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use eopnp_testkit as common;
 
 use common::{mean, median, trial_seed, Problem, ProblemOptions, RotationKind, Scene};
 use eopnp::{CandidateSource, Refinement, Solver};

@@ -25,7 +25,7 @@
 // `!(err <= tol)` is deliberate throughout: a NaN error must fail the check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-mod common;
+use eopnp_testkit as common;
 
 use common::*;
 use eopnp::{Refinement, Solver};

@@ -10,8 +10,7 @@
 //! `EOPNP_ALLOC_BACKTRACE=1 cargo test --test no_alloc -- --nocapture --test-threads=1`
 //! prints a backtrace for every counted allocation.
 
-#[path = "common/mod.rs"]
-mod common;
+use eopnp_testkit as common;
 
 use common::{Problem, ProblemOptions, RotationKind, Scene};
 use eopnp::{Refinement, Solver};

@@ -7,7 +7,7 @@
 //! - `cargo test --release --test soak -- --ignored --nocapture` runs 1,000,000 problems
 //!   (override with `EOPNP_SOAK=<count>`); a few minutes on 2 cores.
 
-mod common;
+use eopnp_testkit as common;
 
 use common::*;
 use eopnp::Solver;

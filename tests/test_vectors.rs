@@ -11,7 +11,7 @@
 // `!(err <= tol)` is deliberate throughout: a NaN error must fail the check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-mod common;
+use eopnp_testkit as common;
 
 use common::{lm_refine, rot_err_deg, trans_err_pct, NORMALISED};
 use eopnp::{Refinement, Solver};

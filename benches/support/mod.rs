@@ -1,6 +1,6 @@
 #![allow(dead_code)]
 //! Shared setup of the criterion benches: fixed-seed problem sets, generated outside the timed
-//! closures with the test suite's generator (`tests/common/mod.rs`, same protocol).
+//! closures with the test suite's generator (`testkit/`, the crate `eopnp-testkit`, same protocol).
 
 use crate::common::{Problem, ProblemOptions, RotationKind, Scene};
 use criterion::Criterion;

@@ -9,7 +9,7 @@
 //! Rows: general scene, N sweep (4, 5, 6, 8, 10, 15, 20, 50, 100, 1000) at sigma = 2 px; sigma
 //! sweep (0, 0.5, 1, 2, 3, 5, 10 px) at N = 10; planar scene (random tilt) N = 4, 6, 10, 100;
 //! quasi-singular scene N = 6, 10, 100. Problems come from the test suite's generator
-//! (`tests/common/mod.rs`), each from one seed derived from `--seed`, the row and the trial.
+//! (`testkit/`, the crate `eopnp-testkit`), each from one seed derived from `--seed`, the row and the trial.
 //!
 //! Methods: eopnp default (reprojection refinement) and `Refinement::Algebraic`; `sqpnp` 0.4;
 //! `lambda-twist` 0.7 (P3P + 4th-point disambiguation, N = 4 only); `kornia-pnp` 0.1.10 (EPnP,
@@ -24,8 +24,7 @@
 //! Writes `DIR/results.md` (also printed), `DIR/plot.svg` and `DIR/problems.json` (every problem,
 //! read by `scripts/compare_opencv.py`); `DIR` defaults to `target/compare` in the workspace.
 
-#[path = "../../tests/common/mod.rs"]
-mod common;
+use eopnp_testkit as common;
 mod peers;
 mod svg;
 

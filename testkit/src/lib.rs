@@ -1,4 +1,5 @@
-//! Shared test infrastructure for the integration tests of `eopnp`: seeded RNG, the synthetic
+//! Shared test support of the eopnp workspace (tests, benches, examples, the comparison
+//! program): seeded RNG, the synthetic
 //! problem generator of docs/algorithm.md section 7 (the reference prototype's), the error metrics
 //! of section 1, and an independent Levenberg-Marquardt reference ("LM from ground truth", the
 //! maximum-likelihood floor).
@@ -7,7 +8,6 @@
 //! assertion message. `Problem::generate(&ProblemOptions { seed, .. })` rebuilds it exactly.
 //! Trial seeds derive from (suite seed, test name, trial index) via [`trial_seed`]; the suite
 //! seed is [`DEFAULT_SUITE_SEED`] unless the environment variable `EOPNP_TEST_SEED` is set.
-#![allow(dead_code)]
 
 use eopnp::Solution;
 use nalgebra::{DMatrix, DVector, Matrix3, Point2, Point3, Quaternion, UnitQuaternion, Vector3};
