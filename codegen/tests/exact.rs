@@ -235,7 +235,7 @@ fn inv3(a: &[[Q; 3]; 3]) -> Option<[[Q; 3]; 3]> {
         let rs: Vec<usize> = (0..3).filter(|&i| i != r).collect();
         let cs: Vec<usize> = (0..3).filter(|&i| i != c).collect();
         let d = m(rs[0], cs[0]) * m(rs[1], cs[1]) - m(rs[0], cs[1]) * m(rs[1], cs[0]);
-        if (r + c).is_multiple_of(2) {
+        if (r + c) % 2 == 0 {
             d
         } else {
             -d
