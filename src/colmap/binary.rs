@@ -1,5 +1,6 @@
 //! The binary format (`cameras.bin`, `images.bin`, `points3D.bin`; little-endian, COLMAP's
-//! `reconstruction_io` layout): the readers, bounded by the bytes present, and the writer.
+//! `reconstruction_io` layout): the readers, bounded by the bytes present, and the encoder the
+//! writer (`write.rs`) uses.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -152,7 +153,7 @@ pub(super) fn parse_cameras_bin(
 }
 
 /// Longest image name accepted (bytes), a bound on the NUL search.
-const MAX_NAME: usize = 1 << 16;
+pub(super) const MAX_NAME: usize = 1 << 16;
 
 pub(super) fn parse_images_bin(path: &Path, bytes: &[u8]) -> Result<Images, ModelError> {
     let mut r = Reader {
@@ -261,77 +262,56 @@ pub(super) fn parse_points_bin(
     Ok(points)
 }
 
-/// Writes `model` in COLMAP's binary format (`cameras.bin`, `images.bin`, `points3D.bin`) to
-/// `dir`, which must exist. Reading it back with [`super::read_model_binary`] gives an identical
-/// model.
-///
-/// # Errors
-/// Any I/O error; [`std::io::ErrorKind::InvalidInput`] for a camera whose model has no COLMAP
-/// id ([`CameraModel::OpenCvThinPrismTilted`]), before anything is written.
-pub fn write_model_binary(model: &Model, dir: impl AsRef<Path>) -> std::io::Result<()> {
-    let dir = dir.as_ref();
-    let mut b = Vec::new();
-    b.extend_from_slice(&(model.cameras.len() as u64).to_le_bytes());
+/// `cameras.bin`, `images.bin` and `points3D.bin` of a model already checked by
+/// `write::validate` for the binary format (every camera has a COLMAP model id, no name holds
+/// a NUL byte or is longer than the reader accepts, every observed 3D point id fits an `i64`).
+pub(super) fn encode_binary(model: &Model) -> [Vec<u8>; 3] {
+    let mut c = Vec::new();
+    c.extend_from_slice(&(model.cameras.len() as u64).to_le_bytes());
     for (id, cam) in &model.cameras {
-        let model_id = cam.model().colmap_id().ok_or_else(|| {
-            std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                format!(
-                    "camera {id}: model {} is not a COLMAP model (no COLMAP model id)",
-                    cam.model()
-                ),
-            )
-        })?;
-        b.extend_from_slice(&id.to_le_bytes());
-        b.extend_from_slice(&model_id.to_le_bytes());
-        b.extend_from_slice(&cam.width().to_le_bytes());
-        b.extend_from_slice(&cam.height().to_le_bytes());
+        let model_id = cam.model().colmap_id().unwrap_or(-1);
+        c.extend_from_slice(&id.to_le_bytes());
+        c.extend_from_slice(&model_id.to_le_bytes());
+        c.extend_from_slice(&cam.width().to_le_bytes());
+        c.extend_from_slice(&cam.height().to_le_bytes());
         for p in cam.params() {
-            b.extend_from_slice(&p.to_le_bytes());
+            c.extend_from_slice(&p.to_le_bytes());
         }
     }
-    std::fs::write(dir.join("cameras.bin"), &b)?;
 
-    b.clear();
-    b.extend_from_slice(&(model.images.len() as u64).to_le_bytes());
+    let mut i = Vec::new();
+    i.extend_from_slice(&(model.images.len() as u64).to_le_bytes());
     for img in model.images.values() {
-        if img.name.as_bytes().contains(&0) {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                format!("image {} name contains a NUL byte", img.id),
-            ));
-        }
-        b.extend_from_slice(&img.id.to_le_bytes());
+        i.extend_from_slice(&img.id.to_le_bytes());
         for v in img.q.iter().chain(img.t.iter()) {
-            b.extend_from_slice(&v.to_le_bytes());
+            i.extend_from_slice(&v.to_le_bytes());
         }
-        b.extend_from_slice(&img.camera_id.to_le_bytes());
-        b.extend_from_slice(img.name.as_bytes());
-        b.push(0);
-        b.extend_from_slice(&(img.points2d.len() as u64).to_le_bytes());
+        i.extend_from_slice(&img.camera_id.to_le_bytes());
+        i.extend_from_slice(img.name.as_bytes());
+        i.push(0);
+        i.extend_from_slice(&(img.points2d.len() as u64).to_le_bytes());
         for (px, pid) in &img.points2d {
-            b.extend_from_slice(&px.x.to_le_bytes());
-            b.extend_from_slice(&px.y.to_le_bytes());
+            i.extend_from_slice(&px.x.to_le_bytes());
+            i.extend_from_slice(&px.y.to_le_bytes());
             let id = pid.map_or(-1i64, |p| i64::try_from(p).unwrap_or(-1));
-            b.extend_from_slice(&id.to_le_bytes());
+            i.extend_from_slice(&id.to_le_bytes());
         }
     }
-    std::fs::write(dir.join("images.bin"), &b)?;
 
-    b.clear();
-    b.extend_from_slice(&(model.points.len() as u64).to_le_bytes());
-    for p in model.points.values() {
-        b.extend_from_slice(&p.id.to_le_bytes());
-        for v in p.xyz.iter() {
-            b.extend_from_slice(&v.to_le_bytes());
+    let mut p = Vec::new();
+    p.extend_from_slice(&(model.points.len() as u64).to_le_bytes());
+    for pt in model.points.values() {
+        p.extend_from_slice(&pt.id.to_le_bytes());
+        for v in pt.xyz.iter() {
+            p.extend_from_slice(&v.to_le_bytes());
         }
-        b.extend_from_slice(&p.rgb);
-        b.extend_from_slice(&p.error.to_le_bytes());
-        b.extend_from_slice(&(p.track.len() as u64).to_le_bytes());
-        for (i, k) in &p.track {
-            b.extend_from_slice(&i.to_le_bytes());
-            b.extend_from_slice(&k.to_le_bytes());
+        p.extend_from_slice(&pt.rgb);
+        p.extend_from_slice(&pt.error.to_le_bytes());
+        p.extend_from_slice(&(pt.track.len() as u64).to_le_bytes());
+        for (img, k) in &pt.track {
+            p.extend_from_slice(&img.to_le_bytes());
+            p.extend_from_slice(&k.to_le_bytes());
         }
     }
-    std::fs::write(dir.join("points3D.bin"), &b)
+    [c, i, p]
 }

@@ -1,7 +1,7 @@
 //! COLMAP sparse reconstructions: readers for the text (`cameras.txt`, `images.txt`,
-//! `points3D.txt`) and binary (`cameras.bin`, `images.bin`, `points3D.bin`) formats, a binary
-//! writer, and [`register_image`], which re-estimates an image's pose from its 2D-3D
-//! correspondences.
+//! `points3D.txt`) and binary (`cameras.bin`, `images.bin`, `points3D.bin`) formats, an atomic
+//! writer of both ([`write_model`]: reading back gives the identical [`Model`]), and
+//! [`register_image`], which re-estimates an image's pose from its 2D-3D correspondences.
 //!
 //! Conventions are COLMAP's: an image's pose `(q, t)` maps world to camera,
 //! `x_cam = R(q) X + t`, with `q = (qw, qx, qy, qz)` a Hamilton quaternion; pixels follow
@@ -15,15 +15,16 @@ mod binary;
 mod model;
 mod register;
 mod text;
+mod write;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
 
-pub use binary::write_model_binary;
 pub use model::{quaternion_to_matrix, Image, Location, Model, ModelError, Point3D, RegisterError};
 pub use register::{register_image, Registration};
+pub use write::{encode_model, write_model, write_model_binary, write_model_with, Overwrite};
 
 use model::Images;
 

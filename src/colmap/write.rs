@@ -1,0 +1,424 @@
+//! Writing a model, text or binary, atomically: the model is checked and encoded in memory
+//! first, then written to temporary files that are fsynced and renamed into place.
+//!
+//! Guarantees (see [`write_model`]):
+//! - `dir` does not exist: the model is written into a fresh temporary directory next to it
+//!   (`.<name>.tmp-<pid>-<n>`), which is renamed to `dir`. All or nothing, even across a
+//!   crash: `dir` either does not appear or appears with the complete model.
+//! - `dir` is an existing empty directory (or, with [`Overwrite::Files`], any directory): each
+//!   file is written to `.<file>.tmp-<pid>-<n>` in `dir`, fsynced, and renamed over its final
+//!   name. Every file is replaced atomically (never truncated or half-written), and on any
+//!   error the directory is returned to its previous state (temporaries removed, replaced
+//!   files restored from hard-link backups). The three renames are not one atomic step: a
+//!   crash during them can leave a mix of old and new files, and dot-named temporaries.
+
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, ErrorKind, Write as _};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::binary::{encode_binary, MAX_NAME};
+use super::model::{check_quaternion, Model};
+use super::text::{encode_text, text_name_ok};
+use super::{ModelFormat, BIN_FILES};
+use crate::camera::Camera;
+
+/// What [`write_model_with`] may do to an existing, non-empty directory.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Overwrite {
+    /// Refuse ([`ErrorKind::DirectoryNotEmpty`]) if `dir` exists and is not empty; nothing is
+    /// written. What [`write_model`] does.
+    #[default]
+    Never,
+    /// Write into an existing directory whatever it holds, replacing the three files of the
+    /// format (other files are left alone). Refused ([`ErrorKind::AlreadyExists`]) when writing
+    /// text into a directory that holds a complete binary model, which readers (this crate's,
+    /// COLMAP's) would keep preferring over the new text files.
+    Files,
+}
+
+impl ModelFormat {
+    /// The three file names of the format: cameras, images, 3D points.
+    #[must_use]
+    pub fn file_names(self) -> [&'static str; 3] {
+        match self {
+            ModelFormat::Text => super::TEXT_FILES,
+            ModelFormat::Binary => BIN_FILES,
+        }
+    }
+}
+
+fn invalid(format: ModelFormat, reason: String) -> io::Error {
+    let f = match format {
+        ModelFormat::Text => "text",
+        ModelFormat::Binary => "binary",
+    };
+    io::Error::new(
+        ErrorKind::InvalidInput,
+        format!("cannot write the model in {f} format: {reason}"),
+    )
+}
+
+/// Checks that `model` reads back identically from `format`: everything the reader rejects
+/// (non-finite or zero quaternion, non-finite coordinates, a missing camera or observed 3D
+/// point, a map key different from the record's id, a camera model COLMAP does not know) and
+/// what the format cannot represent.
+fn validate(model: &Model, format: ModelFormat) -> io::Result<()> {
+    let bad = |reason: String| Err(invalid(format, reason));
+    for (id, cam) in &model.cameras {
+        if cam.model().colmap_id().is_none() {
+            return bad(format!(
+                "camera {id}: model {} is not a COLMAP model",
+                cam.model()
+            ));
+        }
+        if let Err(e) = Camera::new(cam.model(), cam.width(), cam.height(), cam.params().to_vec())
+        {
+            return bad(format!("camera {id}: {e}"));
+        }
+    }
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    for (key, img) in &model.images {
+        let id = img.id;
+        if *key != id {
+            return bad(format!("image {id} is stored under key {key}"));
+        }
+        if let Err(e) = check_quaternion(&img.q) {
+            return bad(format!("image {id}: {e}"));
+        }
+        if !finite(img.t.as_slice()) {
+            return bad(format!("image {id}: translation is not finite"));
+        }
+        if !model.cameras.contains_key(&img.camera_id) {
+            return bad(format!(
+                "image {id} refers to camera {}, which is not in the model",
+                img.camera_id
+            ));
+        }
+        let name_ok = match format {
+            ModelFormat::Text => text_name_ok(&img.name),
+            ModelFormat::Binary => !img.name.contains('\0') && img.name.len() <= MAX_NAME,
+        };
+        if !name_ok {
+            let rule = match format {
+                ModelFormat::Text => {
+                    "must be one non-empty line without leading or trailing whitespace"
+                }
+                ModelFormat::Binary => "must not contain a NUL byte or be longer than 64 KiB",
+            };
+            return bad(format!("image {id}: name {:?} {rule}", img.name));
+        }
+        for (k, (px, pid)) in img.points2d.iter().enumerate() {
+            if !finite(px.coords.as_slice()) {
+                return bad(format!("image {id}: observation {k} is not finite"));
+            }
+            if let Some(p) = pid {
+                if !model.points.contains_key(p) {
+                    return bad(format!(
+                        "observation {k} of image {id} refers to 3D point {p}, which is not in \
+                         the model"
+                    ));
+                }
+                if format == ModelFormat::Binary && i64::try_from(*p).is_err() {
+                    return bad(format!(
+                        "observation {k} of image {id}: 3D point id {p} does not fit the \
+                         format's signed 64-bit field"
+                    ));
+                }
+            }
+        }
+    }
+    for (key, pt) in &model.points {
+        if *key != pt.id {
+            return bad(format!("3D point {} is stored under key {key}", pt.id));
+        }
+        if !finite(pt.xyz.coords.as_slice()) {
+            return bad(format!("3D point {key}: coordinates are not finite"));
+        }
+    }
+    Ok(())
+}
+
+/// The contents of the model's three files (cameras, images, 3D points, in the order of
+/// [`ModelFormat::file_names`]) in `format`, as [`write_model`] writes them. Text numbers are
+/// in Rust's shortest round-trip form, so [`super::parse_model_text`] /
+/// [`super::parse_model_binary`] of the result give `model` back exactly (every `f64`
+/// bit for bit, except that a NaN ERROR of a 3D point reads back as the canonical NaN in text).
+///
+/// # Errors
+/// [`ErrorKind::InvalidInput`] if the model would not read back identically: a non-finite or
+/// zero quaternion, a non-finite translation, pixel or 3D point, a missing camera or observed
+/// 3D point, a map key that differs from the record's id, a camera model without a COLMAP id
+/// ([`crate::camera::CameraModel::OpenCvThinPrismTilted`]); text: an image name that is empty,
+/// spans lines or has leading or trailing whitespace; binary: a name with a NUL byte or longer
+/// than 64 KiB, an observed 3D point id above `i64::MAX`.
+pub fn encode_model(model: &Model, format: ModelFormat) -> io::Result<[Vec<u8>; 3]> {
+    validate(model, format)?;
+    Ok(match format {
+        ModelFormat::Text => encode_text(model),
+        ModelFormat::Binary => encode_binary(model),
+    })
+}
+
+/// Writes `model` in `format` to the directory `dir`, atomically, refusing to overwrite:
+/// `dir` must not exist (its parent must) or be an empty directory.
+///
+/// - `dir` does not exist: the model is written into a fresh temporary directory next to it
+///   (`.<name>.tmp-<pid>-<n>` in the parent), every file fsynced, and the directory renamed to
+///   `dir`: all or nothing, even across a crash.
+/// - `dir` is an empty directory: each file is written to `.<file>.tmp-<pid>-<n>` in `dir`,
+///   fsynced and renamed into place; on any error the files already renamed and the
+///   temporaries are removed (`dir` is empty again). A crash during the three renames can
+///   leave part of the model.
+///
+/// The model is checked and encoded in memory first ([`encode_model`]), so an unrepresentable
+/// model fails before anything is created. Reading `dir` back ([`super::read_model`]) gives
+/// `model` exactly.
+///
+/// # Errors
+/// [`ErrorKind::InvalidInput`] as [`encode_model`], or for a `dir` without a final name
+/// (`/`, `..`); [`ErrorKind::DirectoryNotEmpty`] if `dir` exists and is not empty;
+/// [`ErrorKind::NotADirectory`] if `dir` or its parent is not a directory;
+/// [`ErrorKind::NotFound`] if the parent does not exist; any I/O error of the writing (in
+/// every case with nothing of the model left behind).
+pub fn write_model(model: &Model, dir: impl AsRef<Path>, format: ModelFormat) -> io::Result<()> {
+    write_model_with(model, dir, format, Overwrite::Never)
+}
+
+/// Writes `model` in COLMAP's binary format to `dir`, replacing the three `.bin` files of an
+/// existing directory (other files are kept): [`write_model_with`] with
+/// [`ModelFormat::Binary`] and [`Overwrite::Files`]. Reading it back with
+/// [`super::read_model_binary`] gives an identical model.
+///
+/// # Errors
+/// As [`write_model_with`]; [`ErrorKind::InvalidInput`] for a camera whose model has no
+/// COLMAP id ([`crate::camera::CameraModel::OpenCvThinPrismTilted`]), before anything is
+/// written.
+pub fn write_model_binary(model: &Model, dir: impl AsRef<Path>) -> io::Result<()> {
+    write_model_with(model, dir, ModelFormat::Binary, Overwrite::Files)
+}
+
+/// [`write_model`] with a choice of what to do to an existing non-empty directory. With
+/// [`Overwrite::Files`] the three files of the format in an existing directory are replaced
+/// one by one, each atomically (a hard-link backup of each existing file is taken first):
+/// on any error the directory is restored (old files back in place, temporaries and backups
+/// removed); a crash during the three renames can leave a mix of old and new files (and
+/// dot-named `.tmp-`/`.bak-` files, which no reader takes for a model).
+///
+/// # Errors
+/// As [`write_model`]; with [`Overwrite::Files`], [`ErrorKind::AlreadyExists`] for text over a
+/// complete binary model (see [`Overwrite::Files`]).
+pub fn write_model_with(
+    model: &Model,
+    dir: impl AsRef<Path>,
+    format: ModelFormat,
+    overwrite: Overwrite,
+) -> io::Result<()> {
+    let dir = dir.as_ref();
+    let contents = encode_model(model, format)?;
+    let names = format.file_names();
+    match fs::metadata(dir) {
+        Ok(m) if m.is_dir() => write_into_existing(dir, names, &contents, format, overwrite),
+        Ok(_) => Err(io::Error::new(
+            ErrorKind::NotADirectory,
+            format!("{}: exists and is not a directory", dir.display()),
+        )),
+        Err(e) if e.kind() == ErrorKind::NotFound => write_new_dir(dir, names, &contents),
+        Err(e) => Err(context(dir, e)),
+    }
+}
+
+/// The error with the path in its message.
+fn context(path: &Path, e: io::Error) -> io::Error {
+    io::Error::new(e.kind(), format!("{}: {e}", path.display()))
+}
+
+/// A suffix unique to this process and call: `<pid>-<n>`.
+fn unique() -> String {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    format!(
+        "{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    )
+}
+
+/// Creates `path` (which must not exist), writes `bytes` and fsyncs it.
+fn write_synced(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut f = OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+        .map_err(|e| context(path, e))?;
+    f.write_all(bytes)
+        .and_then(|()| f.sync_all())
+        .map_err(|e| context(path, e))
+}
+
+/// Fsyncs a directory (its entries: created and renamed files), where the platform allows it;
+/// best effort (some file systems refuse to fsync a directory).
+fn sync_dir(dir: &Path) {
+    #[cfg(unix)]
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+    #[cfg(not(unix))]
+    let _ = (dir, File::open);
+}
+
+/// `dir` does not exist: write into a fresh sibling directory and rename it to `dir`.
+fn write_new_dir(dir: &Path, names: [&str; 3], contents: &[Vec<u8>; 3]) -> io::Result<()> {
+    let Some(name) = dir.file_name() else {
+        return Err(io::Error::new(
+            ErrorKind::InvalidInput,
+            format!("{}: not a directory name", dir.display()),
+        ));
+    };
+    let parent = match dir.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    match fs::metadata(&parent) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => {
+            return Err(io::Error::new(
+                ErrorKind::NotADirectory,
+                format!("{}: parent is not a directory", dir.display()),
+            ))
+        }
+        Err(e) if e.kind() == ErrorKind::NotFound => {
+            return Err(io::Error::new(
+                ErrorKind::NotFound,
+                format!(
+                    "{}: parent directory {} does not exist",
+                    dir.display(),
+                    parent.display()
+                ),
+            ))
+        }
+        Err(e) => return Err(context(&parent, e)),
+    }
+    let target = parent.join(name);
+    let tmp = parent.join(format!(".{}.tmp-{}", name.to_string_lossy(), unique()));
+    fs::create_dir(&tmp).map_err(|e| context(&tmp, e))?;
+    let result = (|| {
+        for (n, bytes) in names.iter().zip(contents) {
+            write_synced(&tmp.join(n), bytes)?;
+        }
+        sync_dir(&tmp);
+        fs::rename(&tmp, &target).map_err(|e| {
+            // An empty directory created meanwhile is replaced; a non-empty one is not.
+            let kind = match e.kind() {
+                ErrorKind::AlreadyExists | ErrorKind::DirectoryNotEmpty => {
+                    ErrorKind::DirectoryNotEmpty
+                }
+                k => k,
+            };
+            io::Error::new(
+                kind,
+                format!("{}: cannot rename the written model into place: {e}", dir.display()),
+            )
+        })
+    })();
+    match result {
+        Ok(()) => {
+            sync_dir(&parent);
+            Ok(())
+        }
+        Err(e) => {
+            let _ = fs::remove_dir_all(&tmp);
+            Err(e)
+        }
+    }
+}
+
+/// `dir` exists: temporaries in `dir`, fsynced, renamed over the final names, with rollback.
+fn write_into_existing(
+    dir: &Path,
+    names: [&str; 3],
+    contents: &[Vec<u8>; 3],
+    format: ModelFormat,
+    overwrite: Overwrite,
+) -> io::Result<()> {
+    let non_empty = fs::read_dir(dir)
+        .map_err(|e| context(dir, e))?
+        .next()
+        .is_some();
+    if non_empty {
+        match overwrite {
+            Overwrite::Never => {
+                return Err(io::Error::new(
+                    ErrorKind::DirectoryNotEmpty,
+                    format!(
+                        "{}: exists and is not empty (refusing to write a model into it)",
+                        dir.display()
+                    ),
+                ))
+            }
+            Overwrite::Files => {
+                if format == ModelFormat::Text && BIN_FILES.iter().all(|n| dir.join(n).is_file())
+                {
+                    return Err(io::Error::new(
+                        ErrorKind::AlreadyExists,
+                        format!(
+                            "{}: holds a binary model, which readers prefer over the text model \
+                             being written; remove cameras.bin, images.bin and points3D.bin first",
+                            dir.display()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    let suffix = unique();
+    let targets = names.map(|n| dir.join(n));
+    let temps = names.map(|n| dir.join(format!(".{n}.tmp-{suffix}")));
+    let backups = names.map(|n| dir.join(format!(".{n}.bak-{suffix}")));
+    let remove_all = |paths: &[PathBuf]| {
+        for p in paths {
+            let _ = fs::remove_file(p);
+        }
+    };
+
+    // 1. The new files, fsynced, under temporary names.
+    for k in 0..3 {
+        if let Err(e) = write_synced(&temps[k], &contents[k]) {
+            remove_all(&temps[..=k]);
+            return Err(e);
+        }
+    }
+    // 2. Hard-link backups of the files about to be replaced.
+    let mut backed_up = [false; 3];
+    for k in 0..3 {
+        match fs::symlink_metadata(&targets[k]) {
+            Err(e) if e.kind() == ErrorKind::NotFound => continue,
+            _ => {}
+        }
+        if let Err(e) = fs::hard_link(&targets[k], &backups[k]) {
+            remove_all(&temps);
+            remove_all(&backups);
+            return Err(context(&targets[k], e));
+        }
+        backed_up[k] = true;
+    }
+    // 3. The renames; on failure put back what was there.
+    for k in 0..3 {
+        if let Err(e) = fs::rename(&temps[k], &targets[k]) {
+            for j in 0..k {
+                if backed_up[j] {
+                    let _ = fs::rename(&backups[j], &targets[j]);
+                } else {
+                    let _ = fs::remove_file(&targets[j]);
+                }
+            }
+            remove_all(&temps);
+            remove_all(&backups);
+            sync_dir(dir);
+            return Err(context(&targets[k], e));
+        }
+    }
+    remove_all(&backups);
+    sync_dir(dir);
+    Ok(())
+}
