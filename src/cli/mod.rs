@@ -71,6 +71,25 @@ pub(crate) struct RegisterArgs {
     model_dir: PathBuf,
     #[command(flatten)]
     opts: RegisterOptions,
+    /// Write the model with every image's pose replaced by the re-estimated one (images that
+    /// fail keep their pose, and the output says which) to the directory OUT, which must not
+    /// exist (its parent must) or be empty, and must not be the input's directory. Written
+    /// atomically: into a temporary directory next to OUT, fsynced, then renamed to OUT (into an
+    /// existing empty OUT: temporary files renamed into place); on any failure nothing is left.
+    #[arg(long, value_name = "OUT")]
+    write: Option<PathBuf>,
+    /// Format of the model written by --write (default: the input model's format).
+    #[arg(long, value_name = "FORMAT", requires = "write")]
+    write_format: Option<WriteFormat>,
+}
+
+/// The format of `register --write`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum WriteFormat {
+    /// cameras.txt, images.txt, points3D.txt.
+    Text,
+    /// cameras.bin, images.bin, points3D.bin.
+    Binary,
 }
 
 /// Estimation options shared by `register` and the no-argument default run.
@@ -208,8 +227,17 @@ fn bundled_model() -> PathBuf {
 /// Runs the command line.
 pub fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
-        None => register::run(&bundled_model(), &RegisterOptions::default(), true),
-        Some(Command::Register(a)) => register::run(&a.model_dir, &a.opts, false),
+        None => register::run(&bundled_model(), &RegisterOptions::default(), None, true),
+        Some(Command::Register(a)) => {
+            let out = a.write.map(|dir| register::Output {
+                dir,
+                format: a.write_format.map(|f| match f {
+                    WriteFormat::Text => crate::colmap::ModelFormat::Text,
+                    WriteFormat::Binary => crate::colmap::ModelFormat::Binary,
+                }),
+            });
+            register::run(&a.model_dir, &a.opts, out.as_ref(), false)
+        }
         Some(Command::Solve(a)) => {
             let solver = if a.algebraic {
                 Solver::default().refinement(Refinement::Algebraic)

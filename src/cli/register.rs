@@ -2,11 +2,11 @@
 
 use std::fmt::Write as _;
 use std::io::IsTerminal;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::experiment::{self, ImageProblem, Outliers};
-use crate::colmap::{self, Model, RegisterError, Registration};
+use crate::colmap::{self, Model, ModelFormat, RegisterError, Registration};
 use crate::ransac::{Ransac, RansacStats};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
@@ -188,7 +188,144 @@ fn export_problems(model: &Model, opts: &RegisterOptions) -> String {
     s
 }
 
-pub(crate) fn run(dir: &Path, opts: &RegisterOptions, intro: bool) -> Result<(), Failure> {
+/// `--write OUT [--write-format F]`: where to write the re-estimated model.
+#[derive(Clone, Debug)]
+pub(crate) struct Output {
+    /// The directory to create (or an existing empty one).
+    pub(crate) dir: PathBuf,
+    /// The format; `None`: the input's.
+    pub(crate) format: Option<ModelFormat>,
+}
+
+/// What `--write` wrote.
+struct Written {
+    dir: PathBuf,
+    format: ModelFormat,
+    /// Images whose pose was replaced.
+    replaced: usize,
+    /// Images that could not be registered and keep the input's pose.
+    kept: Vec<u32>,
+}
+
+/// Checks `--write OUT` before any work (exit code 2): OUT must not be, or be inside, the
+/// input's directory (compared canonicalised, so symbolic links and `..` do not hide it), and
+/// must be an empty directory or not exist with an existing parent directory.
+fn check_output(input: &Path, out: &Path) -> Result<(), Failure> {
+    let bad = |why: &str| Failure::input(format!("--write {}: {why}", out.display()));
+    let input_c = std::fs::canonicalize(input)
+        .map_err(|e| Failure::input(format!("{}: {e}", input.display())))?;
+    let inside = |c: &Path| -> Result<(), Failure> {
+        if c == input_c {
+            Err(bad("is the input model's directory (refusing to write over the input)"))
+        } else if c.starts_with(&input_c) {
+            Err(bad("is inside the input model's directory"))
+        } else {
+            Ok(())
+        }
+    };
+    match std::fs::metadata(out) {
+        Ok(m) => {
+            let c = std::fs::canonicalize(out).map_err(|e| bad(&e.to_string()))?;
+            inside(&c)?;
+            if !m.is_dir() {
+                return Err(bad("exists and is not a directory"));
+            }
+            let mut entries = std::fs::read_dir(out).map_err(|e| bad(&e.to_string()))?;
+            if entries.next().is_some() {
+                return Err(bad(
+                    "exists and is not empty (give a new directory or an empty one)",
+                ));
+            }
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let Some(name) = out.file_name() else {
+                return Err(bad("not a directory name"));
+            };
+            let parent = match out.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            };
+            match std::fs::metadata(parent) {
+                Ok(m) if m.is_dir() => {}
+                Ok(_) => return Err(bad("its parent is not a directory")),
+                Err(_) => return Err(bad("its parent directory does not exist")),
+            }
+            let c = std::fs::canonicalize(parent).map_err(|e| bad(&e.to_string()))?;
+            inside(&c.join(name))
+        }
+        Err(e) => Err(bad(&e.to_string())),
+    }
+}
+
+/// The input model with every registered image's pose replaced, written atomically to `out`.
+fn write_output(
+    model: &Model,
+    input_format: ModelFormat,
+    rows: &[Row],
+    out: &Output,
+) -> Result<Written, Failure> {
+    let mut new = model.clone();
+    let mut kept = Vec::new();
+    let mut replaced = 0;
+    for (id, _, result, _) in rows {
+        match (result, new.images.get_mut(id)) {
+            (Ok(reg), Some(img)) => {
+                let q = reg.solution.pose.rotation;
+                img.q = [q.w, q.i, q.j, q.k];
+                img.t = reg.solution.pose.translation.vector;
+                replaced += 1;
+            }
+            _ => kept.push(*id),
+        }
+    }
+    let format = out.format.unwrap_or(input_format);
+    colmap::write_model(&new, &out.dir, format).map_err(|e| {
+        use std::io::ErrorKind as K;
+        let message = format!("cannot write the model to {}: {e}", out.dir.display());
+        match e.kind() {
+            K::DirectoryNotEmpty
+            | K::AlreadyExists
+            | K::NotADirectory
+            | K::NotFound
+            | K::InvalidInput => Failure::input(message),
+            _ => Failure::solver(message),
+        }
+    })?;
+    Ok(Written {
+        dir: out.dir.clone(),
+        format,
+        replaced,
+        kept,
+    })
+}
+
+fn written_line(w: &Written, total: usize) -> String {
+    let mut s = format!(
+        "Wrote {} ({} format): {} of {total} image poses replaced by the re-estimated ones.",
+        w.dir.display(),
+        format_name(w.format),
+        w.replaced
+    );
+    if !w.kept.is_empty() {
+        let ids: Vec<String> = w.kept.iter().map(u32::to_string).collect();
+        let _ = write!(
+            s,
+            " Not registered, keeping the input model's pose: image{} {}.",
+            if ids.len() == 1 { "" } else { "s" },
+            ids.join(", ")
+        );
+    }
+    s.push('\n');
+    s
+}
+
+pub(crate) fn run(
+    dir: &Path,
+    opts: &RegisterOptions,
+    out: Option<&Output>,
+    intro: bool,
+) -> Result<(), Failure> {
     let format = colmap::detect_format(dir).map_err(|e| {
         let hint = if intro {
             "\n(the bundled model is missing; run `eopnp register MODEL_DIR` on a COLMAP model)"
@@ -199,6 +336,9 @@ pub(crate) fn run(dir: &Path, opts: &RegisterOptions, intro: bool) -> Result<(),
     })?;
     opts.validate()?;
     let model = colmap::read_model(dir).map_err(|e| Failure::input(e.to_string()))?;
+    if let Some(out) = out {
+        check_output(dir, &out.dir)?;
+    }
     if let Some(path) = &opts.export_problems {
         std::fs::write(path, export_problems(&model, opts))
             .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
@@ -223,10 +363,17 @@ pub(crate) fn run(dir: &Path, opts: &RegisterOptions, intro: bool) -> Result<(),
         (true, true) => "ransac+algebraic",
         (false, true) => "ransac+reprojection",
     };
+    let written = out
+        .map(|o| write_output(&model, format, &rows, o))
+        .transpose()?;
     let text = if opts.json {
-        to_json(dir, format, mode, &rows)
+        to_json(dir, format, mode, &rows, written.as_ref())
     } else {
-        to_table(dir, format, mode, &rows, &model, intro)
+        let mut t = to_table(dir, format, mode, &rows, &model, intro);
+        if let Some(w) = &written {
+            t.push_str(&written_line(w, rows.len()));
+        }
+        t
     };
     emit(&text)?;
     if rows.iter().all(|r| r.2.is_err()) && !rows.is_empty() {
@@ -274,7 +421,13 @@ fn extra_json(e: &Extra) -> serde_json::Value {
     })
 }
 
-fn to_json(dir: &Path, format: colmap::ModelFormat, mode: &str, rows: &[Row]) -> String {
+fn to_json(
+    dir: &Path,
+    format: colmap::ModelFormat,
+    mode: &str,
+    rows: &[Row],
+    written: Option<&Written>,
+) -> String {
     let images: Vec<serde_json::Value> = rows
         .iter()
         .map(|(id, name, r, extra)| match r {
@@ -307,12 +460,20 @@ fn to_json(dir: &Path, format: colmap::ModelFormat, mode: &str, rows: &[Row]) ->
             Err(e) => json!({ "image_id": id, "name": name, "error": e.to_string() }),
         })
         .collect();
-    let v = json!({
+    let mut v = json!({
         "model": dir.display().to_string(),
         "format": format_name(format),
         "refinement": mode,
         "images": images,
     });
+    if let Some(w) = written {
+        v["written"] = json!({
+            "dir": w.dir.display().to_string(),
+            "format": format_name(w.format),
+            "replaced": w.replaced,
+            "kept_input_pose": w.kept,
+        });
+    }
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
     s.push('\n');
     s
