@@ -216,7 +216,9 @@ fn check_output(input: &Path, out: &Path) -> Result<(), Failure> {
         .map_err(|e| Failure::input(format!("{}: {e}", input.display())))?;
     let inside = |c: &Path| -> Result<(), Failure> {
         if c == input_c {
-            Err(bad("is the input model's directory (refusing to write over the input)"))
+            Err(bad(
+                "is the input model's directory (refusing to write over the input)",
+            ))
         } else if c.starts_with(&input_c) {
             Err(bad("is inside the input model's directory"))
         } else {

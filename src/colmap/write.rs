@@ -73,8 +73,12 @@ fn validate(model: &Model, format: ModelFormat) -> io::Result<()> {
                 cam.model()
             ));
         }
-        if let Err(e) = Camera::new(cam.model(), cam.width(), cam.height(), cam.params().to_vec())
-        {
+        if let Err(e) = Camera::new(
+            cam.model(),
+            cam.width(),
+            cam.height(),
+            cam.params().to_vec(),
+        ) {
             return bad(format!("camera {id}: {e}"));
         }
     }
@@ -317,7 +321,10 @@ fn write_new_dir(dir: &Path, names: [&str; 3], contents: &[Vec<u8>; 3]) -> io::R
             };
             io::Error::new(
                 kind,
-                format!("{}: cannot rename the written model into place: {e}", dir.display()),
+                format!(
+                    "{}: cannot rename the written model into place: {e}",
+                    dir.display()
+                ),
             )
         })
     })();
@@ -357,8 +364,7 @@ fn write_into_existing(
                 ))
             }
             Overwrite::Files => {
-                if format == ModelFormat::Text && BIN_FILES.iter().all(|n| dir.join(n).is_file())
-                {
+                if format == ModelFormat::Text && BIN_FILES.iter().all(|n| dir.join(n).is_file()) {
                     return Err(io::Error::new(
                         ErrorKind::AlreadyExists,
                         format!(
