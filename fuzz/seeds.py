@@ -134,6 +134,35 @@ def colmap_subset():
     return text, cb + SEP + ib + SEP + pb
 
 
+def colmap_write_seeds(text, binary):
+    """The colmap_write target: both boxes subsets, plus models that stress the writer: numbers
+    at the ends of the f64 range, a NaN point error, a 3D point id above i64::MAX (text only),
+    image names that text cannot hold (binary only)."""
+    write("colmap_write", "boxes-subset-text", text)
+    write("colmap_write", "boxes-subset-binary", binary)
+    cams = "1 PINHOLE 640 480 1e300 5e-324 -0 0.1\n2 SIMPLE_RADIAL 10 10 2.5 0 0 -1e-300\n"
+    imgs = (
+        "7 1 -0 0 5e-324 1e300 -1e-300 0.30000000000000004 1 name with  two  spaces\n"
+        "1e-7 -0 18446744073709551615 0.5 0.5 -1 1e16 3 3\n"
+        "8 0 0 0 1 0 0 0 2 a\n"
+        "\n"
+    )
+    pts = (
+        "18446744073709551615 -0 5e-324 1e16 255 0 7 NaN 7 0\n"
+        "3 1.7976931348623157e308 -2.2250738585072014e-308 1 1 2 3 inf 7 1 8 0\n"
+    )
+    write("colmap_write", "extremes-text", cams.encode() + SEP + imgs.encode() + SEP + pts.encode())
+    # Binary: names with a newline, leading and trailing spaces, and an empty name.
+    cb = struct.pack("<Q", 1) + struct.pack("<iiQQ", 1, 0, 100, 100) + struct.pack("<3d", 50.0, 50.0, 50.0)
+    ib = struct.pack("<Q", 3)
+    for iid, name in [(1, b"two\nlines"), (2, b" padded "), (3, b"")]:
+        ib += struct.pack("<I7dI", iid, 1.0, 0.0, -0.0, 0.0, 0.5, -0.25, 4.0, 1) + name + b"\0"
+        ib += struct.pack("<Q", 1) + struct.pack("<ddq", 10.0, 20.0, 5)
+    pb = struct.pack("<Q", 1) + struct.pack("<Q3d3Bd", 5, 0.0, 0.0, 1.0, 1, 2, 3, float("nan"))
+    pb += struct.pack("<Q", 1) + struct.pack("<II", 1, 0)
+    write("colmap_write", "names-binary", cb + SEP + ib + SEP + pb)
+
+
 def cli_seeds(rng):
     def project(world):
         f, cx, cy = 800.0, 320.0, 240.0
@@ -234,6 +263,7 @@ def main():
     text, binary = colmap_subset()
     write("colmap_text", "boxes-subset", text)
     write("colmap_binary", "boxes-subset", binary)
+    colmap_write_seeds(text, binary)
     cli_seeds(rng)
 
 

@@ -20,12 +20,13 @@ use std::time::Instant;
 /// A fuzz target: its name and its harness.
 type Target = (&'static str, fn(&[u8]));
 
-const TARGETS: [Target; 5] = [
+const TARGETS: [Target; 6] = [
     ("solve", harness::solve),
     ("ransac", harness::ransac),
     ("colmap_text", harness::colmap_text),
     ("colmap_binary", harness::colmap_binary),
     ("cli_input", harness::cli_input),
+    ("colmap_write", harness::colmap_write),
 ];
 
 fn fuzz_dir() -> PathBuf {
@@ -196,6 +197,43 @@ fn seeds_reach_the_parsers_and_registration() {
             Ok(_) => panic!("{name}: accepted"),
             Err(f) => assert!(f.message.starts_with(expected), "{name}: {}", f.message),
         }
+    }
+}
+
+#[test]
+fn seeds_reach_the_writer() {
+    use eopnp::colmap::{encode_model, parse_model_binary, parse_model_text, ModelFormat};
+    let split = |data: &[u8]| -> Vec<Vec<u8>> {
+        let mut files = Vec::new();
+        let mut rest = data;
+        while let Some(at) = rest.windows(3).position(|w| w == b"\0\0\xff") {
+            files.push(rest[..at].to_vec());
+            rest = &rest[at + 3..];
+        }
+        files.push(rest.to_vec());
+        assert_eq!(files.len(), 3);
+        files
+    };
+    for (name, text, binary) in [
+        ("boxes-subset-text", true, false),
+        ("boxes-subset-binary", false, true),
+        ("extremes-text", true, false),
+        ("names-binary", false, true),
+    ] {
+        let f = split(&seed("colmap_write", name));
+        let t = parse_model_text(&f[0], &f[1], &f[2]);
+        let b = parse_model_binary(&f[0], &f[1], &f[2]);
+        assert_eq!((t.is_ok(), b.is_ok()), (text, binary), "{name}");
+        let model = t.or(b).unwrap();
+        // The stress seeds reach the writer's refusals in the other format.
+        let other = if text {
+            ModelFormat::Binary
+        } else {
+            ModelFormat::Text
+        };
+        let refused = encode_model(&model, other).is_err();
+        assert_eq!(refused, !name.starts_with("boxes"), "{name}");
+        harness::colmap_write(&seed("colmap_write", name));
     }
 }
 
