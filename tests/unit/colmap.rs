@@ -26,3 +26,40 @@ fn binary_count_cannot_allocate_beyond_the_file() {
     let e = parse_cameras_bin(Path::new("cameras.bin"), &u64::MAX.to_le_bytes()).unwrap_err();
     assert_eq!(e.location, Location::Offset(0));
 }
+
+#[test]
+fn text_numbers_are_shortest_round_trip() {
+    use super::text::push_f64;
+    for (v, want) in [
+        (1245.65, "1245.65"),
+        (0.0577095, "0.0577095"),
+        (-0.0, "-0"),
+        (1.0, "1"),
+        (1e-5, "0.00001"),
+        (9.99e-6, "9.99e-6"),
+        (1e16, "1e16"),
+        (123456789012345.6, "123456789012345.6"),
+        (5e-324, "5e-324"),
+        (f64::MAX, "1.7976931348623157e308"),
+        (f64::NAN, "NaN"),
+        (f64::NEG_INFINITY, "-inf"),
+    ] {
+        let mut s = String::new();
+        push_f64(&mut s, v);
+        assert_eq!(s, want);
+        let back: f64 = s.parse().unwrap();
+        assert!(back.to_bits() == v.to_bits() || (v.is_nan() && back.is_nan()));
+    }
+}
+
+#[test]
+fn text_names_that_read_back() {
+    use super::text::text_name_ok;
+    assert!(text_name_ok(
+        "WhatsApp Image 2020-04-24 at 5.12.56 PM (1).jpeg"
+    ));
+    assert!(text_name_ok("a\tb"));
+    for bad in ["", " a", "a ", "a\nb", "\u{a0}a"] {
+        assert!(!text_name_ok(bad), "{bad:?}");
+    }
+}
