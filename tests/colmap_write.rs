@@ -395,7 +395,9 @@ fn cli_refuses_bad_output_paths_and_leaves_the_input_alone() {
         ]);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{}: {stderr}", out.display());
-        assert!(stderr.contains("--write"), "{stderr}");
+        // The refusal names the output path (not, e.g., a clap usage error).
+        let prefix = format!("error: --write {}: ", out.display());
+        assert!(stderr.starts_with(&prefix), "{stderr}");
         assert!(o.stdout.is_empty(), "refused before any work");
         assert!(
             snapshot(&base) == before,
