@@ -82,3 +82,18 @@ fn camera_round_trips_and_is_validated() {
         assert!(!e.is_empty(), "{bad}");
     }
 }
+
+#[test]
+fn colmap_model_and_registration_round_trip() {
+    use eopnp::colmap::{read_model, register_image, Model, Registration};
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-boxes");
+    let model = read_model(dir).unwrap();
+    let back: Model = round_trip(&model);
+    assert_eq!(back, model);
+    let id = *model.images.keys().next().unwrap();
+    let reg = register_image(&model, id, &Solver::default(), Some(&Ransac::default())).unwrap();
+    let back: Registration = round_trip(&reg);
+    assert_eq!(back.solution, reg.solution);
+    assert_eq!(back.ransac, reg.ransac);
+    assert_eq!(back.rotation_error_deg, reg.rotation_error_deg);
+}

@@ -10,6 +10,48 @@
 //! Every reader is bounded and panic-free on any input: a count field can only claim as many
 //! records as the remaining bytes can hold, and every error carries the file name and the
 //! line number (text) or byte offset (binary) with the reason.
+//!
+//! ```
+//! use eopnp::colmap::{parse_model_text, read_model, register_image, write_model, ModelFormat};
+//! use eopnp::ransac::Ransac;
+//! use eopnp::Solver;
+//! use nalgebra::{Point3, UnitQuaternion, Vector3};
+//!
+//! // A small model: one PINHOLE camera, ten 3D points, one image that observes them all.
+//! let (f, cx, cy) = (800.0, 320.0, 240.0);
+//! let points: Vec<Point3<f64>> = (0..10)
+//!     .map(|i| Point3::new((i % 3) as f64 - 1.0, (i % 4) as f64 * 0.5 - 0.7, (i % 5) as f64 * 0.3))
+//!     .collect();
+//! let q = UnitQuaternion::from_euler_angles(0.1, -0.2, 0.3);
+//! let t = Vector3::new(0.1, -0.2, 6.0);
+//! let mut obs = String::new();
+//! for (k, x) in points.iter().enumerate() {
+//!     let p = q * x + t;
+//!     obs += &format!("{} {} {} ", f * p.x / p.z + cx, f * p.y / p.z + cy, k + 1);
+//! }
+//! let (w, v) = (q.quaternion().w, q.quaternion().imag());
+//! let cameras = format!("1 PINHOLE 640 480 {f} {f} {cx} {cy}\n");
+//! let images = format!("1 {w} {} {} {} {} {} {} 1 view.png\n{obs}\n", v.x, v.y, v.z, t.x, t.y, t.z);
+//! let points3d: String = points
+//!     .iter()
+//!     .enumerate()
+//!     .map(|(k, x)| format!("{} {} {} {} 200 200 200 0.5 1 {k}\n", k + 1, x.x, x.y, x.z))
+//!     .collect();
+//! let model = parse_model_text(cameras.as_bytes(), images.as_bytes(), points3d.as_bytes())?;
+//!
+//! // Re-estimate the image's pose from its correspondences alone, plain and with RANSAC.
+//! let plain = register_image(&model, 1, &Solver::default(), None)?;
+//! let robust = register_image(&model, 1, &Solver::default(), Some(&Ransac::default()))?;
+//! assert!(plain.rotation_error_deg < 1e-9 && plain.rmse_px < 1e-6);
+//! assert_eq!(robust.inliers, 10);
+//!
+//! // Write it (atomically) and read it back.
+//! let dir = std::env::temp_dir().join(format!("eopnp-colmap-doc-{}", std::process::id()));
+//! write_model(&model, &dir, ModelFormat::Binary)?;
+//! assert_eq!(read_model(&dir)?, model);
+//! std::fs::remove_dir_all(&dir)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 mod binary;
 mod model;

@@ -11,6 +11,7 @@ use crate::camera::Camera;
 use crate::PnpError;
 
 /// An image of the reconstruction: its pose, camera and 2D observations.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
     /// Image id.
@@ -38,6 +39,7 @@ impl Image {
 }
 
 /// A triangulated 3D point.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point3D {
     /// Point id.
@@ -53,6 +55,7 @@ pub struct Point3D {
 }
 
 /// A COLMAP sparse reconstruction.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Model {
     /// Cameras by id.

@@ -11,6 +11,7 @@ use crate::ransac::{Ransac, RansacStats};
 use crate::{Solution, Solver};
 
 /// The result of [`register_image`].
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug)]
 #[non_exhaustive]
 pub struct Registration {
@@ -79,19 +80,7 @@ pub(crate) fn pixel_rmse(
 /// adjustment minimises), or robustly by [`Ransac::estimate_pixels`] with `solver` for the
 /// local optimisation and the final fit. The time reported includes the undistortion.
 ///
-/// ```
-/// use eopnp::colmap::{read_model, register_image};
-/// use eopnp::ransac::Ransac;
-/// use eopnp::Solver;
-///
-/// let model = read_model(concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-boxes"))?;
-/// let id = *model.images.keys().next().unwrap();
-/// let plain = register_image(&model, id, &Solver::default(), None)?;
-/// let robust = register_image(&model, id, &Solver::default(), Some(&Ransac::default()))?;
-/// assert!(plain.rotation_error_deg < 0.01 && robust.rotation_error_deg < 0.01);
-/// assert!(robust.ransac.is_some());
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
+/// See the [module documentation](super) for a runnable example.
 ///
 /// # Errors
 /// [`RegisterError`] for an unknown image or camera and for solver failures (e.g. fewer than
