@@ -278,6 +278,7 @@ fn sturm_count_below(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
 /// is not (numerically) positive definite, including NaN entries.
 // Index loops mirror the textbook factorisation; `!(s > 0.0)` deliberately rejects NaN.
 #[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+#[inline]
 pub(crate) fn solve_damped6(h: &[[f64; 6]; 6], lam: f64, g: &[f64; 6]) -> Option<[f64; 6]> {
     let mut l = [[0.0; 6]; 6];
     for j in 0..6 {

@@ -33,6 +33,7 @@ pub(crate) struct Svd3 {
 /// accurate to about `eps * s[0]`. `u`'s third column is `+-(u0 x u1)` (sign chosen to match
 /// the data), so `u` is orthogonal even when singular values are zero. Returns `None` if an
 /// entry is not finite. The zero matrix gives `s = 0`, `u = v = I`.
+#[inline]
 pub(crate) fn svd3(a: &Matrix3<f64>) -> Option<Svd3> {
     let (cols, vcols, nrm, scale) = jacobi3::<true>(a)?;
     let Some(scale) = scale else {
@@ -331,6 +332,7 @@ pub(crate) fn sym_eigen3(a: &Matrix3<f64>) -> Option<(Vector3<f64>, Matrix3<f64>
 /// `eps / 8 * |H|_F`). The trigonometric closed form is not used: it loses accuracy to
 /// `~sqrt(eps) |H|` when two eigenvalues nearly coincide (acos near +-1), which would leave
 /// `H + shift I` indefinite. NaN for non-finite input.
+#[inline]
 pub(crate) fn min_eigenvalue_sym3(h: &Matrix3<f64>) -> f64 {
     let scale = h.amax();
     if scale == 0.0 || !scale.is_finite() {
@@ -375,6 +377,7 @@ pub(crate) fn min_eigenvalue_sym3(h: &Matrix3<f64>) -> f64 {
 
 /// Cholesky factor `L` (lower) of a symmetric 3 x 3 matrix; `None` unless positive definite
 /// (every pivot > 0 and finite).
+#[inline]
 pub(crate) fn cholesky3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     let mut l = Matrix3::<f64>::zeros();
     for j in 0..3 {
@@ -399,6 +402,7 @@ pub(crate) fn cholesky3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
 }
 
 /// Solve `L L^T x = b`.
+#[inline]
 pub(crate) fn cholesky3_solve(l: &Matrix3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
     let mut y = Vector3::zeros();
     for i in 0..3 {
@@ -421,6 +425,7 @@ pub(crate) fn cholesky3_solve(l: &Matrix3<f64>, b: &Vector3<f64>) -> Vector3<f64
 
 /// Reciprocal condition number of a 3x3 matrix (smallest / largest singular value; 0 for a
 /// zero or non-finite matrix). Uses `svd3`'s singular values: nalgebra's 3x3 SVD squares the singular values.
+#[inline]
 pub(crate) fn rcond3(m: &Matrix3<f64>) -> f64 {
     match singular_values3(m) {
         Some(s) if s[0] > 0.0 => s[2] / s[0],
@@ -438,6 +443,7 @@ pub(crate) fn rcond3(m: &Matrix3<f64>) -> f64 {
 /// must be below `NULL_VECTOR_TOL`, i.e. the cross product agrees with the singular vector to
 /// rounding level. Otherwise (rank below 2, or `s3` not negligible against `s2`) the SVD
 /// decides ([`smallest_right_singular_vector`]). `None` if an entry is not finite.
+#[inline]
 pub(crate) fn null_vector3(m: &Matrix3<f64>) -> Option<Vector3<f64>> {
     const NULL_VECTOR_TOL: f64 = 1e-13;
     let r: [Vector3<f64>; 3] = std::array::from_fn(|i| m.row(i).transpose());
