@@ -3,6 +3,7 @@
 mod experiment;
 pub mod input;
 mod register;
+mod report;
 
 use std::io::Write;
 use std::path::PathBuf;

@@ -1,0 +1,205 @@
+//! The derivative-sequence method of [`super::real_roots`]: the real roots of each derivative
+//! bracket those of the one below, each root found by safeguarded Halley/Newton steps with
+//! bisection (see the module documentation of [`super`]).
+
+use super::{sgn, Poly, Roots, EPS, MAX_DEGREE};
+use crate::numeric::bounds::{Bound, Budget};
+
+/// The next trial point strictly inside (lo, hi): 0 if the bracket straddles it, the geometric
+/// mean if it spans more than a factor 2 on one side of 0, else the midpoint.
+#[inline]
+fn split(lo: f64, hi: f64) -> f64 {
+    if lo < 0.0 && hi > 0.0 {
+        return 0.0;
+    }
+    if lo >= 0.0 {
+        let l = lo.max(f64::MIN_POSITIVE);
+        if hi > 2.0 * l {
+            return (l.sqrt()) * (hi.sqrt());
+        }
+    } else {
+        let h = (-hi).max(f64::MIN_POSITIVE);
+        if -lo > 2.0 * h {
+            return -((h.sqrt()) * ((-lo).sqrt()));
+        }
+    }
+    lo + 0.5 * (hi - lo)
+}
+
+/// The root of `q` in the bracket (lo, hi), where q has (computed) sign `s_lo` at lo and the
+/// opposite sign at hi, by safeguarded Halley/Newton steps started at `x0` (if inside). Halley's
+/// step (cubic convergence) costs one more Horner chain than Newton's and saves about one
+/// iteration per root from the usual quadratic-model start. Returns the iterate
+/// with the smallest |q|. Stops when |q(x)| <= eps sum |c_i| |x|^i (below Horner's error bound:
+/// further iterations only chase rounding noise), when a step is below half an ulp, or when
+/// lo and hi are adjacent floats.
+fn bracket(q: &Poly, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f64 {
+    let mut x = if x0 > lo && x0 < hi {
+        x0
+    } else {
+        split(lo, hi)
+    };
+    let mut best_x = x;
+    let mut best_f = f64::INFINITY;
+    let mut step_old = f64::INFINITY;
+    let mut step = f64::INFINITY;
+    let mut iters = Budget::new(Bound::RootBracket);
+    while iters.next() {
+        let (f, d, h, s) = q.eval_d2_abs(x);
+        if f.abs() < best_f {
+            best_f = f.abs();
+            best_x = x;
+        }
+        if f.abs() <= EPS * s {
+            return x;
+        }
+        if sgn(f) == s_lo {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        // Halley's step (cubic convergence; h = q''/2): x - f d / (d^2 - f h), Newton's if the
+        // denominator is not safely positive.
+        let den = d * d - f * h;
+        let xn = if den > 0.5 * d * d {
+            x - f * d / den
+        } else {
+            x - f / d
+        };
+        let dx = (xn - x).abs();
+        // The step is taken when it stays inside the bracket and either halves the step before
+        // last (rtsafe's progress test) or is already tiny (quadratic regime: rounding noise in
+        // f must not force bisection of a wide bracket).
+        let newton_ok =
+            xn.is_finite() && xn > lo && xn < hi && (dx < 0.5 * step_old || dx <= 1e-8 * x.abs());
+        step_old = step;
+        let next = if newton_ok {
+            xn
+        } else {
+            let m = split(lo, hi);
+            if !(m > lo && m < hi) {
+                break; // lo and hi are adjacent floats
+            }
+            m
+        };
+        step = (next - x).abs();
+        if next == x {
+            break;
+        }
+        // A (Halley or Newton) step below half an ulp of x: x is the correctly rounded root up to the
+        // rounding of q; keep the better of x and its neighbour.
+        if newton_ok && step <= 0.5 * EPS * x.abs() {
+            let fnx = q.eval(next);
+            if fnx.abs() < best_f {
+                best_x = next;
+            }
+            break;
+        }
+        x = next;
+    }
+    best_x
+}
+
+/// Real roots of `q` given the sorted real roots `crit` of `q'` (all inside +-bound).
+/// Returns the roots (ascending) and, for each critical point, nothing: callers that need to
+/// know whether a critical point is a root test it again.
+fn roots_between(q: &Poly, crit: &[f64], bound: f64) -> Roots {
+    let mut out = Roots::default();
+    let lead = sgn(q.c[q.n]);
+    let s_minf = if q.n & 1 == 0 { lead } else { -lead };
+    let s_pinf = lead;
+    let mut prev_x = -bound;
+    let mut prev_s = s_minf;
+    let mut prev_zero = false;
+    // Quadratic model at the previous critical point: q(x) ~ f + f2 (x - c)^2 / 2, whose root
+    // c +- sqrt(2 |f / f2|) is the starting guess on either side (exact for a parabola).
+    let mut prev_reach = f64::NAN;
+    let mut prev_f = f64::INFINITY;
+    for &x in crit {
+        if !(x > prev_x && x < bound) {
+            continue;
+        }
+        let (f, _, h, s) = q.eval_d2_abs(x);
+        let f2 = 2.0 * h;
+        let z = q.negligible_with(f, s);
+        let reach = (2.0 * (f / f2).abs()).sqrt();
+        if !prev_zero && !z && sgn(f) != prev_s {
+            let x0 = if f.abs() <= prev_f.abs() || prev_reach.is_nan() {
+                x - reach
+            } else {
+                prev_x + prev_reach
+            };
+            out.push(bracket(q, prev_x, x, prev_s, x0));
+        }
+        if z {
+            out.push(x);
+        }
+        prev_x = x;
+        prev_s = sgn(f);
+        prev_zero = z;
+        prev_reach = reach;
+        prev_f = f;
+    }
+    if !prev_zero && s_pinf != prev_s {
+        out.push(bracket(q, prev_x, bound, prev_s, prev_x + prev_reach));
+    }
+    out
+}
+
+/// The full solver on a prepared polynomial. `imag_tol > 0` adds near-real roots.
+pub(super) fn solve_prepared(p: &Poly, zero_root: bool, imag_tol: f64) -> Roots {
+    let mut out = Roots::default();
+    if p.n == 0 {
+        if zero_root {
+            out.push(0.0);
+        }
+        return out;
+    }
+    let n = p.n;
+    // Derivative sequence d[k] = p^(k), k = 0..n-1 (d[n-1] is linear).
+    let mut d = [*p; MAX_DEGREE];
+    for k in 1..n {
+        d[k] = d[k - 1].derivative();
+    }
+    let bound = p.root_bound();
+    // Roots of the linear level.
+    let lin = &d[n - 1];
+    let mut cur = Roots::default();
+    cur.push(-lin.c[0] / lin.c[1]);
+    let mut crit = Roots::default(); // roots of p' once the loop is done
+    for k in (0..n - 1).rev() {
+        crit = cur;
+        cur = roots_between(&d[k], crit.as_slice(), bound);
+    }
+    out = cur;
+    if n == 1 {
+        crit = Roots::default();
+    }
+    // The exact zero root first, so that the capacity can only ever cut near-real extras.
+    if zero_root {
+        out.push(0.0);
+    }
+    // Near-real roots from the critical points of p (T8).
+    if imag_tol > 0.0 && n >= 2 {
+        let found = out;
+        for &x in &crit {
+            let tol = imag_tol * (1.0 + x.abs());
+            let (f, _, h, s) = p.eval_d2_abs(x);
+            let f2 = 2.0 * h;
+            if p.negligible_with(f, s) || found.iter().any(|&r| (r - x).abs() <= tol) {
+                continue; // already a root
+            }
+            // Same signs of p and p'': a complex pair x +- i b (opposite signs: a real pair,
+            // already found by the bracketing).
+            if f == 0.0 || f2 == 0.0 || (f > 0.0) != (f2 > 0.0) {
+                continue;
+            }
+            let b = (2.0 * (f / f2)).sqrt();
+            if b <= tol {
+                out.push(x);
+            }
+        }
+    }
+    out.sort_dedup();
+    out
+}
