@@ -9,7 +9,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg64;
 
-use crate::colmap::{Model, RegisterError, Registration};
+use crate::colmap::{pixel_rmse, Model, RegisterError, Registration};
 use crate::robust::ransac::{index, Ransac, RansacSolution};
 use crate::{Solution, Solver};
 
@@ -150,25 +150,14 @@ pub(crate) fn registration(
     let r = solution.rotation;
     let t = solution.pose.translation.vector;
     let rmse = |r: &Matrix3<f64>, t: &Vector3<f64>| {
-        let (mut s, mut k) = (0.0, 0usize);
-        for ((x, px), ok) in problem
-            .world
-            .iter()
-            .zip(&problem.pixels)
-            .zip(&problem.truth)
-        {
-            if *ok {
-                let p = r * x.coords + t;
-                let q = cam.project(Point2::new(p.x / p.z, p.y / p.z));
-                s += (q - px).norm_squared();
-                k += 1;
-            }
-        }
-        if k == 0 {
-            f64::NAN
-        } else {
-            (s / k as f64).sqrt()
-        }
+        pixel_rmse(
+            cam,
+            &problem.world,
+            &problem.pixels,
+            Some(&problem.truth),
+            r,
+            t,
+        )
     };
     Ok(Registration {
         image_id,
