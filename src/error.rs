@@ -112,7 +112,7 @@ pub enum PnpError {
     /// No candidate rotation survived (numerical failure); not observed on valid input.
     NoSolution,
     /// A [`crate::ransac::Ransac`] option is outside its range: `threshold_px` must be finite
-    /// and > 0, `confidence` in (0, 1), `max_iterations` >= 1, `final_threshold_factor` finite
+    /// and > 0 with a normal square, `confidence` in (0, 1), `max_iterations` >= 1, `final_threshold_factor` finite
     /// and >= 1; or the focal lengths given to [`crate::ransac::Ransac::estimate`] are not
     /// finite and > 0 (`"focal"`).
     InvalidOption {
@@ -159,7 +159,7 @@ impl fmt::Display for PnpError {
             ),
             PnpError::InvalidOption { option } => {
                 let range = match *option {
-                    "threshold_px" => "a finite number of pixels > 0",
+                    "threshold_px" => "a finite number of pixels > 0 whose square is a normal number (above about 1e-154)",
                     "confidence" => "a probability strictly between 0 and 1",
                     "max_iterations" => "at least 1",
                     "final_threshold_factor" => "finite and >= 1",

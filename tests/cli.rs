@@ -228,6 +228,21 @@ fn unsupported_camera_and_missing_model_are_input_errors() {
 }
 
 #[test]
+fn ransac_thresholds_whose_square_is_not_normal_are_input_errors() {
+    let model = data("colmap-boxes");
+    for t in ["1e-160", "1e160", "0", "nan"] {
+        let o = eopnp(&[
+            "register",
+            model.to_str().unwrap(),
+            "--ransac",
+            "--threshold",
+            t,
+        ]);
+        assert_input_error(&o, &["--threshold"]);
+    }
+}
+
+#[test]
 fn malformed_model_reports_file_and_line() {
     let dir =
         Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-model-{}", std::process::id()));

@@ -74,6 +74,15 @@ fn options_out_of_range_are_typed_errors() {
     let cases = [
         (Ransac::default().threshold_px(0.0), "threshold_px"),
         (Ransac::default().threshold_px(f64::NAN), "threshold_px"),
+        // Squares that underflow (to a subnormal or 0) or overflow.
+        (Ransac::default().threshold_px(1e-160), "threshold_px"),
+        (Ransac::default().threshold_px(1e160), "threshold_px"),
+        (
+            Ransac::default()
+                .threshold_px(1e150)
+                .final_threshold_factor(1e10),
+            "final_threshold_factor",
+        ),
         (Ransac::default().confidence(1.0), "confidence"),
         (Ransac::default().confidence(-0.5), "confidence"),
         (Ransac::default().max_iterations(0), "max_iterations"),

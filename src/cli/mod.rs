@@ -141,9 +141,13 @@ impl Default for RegisterOptions {
 impl RegisterOptions {
     /// Checks the values clap cannot.
     fn validate(&self) -> Result<(), Failure> {
-        if !(self.threshold.is_finite() && self.threshold > 0.0) {
+        // RANSAC compares squared errors with the squared threshold, which must be a normal
+        // number (as `Ransac` checks).
+        let t2 = self.threshold * self.threshold;
+        if !(self.threshold.is_finite() && self.threshold > 0.0 && t2.is_normal()) {
             return Err(Failure::input(format!(
-                "--threshold must be a positive number of pixels, got {}",
+                "--threshold must be a positive number of pixels whose square is a normal \
+                 number (between about 1e-154 and 1e154), got {}",
                 self.threshold
             )));
         }

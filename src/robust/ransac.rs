@@ -228,7 +228,10 @@ impl Ransac {
     /// [`PnpError::InvalidOption`] for the first option out of its range.
     fn check(&self) -> Result<(), PnpError> {
         let bad = |option| Err(PnpError::InvalidOption { option });
-        if !(self.threshold_px.is_finite() && self.threshold_px > 0.0) {
+        // The scores compare squared errors with the squared threshold: it must be a normal
+        // number (a threshold below about 1e-154 px squares to a subnormal or to 0).
+        let th2 = self.threshold_px * self.threshold_px;
+        if !(self.threshold_px.is_finite() && self.threshold_px > 0.0 && th2.is_normal()) {
             return bad("threshold_px");
         }
         if !(self.confidence > 0.0 && self.confidence < 1.0) {
@@ -237,7 +240,11 @@ impl Ransac {
         if self.max_iterations == 0 {
             return bad("max_iterations");
         }
-        if !(self.final_threshold_factor.is_finite() && self.final_threshold_factor >= 1.0) {
+        let final_th = self.threshold_px * self.final_threshold_factor;
+        if !(self.final_threshold_factor.is_finite()
+            && self.final_threshold_factor >= 1.0
+            && (final_th * final_th).is_normal())
+        {
             return bad("final_threshold_factor");
         }
         Ok(())
