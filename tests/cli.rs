@@ -366,3 +366,103 @@ fn csv_errors_name_line_and_field() {
     let o = eopnp_stdin(&["solve", "-", camera[0], camera[1]], b"x;y;X;Z\n1;2;3;4\n");
     assert_input_error(&o, &["<stdin>:1:", "missing column Y"]);
 }
+
+#[test]
+fn degenerate_correspondences_and_a_file_as_model_are_input_errors() {
+    // Collinear world points: the input cannot determine a pose (exit 2, not 1).
+    let mut csv = String::from("x,y,X,Y,Z\n");
+    for k in 0..8 {
+        let t = k as f64;
+        csv += &format!(
+            "{},{},{},{},{}\n",
+            300.0 + 3.0 * t,
+            200.0 + 2.0 * t,
+            t,
+            2.0 * t,
+            5.0
+        );
+    }
+    let p = scratch_file("collinear.csv", &csv);
+    let o = eopnp(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--camera",
+        "PINHOLE 800 800 320 240",
+    ]);
+    assert_input_error(&o, &["collinear"]);
+    // A file given as the model directory.
+    let f = data("colmap-boxes").join("cameras.txt");
+    let o = eopnp(&["register", f.to_str().unwrap()]);
+    assert_input_error(&o, &["not a directory"]);
+}
+
+#[test]
+fn image_names_reach_the_terminal_escaped() {
+    // A copy of the bundled model whose first image name carries an escape sequence and a bell.
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model-with-escapes");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = data("colmap-boxes");
+    for f in ["cameras.txt", "points3D.txt"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let images = std::fs::read_to_string(src.join("images.txt")).unwrap();
+    let mut done = false;
+    let mut out = String::new();
+    for line in images.lines() {
+        let fields: Vec<&str> = line.split(' ').collect();
+        // The first record line is an image line: nine numbers, then the name (with spaces).
+        if !done && !line.starts_with('#') && fields.len() >= 10 {
+            out += &fields[..9].join(" ");
+            out += " \u{1b}[31mred\u{7}.jpg\n";
+            done = true;
+        } else {
+            out += line;
+            out.push('\n');
+        }
+    }
+    assert!(done);
+    std::fs::write(dir.join("images.txt"), out).unwrap();
+    let o = eopnp(&["register", dir.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        !text.contains('\u{1b}') && !text.contains('\u{7}'),
+        "{text}"
+    );
+    assert!(text.contains("\\u{1b}[31mred\\u{7}.jpg"), "{text}");
+}
+
+#[test]
+fn export_problems_never_writes_into_the_input_model() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model-export-target");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = data("colmap-boxes");
+    for f in ["cameras.txt", "images.txt", "points3D.txt"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let before = std::fs::read(dir.join("images.txt")).unwrap();
+    for target in [dir.join("images.txt"), dir.join("new.json")] {
+        let o = eopnp(&[
+            "register",
+            dir.to_str().unwrap(),
+            "--export-problems",
+            target.to_str().unwrap(),
+        ]);
+        assert_input_error(&o, &["--export-problems", "input model"]);
+    }
+    assert_eq!(std::fs::read(dir.join("images.txt")).unwrap(), before);
+    assert!(!dir.join("new.json").exists());
+    // Elsewhere it is written whole.
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("exported-problems.json");
+    let o = eopnp(&[
+        "register",
+        dir.to_str().unwrap(),
+        "--export-problems",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(v["images"].as_array().unwrap().len(), 6);
+}

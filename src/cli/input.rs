@@ -4,6 +4,7 @@ use std::io::Read;
 use std::path::Path;
 
 use crate::camera::Camera;
+use crate::PnpError;
 use crate::Solver;
 use nalgebra::{Point2, Point3};
 use serde::Deserialize;
@@ -485,7 +486,15 @@ pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
     }
     let sol = solver
         .solve_pixels(&p.world, &p.pixels, &p.camera)
-        .map_err(|e| Failure::solver(format!("no pose: {e}")))?;
+        .map_err(|e| {
+            // Degenerate or malformed input is the input's problem (exit 2); only a numerical
+            // failure on valid input is the solver's (exit 1).
+            let message = format!("no pose: {e}");
+            match e {
+                PnpError::NoSolution => Failure::solver(message),
+                _ => Failure::input(message),
+            }
+        })?;
 
     let r = sol.rotation;
     let t = sol.pose.translation.vector;

@@ -214,6 +214,21 @@ impl Failure {
     }
 }
 
+/// `s` for the terminal: control and other invisible characters escaped as Rust escapes
+/// them (`\u{1b}`, `\t`, `\u{200b}`), everything else as it is. For names read from input
+/// files (COLMAP image names, paths), so that no escape sequence reaches the terminal raw.
+pub(crate) fn escaped(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if matches!(c, '\\' | '"' | '\'') || c.escape_debug().count() == 1 {
+            out.push(c);
+        } else {
+            out.extend(c.escape_debug());
+        }
+    }
+    out
+}
+
 /// Writes `text` to stdout; a closed pipe (e.g. `| head`) is not an error.
 pub(crate) fn emit(text: &str) -> Result<(), Failure> {
     let mut out = std::io::stdout().lock();

@@ -292,6 +292,60 @@ fn written_line(w: &Written, total: usize) -> String {
     s
 }
 
+/// `--export-problems FILE` must not resolve into the input model's directory (it could
+/// replace one of the model's own files).
+fn check_export(input: &Path, file: &Path) -> Result<(), Failure> {
+    let bad = |why: &str| {
+        Failure::input(format!(
+            "--export-problems {}: {why}",
+            super::escaped(&file.display().to_string())
+        ))
+    };
+    let input_c = std::fs::canonicalize(input).map_err(|e| bad(&e.to_string()))?;
+    let Some(name) = file.file_name() else {
+        return Err(bad("not a file name"));
+    };
+    let parent = match file.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let parent_c =
+        std::fs::canonicalize(parent).map_err(|_| bad("its parent directory does not exist"))?;
+    let target = parent_c.join(name);
+    // A symbolic link at the target is followed, as the write would follow it.
+    let target = std::fs::canonicalize(&target).unwrap_or(target);
+    if target.starts_with(&input_c) {
+        return Err(bad(
+            "is inside the input model's directory (refusing to write over the input)",
+        ));
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename: a
+/// failure leaves no partial file and the previous content of `path`, if any, unchanged.
+fn write_file_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write as _;
+    let name = path
+        .file_name()
+        .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "no file name"))?;
+    let tmp = path.with_file_name(format!(
+        ".{}.tmp-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
 pub(crate) fn run(
     dir: &Path,
     opts: &RegisterOptions,
@@ -312,7 +366,8 @@ pub(crate) fn run(
         check_output(dir, &out.dir)?;
     }
     if let Some(path) = &opts.export_problems {
-        std::fs::write(path, export_problems(&model, opts))
+        check_export(dir, path)?;
+        write_file_atomically(path, export_problems(&model, opts).as_bytes())
             .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
     }
 

@@ -183,7 +183,7 @@ pub(super) fn to_table(
             model.points.len(),
         );
     }
-    let label = |id: &u32, name: &str| format!("{id} {name}");
+    let label = |id: &u32, name: &str| format!("{id} {}", super::escaped(name));
     let wname = rows
         .iter()
         .map(|(id, name, _, _)| label(id, name).chars().count())

@@ -99,6 +99,10 @@ pub fn detect_format(dir: &Path) -> Result<ModelFormat, ModelError> {
             "not a COLMAP model: expected cameras.txt, images.txt and points3D.txt (text \
              format) or cameras.bin, images.bin and points3D.bin (binary format)"
                 .to_string()
+        } else if dir.exists() {
+            "not a directory: a COLMAP model is a directory holding cameras, images and \
+             points3D files"
+                .to_string()
         } else {
             "no such directory".to_string()
         };
