@@ -141,3 +141,26 @@ fn no_consensus_is_reported_with_the_sample_count() {
         other => panic!("expected NoConsensus, got {other:?}"),
     }
 }
+
+#[test]
+fn clean_problems_with_four_and_five_points_are_solved() {
+    use eopnp_testkit::{Problem, ProblemOptions, RotationKind, Scene};
+    for n in [4, 5] {
+        for seed in 0..20 {
+            let p = Problem::generate(&ProblemOptions {
+                n,
+                sigma_px: 0.0,
+                scene: Scene::General,
+                rotation: RotationKind::Uniform,
+                seed,
+            });
+            let sol = Ransac::default()
+                .seed(seed)
+                .estimate(&Solver::default(), &p.world, &p.image, (800.0, 800.0), None)
+                .unwrap_or_else(|e| panic!("N = {n}, seed {seed}: {e}"));
+            assert_eq!(sol.num_inliers, n, "N = {n}, seed {seed}");
+            let err = eopnp::metrics::rotation_error_deg(&sol.solution.rotation, &p.r_gt);
+            assert!(err < 1e-6, "N = {n}, seed {seed}: {err:e} deg");
+        }
+    }
+}

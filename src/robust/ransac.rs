@@ -84,7 +84,8 @@ const SPRT_DELTA0: f64 = 0.05;
 /// `delta` = 0.002); below about 9 % inliers the adaptive count exceeds the default
 /// [`Ransac::max_iterations`] anyway.
 const SPRT_EPS_MIN: f64 = 0.1;
-/// EOPnP needs four points; local optimisation also wants more than the sample itself.
+/// Inliers an EOPnP fit needs: EOPnP needs four points, and local optimisation wants more than
+/// the three of the sample; a problem with fewer points (N = 4, 5) needs all of them.
 const MIN_FIT_POINTS: usize = 6;
 
 /// RANSAC options. `Ransac::default()` is the recommended configuration; the fields can also

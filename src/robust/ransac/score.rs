@@ -138,7 +138,9 @@ impl Problem<'_> {
                 buf.weights.push(self.weights[i]);
             }
         }
-        if buf.world.len() < MIN_FIT_POINTS {
+        // At least MIN_FIT_POINTS inliers, or every point of a smaller problem (EOPnP needs 4;
+        // a clean N = 4 or 5 problem is then fitted on all of its points).
+        if buf.world.len() < MIN_FIT_POINTS.min(self.world.len()) {
             return None;
         }
         solver
