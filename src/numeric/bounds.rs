@@ -6,7 +6,7 @@
 //! plain counter against the bound's constant. In test builds the limit of any [`Bound`] can
 //! be lowered for the current thread ([`hook::with_limit`]) and every exhausted budget is
 //! counted, so that each routine's behaviour *at* its bound (a defined result, never a panic,
-//! a hang or a silent wrong pose) has a test (`bounds/tests.rs`).
+//! a hang or a silent wrong pose) has a test (`tests/unit/numeric/bounds.rs`).
 //!
 //! The user-configurable bounds (S6 `newton_iterations`, S9 `reprojection_iterations`,
 //! RANSAC `max_iterations`) are reached by setting the option; their tests are there too.
