@@ -466,3 +466,45 @@ fn export_problems_never_writes_into_the_input_model() {
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
     assert_eq!(v["images"].as_array().unwrap().len(), 6);
 }
+
+#[test]
+fn observations_left_out_by_undistortion_are_shown_in_the_table() {
+    // A copy of the bundled model whose first observation of the first image lies where the
+    // lens model cannot be inverted (x = 1e12 px).
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model-with-far-pixel");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = data("colmap-boxes");
+    for f in ["cameras.txt", "points3D.txt"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let images = std::fs::read_to_string(src.join("images.txt")).unwrap();
+    let mut out = String::new();
+    let mut records = 0;
+    for line in images.lines() {
+        if line.starts_with('#') {
+            out += line;
+        } else {
+            records += 1;
+            if records == 2 {
+                // The first image's observations: "x y point3d_id ...", the first one with a
+                // 3D point is moved.
+                let mut f: Vec<String> = line.split(' ').map(str::to_string).collect();
+                let k = (0..f.len() / 3).find(|k| f[3 * k + 2] != "-1").unwrap();
+                f[3 * k] = "1e12".to_string();
+                out += &f.join(" ");
+            } else {
+                out += line;
+            }
+        }
+        out.push('\n');
+    }
+    std::fs::write(dir.join("images.txt"), out).unwrap();
+    let o = eopnp(&["register", dir.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("1 observation(s) left out: their pixel could not be undistorted"),
+        "{}",
+        stdout(&o)
+    );
+}

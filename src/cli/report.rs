@@ -221,6 +221,14 @@ pub(super) fn to_table(
                     rmse,
                     r.micros
                 );
+                if r.skipped > 0 {
+                    let _ = writeln!(
+                        s,
+                        "{:<wname$}  {} observation(s) left out: their pixel could not be \
+                         undistorted",
+                        "", r.skipped
+                    );
+                }
                 if let Some(e) = extra {
                     if let Some(f) = &e.floor {
                         floor_r = floor_r.max(f.rotation_error_deg);
