@@ -196,7 +196,7 @@ fn soak_ci_size() {
 /// [`soak`] at once): no typed error on a non-degenerate input, and on the problems with
 /// N <= 20, where failures happen, no more than 10 % more rotation errors above 5 degrees than
 /// LM started at the ground truth (measured: 1,249 vs 1,171 at 20,000 problems, 12,814 vs
-/// 11,998 at 200,000, 64,720 vs 60,519 at 1,000,000: 6.6-7.0 % more).
+/// 11,998 at 200,000, 64,720 vs 60,519 at 1,000,000: 6.7-6.9 % more).
 fn assert_headline(t: &Tally) {
     assert_eq!(
         t.errors_nondegenerate, 0,
