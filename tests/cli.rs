@@ -57,6 +57,21 @@ fn scratch_file(name: &str, contents: &str) -> PathBuf {
     p
 }
 
+/// A fresh copy of the bundled text model in the test's scratch directory `name`, with its
+/// `images.txt` passed through `edit_images`.
+fn model_copy(name: &str, edit_images: impl Fn(&str) -> String) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = data("colmap-boxes");
+    for f in ["cameras.txt", "points3D.txt"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let images = std::fs::read_to_string(src.join("images.txt")).unwrap();
+    std::fs::write(dir.join("images.txt"), edit_images(&images)).unwrap();
+    dir
+}
+
 /// Asserts a clean input-error exit: code 2, the message on stderr, no panic.
 fn assert_input_error(o: &Output, needles: &[&str]) {
     let err = stderr(o);
@@ -399,30 +414,24 @@ fn degenerate_correspondences_and_a_file_as_model_are_input_errors() {
 #[test]
 fn image_names_reach_the_terminal_escaped() {
     // A copy of the bundled model whose first image name carries an escape sequence and a bell.
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model-with-escapes");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let src = data("colmap-boxes");
-    for f in ["cameras.txt", "points3D.txt"] {
-        std::fs::copy(src.join(f), dir.join(f)).unwrap();
-    }
-    let images = std::fs::read_to_string(src.join("images.txt")).unwrap();
-    let mut done = false;
-    let mut out = String::new();
-    for line in images.lines() {
-        let fields: Vec<&str> = line.split(' ').collect();
-        // The first record line is an image line: nine numbers, then the name (with spaces).
-        if !done && !line.starts_with('#') && fields.len() >= 10 {
-            out += &fields[..9].join(" ");
-            out += " \u{1b}[31mred\u{7}.jpg\n";
-            done = true;
-        } else {
-            out += line;
-            out.push('\n');
+    let dir = model_copy("model-with-escapes", |images| {
+        let mut done = false;
+        let mut out = String::new();
+        for line in images.lines() {
+            let fields: Vec<&str> = line.split(' ').collect();
+            // The first record line is an image line: nine numbers, then the name (with spaces).
+            if !done && !line.starts_with('#') && fields.len() >= 10 {
+                out += &fields[..9].join(" ");
+                out += " \u{1b}[31mred\u{7}.jpg\n";
+                done = true;
+            } else {
+                out += line;
+                out.push('\n');
+            }
         }
-    }
-    assert!(done);
-    std::fs::write(dir.join("images.txt"), out).unwrap();
+        assert!(done);
+        out
+    });
     let o = eopnp(&["register", dir.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let text = stdout(&o);
@@ -435,13 +444,7 @@ fn image_names_reach_the_terminal_escaped() {
 
 #[test]
 fn export_problems_never_writes_into_the_input_model() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model-export-target");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let src = data("colmap-boxes");
-    for f in ["cameras.txt", "images.txt", "points3D.txt"] {
-        std::fs::copy(src.join(f), dir.join(f)).unwrap();
-    }
+    let dir = model_copy("model-export-target", str::to_string);
     let before = std::fs::read(dir.join("images.txt")).unwrap();
     for target in [dir.join("images.txt"), dir.join("new.json")] {
         let o = eopnp(&[
@@ -471,35 +474,29 @@ fn export_problems_never_writes_into_the_input_model() {
 fn observations_left_out_by_undistortion_are_shown_in_the_table() {
     // A copy of the bundled model whose first observation of the first image lies where the
     // lens model cannot be inverted (x = 1e12 px).
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("model-with-far-pixel");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let src = data("colmap-boxes");
-    for f in ["cameras.txt", "points3D.txt"] {
-        std::fs::copy(src.join(f), dir.join(f)).unwrap();
-    }
-    let images = std::fs::read_to_string(src.join("images.txt")).unwrap();
-    let mut out = String::new();
-    let mut records = 0;
-    for line in images.lines() {
-        if line.starts_with('#') {
-            out += line;
-        } else {
-            records += 1;
-            if records == 2 {
-                // The first image's observations: "x y point3d_id ...", the first one with a
-                // 3D point is moved.
-                let mut f: Vec<String> = line.split(' ').map(str::to_string).collect();
-                let k = (0..f.len() / 3).find(|k| f[3 * k + 2] != "-1").unwrap();
-                f[3 * k] = "1e12".to_string();
-                out += &f.join(" ");
-            } else {
+    let dir = model_copy("model-with-far-pixel", |images| {
+        let mut out = String::new();
+        let mut records = 0;
+        for line in images.lines() {
+            if line.starts_with('#') {
                 out += line;
+            } else {
+                records += 1;
+                if records == 2 {
+                    // The first image's observations: "x y point3d_id ...", the first one with
+                    // a 3D point is moved.
+                    let mut f: Vec<String> = line.split(' ').map(str::to_string).collect();
+                    let k = (0..f.len() / 3).find(|k| f[3 * k + 2] != "-1").unwrap();
+                    f[3 * k] = "1e12".to_string();
+                    out += &f.join(" ");
+                } else {
+                    out += line;
+                }
             }
+            out.push('\n');
         }
-        out.push('\n');
-    }
-    std::fs::write(dir.join("images.txt"), out).unwrap();
+        out
+    });
     let o = eopnp(&["register", dir.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(
