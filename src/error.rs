@@ -73,7 +73,8 @@ impl fmt::Display for DegenerateKind {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum PnpError {
     /// Fewer correspondences than the solver needs (`need` = 4). With weights, only the
-    /// points with a weight > 0 count.
+    /// points with a weight > 0 count, and then only those whose weight is above 2^-52 times
+    /// the largest weight (a lighter point cannot change a weighted sum at f64 precision).
     TooFewPoints {
         /// Number of (positively weighted) correspondences given.
         got: usize,
@@ -119,11 +120,17 @@ pub enum PnpError {
         /// The option's field name.
         option: &'static str,
     },
-    /// RANSAC drew `iterations` samples and no pose had at least 4 correspondences within the
-    /// threshold (or no fit on them succeeded).
+    /// RANSAC drew `iterations` samples and found no consensus: no pose had enough
+    /// correspondences within the threshold for a fit, or the best pose's `inliers` are no
+    /// more than a wrong pose reaches by chance at this threshold (`needed` is the least
+    /// consensus accepted; see [`crate::ransac`], "Consensus").
     NoConsensus {
         /// Samples drawn.
         iterations: u32,
+        /// Inliers of the best pose found (0 if none).
+        inliers: usize,
+        /// The least number of inliers accepted.
+        needed: usize,
     },
 }
 
@@ -132,7 +139,8 @@ impl fmt::Display for PnpError {
         match self {
             PnpError::TooFewPoints { got, need } => write!(
                 f,
-                "too few correspondences: got {got} (with weight > 0), need at least {need}"
+                "too few correspondences: got {got}, need at least {need} (with weights, points \
+                 of weight 0 or below 2^-52 times the largest do not count)"
             ),
             PnpError::LengthMismatch { world, image } => write!(
                 f,
@@ -171,11 +179,16 @@ impl fmt::Display for PnpError {
                     "RANSAC option `{option}` is out of range: it must be {range}"
                 )
             }
-            PnpError::NoConsensus { iterations } => write!(
+            PnpError::NoConsensus {
+                iterations,
+                inliers,
+                needed,
+            } => write!(
                 f,
-                "RANSAC found no pose consistent with at least 4 correspondences after \
-                 {iterations} samples; check the correspondences and the intrinsics (focal \
-                 length in pixels), or raise threshold_px or max_iterations"
+                "RANSAC found no consensus after {iterations} samples: the best pose has \
+                 {inliers} inliers, {needed} needed to be more than chance at this threshold; \
+                 check the correspondences and the intrinsics (focal length in pixels), or \
+                 raise max_iterations"
             ),
         }
     }

@@ -59,6 +59,9 @@ fn user_bounds_newton_lm_ransac() {
         .seed(3);
     match ransac.estimate(&Solver::default(), &w, &i, (500.0, 500.0), None) {
         Ok(sol) => assert_eq!(sol.stats.iterations, 30),
-        Err(e) => assert_eq!(e, PnpError::NoConsensus { iterations: 30 }),
+        Err(e) => assert!(
+            matches!(e, PnpError::NoConsensus { iterations: 30, .. }),
+            "{e:?}"
+        ),
     }
 }

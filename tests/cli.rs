@@ -505,3 +505,50 @@ fn observations_left_out_by_undistortion_are_shown_in_the_table() {
         stdout(&o)
     );
 }
+
+#[test]
+fn register_ransac_shows_an_image_without_consensus_as_not_registered() {
+    // A copy of the bundled model whose first image's observations point at the wrong 3D
+    // points (the list of observed ids rotated by half its length).
+    let dir = model_copy("model-wrong-correspondences", |images| {
+        let mut out = String::new();
+        let mut state = 0; // 0: before the first image line, 1: its points line next, 2: done
+        for line in images.lines() {
+            if line.starts_with('#') || state == 2 {
+                out += line;
+            } else if state == 0 {
+                out += line;
+                state = 1;
+            } else {
+                let fields: Vec<&str> = line.split_whitespace().collect();
+                let ids: Vec<&str> = fields
+                    .chunks(3)
+                    .map(|c| c[2])
+                    .filter(|id| *id != "-1")
+                    .collect();
+                let shift = ids.len() / 2;
+                let mut k = 0;
+                let mut edited = Vec::new();
+                for c in fields.chunks(3) {
+                    let id = if c[2] == "-1" {
+                        "-1"
+                    } else {
+                        k += 1;
+                        ids[(k - 1 + shift) % ids.len()]
+                    };
+                    edited.push(format!("{} {} {id}", c[0], c[1]));
+                }
+                out += &edited.join(" ");
+                state = 2;
+            }
+            out.push('\n');
+        }
+        assert_eq!(state, 2);
+        out
+    });
+    let o = eopnp(&["register", dir.to_str().unwrap(), "--ransac"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("failed: RANSAC found no consensus"), "{text}");
+    assert!(text.contains("5 of 6 images registered"), "{text}");
+}

@@ -22,7 +22,11 @@ fn display_is_actionable() {
         PnpError::InvalidOption {
             option: "confidence",
         },
-        PnpError::NoConsensus { iterations: 30 },
+        PnpError::NoConsensus {
+            iterations: 30,
+            inliers: 7,
+            needed: 12,
+        },
     ];
     for e in &cases {
         let s = e.to_string();
