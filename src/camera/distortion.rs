@@ -115,7 +115,8 @@ impl Distortion {
 
 /// Solves `x + D(x) = x0` (with the tilt: `tilt(x + D(x)) = x0`, Newton on the whole map) for
 /// `x` (COLMAP's `IterativeUndistortion`, with a tighter stopping
-/// rule and an explicit convergence check). `None` if it does not converge.
+/// rule and an explicit convergence check). `None` if it does not converge, or converges to a
+/// root where the map folds (det J <= 0) or mirrors through the principal point (1 + g <= 0).
 pub(super) fn iterative_undistortion(d: &Distortion, x0: (f64, f64)) -> Option<(f64, f64)> {
     // COLMAP's trust region: |step| <= max(0.1 |x|, 0.1).
     const REL_RADIUS: f64 = 0.1;
@@ -144,12 +145,19 @@ pub(super) fn iterative_undistortion(d: &Distortion, x0: (f64, f64)) -> Option<(
             break;
         }
     }
-    // Convergence check: the equation holds and the map is locally invertible (det J > 0,
-    // as at the image centre) at the solution.
+    // Convergence check: the equation holds, the map is locally invertible (det J > 0, as at
+    // the image centre) at the solution, and the solution is not mirrored through the
+    // principal point (radial scale 1 + g > 0: with an extreme coefficient both radial and
+    // tangential scales can be negative, so det J > 0 alone does not exclude that root).
     let ((xu, xv), j) = d.apply(u, v);
     let res = (xu - x0.0).hypot(xv - x0.1);
     let det = j[0] * j[3] - j[1] * j[2];
+    let (g, _) = d.radial(u * u + v * v);
     // (Running out of iterations is accepted only if this residual test passes anyway.)
-    let ok = u.is_finite() && v.is_finite() && res <= RESIDUAL_TOL * scale0 && det > 0.0;
+    let ok = u.is_finite()
+        && v.is_finite()
+        && res <= RESIDUAL_TOL * scale0
+        && det > 0.0
+        && 1.0 + g > 0.0;
     ok.then_some((u, v))
 }

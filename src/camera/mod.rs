@@ -342,8 +342,10 @@ impl Camera {
     ///
     /// The distortion is inverted by Newton's method (analytic Jacobian, COLMAP's trust region)
     /// with at most [`UNDISTORT_MAX_ITERATIONS`] iterations, followed by a check that the
-    /// distortion equation holds to about 1e-13 and that the distortion map is locally
-    /// invertible at the solution.
+    /// distortion equation holds to about 1e-13, that the distortion map is locally
+    /// invertible at the solution, and that the solution is on the pixel's side of the
+    /// principal point (with extreme coefficients a pixel can also have a preimage mirrored
+    /// through it; that one is refused).
     ///
     /// # Errors
     /// [`CameraError::NonFinite`] for a NaN or infinite pixel, [`CameraError::NoConvergence`]
