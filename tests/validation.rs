@@ -97,8 +97,15 @@ fn validation_errors_in_order() {
         e(solve(&world, &image, Some(&w))),
         PnpError::InvalidWeight { index: 1 }
     );
-    let w = [1.0, 0.0, 1.0, 0.0, 1.0, 1e-300];
+    let w = [1.0, 0.0, 1.0, 0.0, 1.0, 1e-15];
     assert!(solve(&world, &image, Some(&w)).is_ok());
+    // A weight at f64 resolution of the largest cannot tell the P3P poses of the other three
+    // apart: it does not count.
+    let w = [1.0, 0.0, 1.0, 0.0, 1.0, 1e-300];
+    assert_eq!(
+        e(solve(&world, &image, Some(&w))),
+        PnpError::TooFewPoints { got: 3, need: 4 }
+    );
     let w = [1.0, 0.0, 1.0, 0.0, 1.0, 0.0];
     assert_eq!(
         e(solve(&world, &image, Some(&w))),

@@ -63,10 +63,22 @@ const MIN_UNIT: f64 = 9.332636185032189e-302;
 
 /// Minimum number of correspondences (with a weight > 0).
 pub(crate) const MIN_POINTS: usize = 4;
+/// A weight at or below `NEGLIGIBLE_WEIGHT` times the largest weight cannot change any
+/// weighted sum at f64 precision (2^-52), so such a point does not count towards
+/// [`MIN_POINTS`] (it is still used).
+pub(crate) const NEGLIGIBLE_WEIGHT: f64 = f64::EPSILON;
 /// S1 collinearity test: collinear if `sv1 <= COLLINEAR_TOL * sv0`.
 pub(crate) const COLLINEAR_TOL: f64 = 1e-8;
 /// S1 image-spread test: coincident unless `spread > IMAGE_SPREAD_TOL * max(1, max |m|)`.
 pub(crate) const IMAGE_SPREAD_TOL: f64 = 1e-12;
+/// S1 small-image test: the pose is flagged degenerate when
+/// `spread <= SMALL_IMAGE_TOL * max(1, max |m|)`. The perspective effects that fix the
+/// rotation (beyond the weak-perspective reflection ambiguity) are of relative size `spread`
+/// in the image, and the rounding of the image coordinates is `eps max |m| / spread` relative
+/// to it; below this bound their ratio, `spread^2 / (eps max |m|)`, is under about 4,500,
+/// where noise-free patterns shrunk towards one point start to give wrong poses at ratios of
+/// about 15 (`tests/tiny_image.rs`).
+pub(crate) const SMALL_IMAGE_TOL: f64 = 1e-6;
 
 /// The normalised working frame of S1: `P = Rw (X - c) / d`.
 #[derive(Clone, Debug, PartialEq)]
@@ -79,10 +91,21 @@ pub(crate) struct WorkingFrame {
     pub rw: Matrix3<f64>,
     /// Planarity `sv2 / sv0` (computed even when not aligned).
     pub ratio: f64,
+    /// The image spread is below [`SMALL_IMAGE_TOL`]: too small, at f64 resolution, to fix
+    /// the pose (flagged as degenerate).
+    pub small_image: bool,
     /// Number of correspondences with a weight > 0 (N without weights).
     pub n_active: usize,
-    /// The S2 sums of the same input in this frame (`P = Rw (X - c) / d`, weights `w`): equal,
-    /// up to rounding, to [`crate::pipeline::moments::accumulate`] with this frame.
+    /// The weight unit: a power of two near the largest weight (1 without weights). Later
+    /// stages use `w_i / weight_unit` (an exact scaling, largest value in `[1, 2)`), so that
+    /// no weighted sum over- or underflows and a common scale of the weights changes nothing
+    /// but the reported cost.
+    pub weight_unit: f64,
+    /// `sum w_i / weight_unit` over the active points.
+    pub weight_sum: f64,
+    /// The S2 sums of the same input in this frame (`P = Rw (X - c) / d`, weights
+    /// `w / weight_unit`): equal, up to rounding, to [`crate::pipeline::moments::accumulate`]
+    /// with this frame, divided by `weight_unit`.
     pub sums: Accumulator,
 }
 
@@ -135,6 +158,8 @@ struct Scan {
     xmax: f64,
     mmax: f64,
     wmax: f64,
+    /// Smallest weight > 0 (`wmax` without weights).
+    wmin: f64,
     /// Raw sums `sum w`, `sum w X`, `sum w m` (all points; `w = 0` adds exact zeros).
     wsum: f64,
     xsum: Vector3<f64>,
@@ -154,6 +179,7 @@ fn scan<const W: bool>(world: &[Point3<f64>], image: &[Point2<f64>], weights: &[
         xmax: 0.0,
         mmax: 0.0,
         wmax: 0.0,
+        wmin: 0.0,
         wsum: 0.0,
         xsum: Vector3::zeros(),
         msum: Vector2::zeros(),
@@ -161,6 +187,7 @@ fn scan<const W: bool>(world: &[Point3<f64>], image: &[Point2<f64>], weights: &[
     };
     let (mut sx, mut sy, mut sz, mut su, mut sv, mut sw) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     let (mut xmax, mut mmax, mut wmax) = (0.0f64, 0.0f64, 0.0f64);
+    let mut wmin = f64::INFINITY;
     let mut n_active = 0usize;
     let mut negative = false;
     for i in 0..n {
@@ -176,6 +203,7 @@ fn scan<const W: bool>(world: &[Point3<f64>], image: &[Point2<f64>], weights: &[
                 xmax = fmax(xmax, ax);
                 mmax = fmax(mmax, am);
                 wmax = fmax(wmax, w);
+                wmin = wmin.min(w);
             }
             sw += w;
             sx += w * x.x;
@@ -196,12 +224,14 @@ fn scan<const W: bool>(world: &[Point3<f64>], image: &[Point2<f64>], weights: &[
     if !W {
         n_active = n;
         wmax = 1.0;
+        wmin = 1.0;
         sw = n as f64;
     }
     out.n_active = n_active;
     out.xmax = xmax;
     out.mmax = mmax;
     out.wmax = wmax;
+    out.wmin = wmin;
     out.wsum = sw;
     out.xsum = Vector3::new(sx, sy, sz);
     out.msum = Vector2::new(su, sv);
@@ -252,7 +282,8 @@ fn first_invalid(
 /// ([`PnpError::LengthMismatch`]); length of the weights ([`PnpError::WeightsLength`]);
 /// N >= 4 ([`PnpError::TooFewPoints`] with `got = N`); every coordinate and weight finite,
 /// scanning index by index, world before image before weight ([`PnpError::NonFinite`]); no
-/// negative weight ([`PnpError::InvalidWeight`]); at least 4 points with a weight > 0
+/// negative weight ([`PnpError::InvalidWeight`]); at least 4 points with a weight > 0, then
+/// at least 4 with a weight above [`NEGLIGIBLE_WEIGHT`] times the largest
 /// ([`PnpError::TooFewPoints`] with `got` = that count); world range
 /// ([`DegenerateKind::ScaleOutOfRange`] if a coordinate exceeds `f64::MAX / 4`); coincident
 /// world points; collinear world points (`sv1 <= 1e-8 sv0`); world spread below the normal
@@ -333,6 +364,17 @@ fn frame_impl(
             need: MIN_POINTS,
         });
     }
+    if let Some(w) = weights.filter(|_| sc.wmin <= NEGLIGIBLE_WEIGHT * wmax) {
+        // Some weights are negligible next to the largest: count the others (a rare pass).
+        let floor = NEGLIGIBLE_WEIGHT * wmax;
+        let counted = w.iter().filter(|&&wi| wi > floor).count();
+        if counted < MIN_POINTS {
+            return Err(PnpError::TooFewPoints {
+                got: counted,
+                need: MIN_POINTS,
+            });
+        }
+    }
     if xmax > f64::MAX / 4.0 {
         return Err(PnpError::Degenerate(DegenerateKind::ScaleOutOfRange));
     }
@@ -408,7 +450,7 @@ fn frame_impl(
         } else {
             Matrix3::identity()
         };
-        let sums = pass.acc.transformed(&(rw / dd), sw);
+        let sums = pass.acc.transformed(&(rw / dd));
         (vals, rw, sums)
     } else {
         // Pass 3: the sums of the points rotated by the scatter's axes, then the exact frame
@@ -419,12 +461,12 @@ fn frame_impl(
         let (vals1, q) = sym_eigen3(&rot.s).ok_or(PnpError::NoSolution)?;
         if align {
             let qt = rows(&q);
-            (vals1, qt * rw0, rot.transformed(&qt, sw))
+            (vals1, qt * rw0, rot.transformed(&qt))
         } else {
             (
                 vals1,
                 Matrix3::identity(),
-                pass.acc.transformed(&(Matrix3::identity() / dd), sw),
+                pass.acc.transformed(&(Matrix3::identity() / dd)),
             )
         }
     };
@@ -445,12 +487,16 @@ fn frame_impl(
     if spread.is_nan() || spread <= IMAGE_SPREAD_TOL * mmax.max(1.0) / sm {
         return Err(PnpError::Degenerate(DegenerateKind::CoincidentImagePoints));
     }
+    let small_image = spread <= SMALL_IMAGE_TOL * mmax.max(1.0) / sm;
     Ok(WorkingFrame {
+        small_image,
         c: cs * sx,
         d,
         rw,
         ratio: sv[2] / sv[0],
         n_active,
+        weight_unit: sw,
+        weight_sum: pass.acc.sw,
         sums,
     })
 }

@@ -101,7 +101,7 @@ pub(crate) fn run(
         weights,
         fr: &fr,
         m45: &m45,
-        degenerate: probe.degenerate,
+        degenerate: probe.degenerate || fr.small_image,
         scale,
     };
     let mut search = Search::new(opts, &sys, &m45, scale);

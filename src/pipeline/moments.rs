@@ -384,18 +384,17 @@ fn congruence(b: &Matrix3<f64>, s: &Matrix3<f64>) -> Matrix3<f64> {
 }
 
 impl Accumulator {
-    /// The sums of the points `B p` with weights `scale * w`, from the sums of the points `p`
-    /// with weights `w`: scalar sums times `scale`, vector sums `scale B a`, matrix sums
-    /// `scale B S B^T`. An exact identity up to rounding (the sums are linear and quadratic in
-    /// `p`). `scale` is a power of two (the weight unit), so it is applied exactly.
-    pub(crate) fn transformed(&self, b: &Matrix3<f64>, scale: f64) -> Accumulator {
-        let v = |x: &Vector3<f64>| (b * x) * scale;
-        let m = |x: &Matrix3<f64>| congruence(b, x) * scale;
+    /// The sums of the points `B p`, from the sums of the points `p` (same weights): scalar
+    /// sums unchanged, vector sums `B a`, matrix sums `B S B^T`. An exact identity up to
+    /// rounding (the sums are linear and quadratic in `p`).
+    pub(crate) fn transformed(&self, b: &Matrix3<f64>) -> Accumulator {
+        let v = |x: &Vector3<f64>| b * x;
+        let m = |x: &Matrix3<f64>| congruence(b, x);
         Accumulator {
-            sw: self.sw * scale,
-            su: self.su * scale,
-            sv: self.sv * scale,
-            sq: self.sq * scale,
+            sw: self.sw,
+            su: self.su,
+            sv: self.sv,
+            sq: self.sq,
             a: v(&self.a),
             a_u: v(&self.a_u),
             a_v: v(&self.a_v),

@@ -38,8 +38,10 @@ pub struct Solution {
     pub reprojection_rmse: f64,
     /// More than half of the points (with non-zero weight) are in front of the camera.
     pub cheirality_ok: bool,
-    /// More than four eigenvalues of `M` are below `1e-10 trace(M)`: the configuration is close
-    /// to degenerate and the pose may be ambiguous (docs/algorithm.md S7, section 6).
+    /// The configuration is close to degenerate and the pose may be ambiguous or wrong: more
+    /// than four eigenvalues of `M` are below `1e-10 trace(M)`, or the image points span less
+    /// than `1e-6 max(1, max |m|)` (RMS, normalised units), too little for f64 to resolve
+    /// the perspective that fixes the rotation (docs/algorithm.md S1, S7, section 6).
     pub degenerate: bool,
     /// Whether the planar branch produced this pose's starting candidate.
     pub planar: bool,
@@ -134,9 +136,7 @@ impl Output<'_> {
                 self.world,
                 self.image,
                 self.weights,
-                &self.fr.c,
-                self.fr.d,
-                &self.fr.rw,
+                self.fr,
                 &r,
                 &t,
                 opts,
@@ -162,14 +162,19 @@ impl Output<'_> {
             _ => in_front(self.world, self.weights, self.fr, &r, &t),
         };
         let (rw, tw) = self.fr.to_world(&r, &t);
-        let (e, wsum) = match s9_error {
-            Some(e) => (
-                e,
-                self.weights
-                    .map_or(self.fr.n_active as f64, |w| w.iter().sum::<f64>()),
+        // In S1's weight unit (exact powers of two): `e * weight_unit` is the caller's cost.
+        let e = match s9_error {
+            Some(e) => e,
+            None => reprojection_error(
+                self.world,
+                self.image,
+                self.weights,
+                1.0 / self.fr.weight_unit,
+                &rw,
+                &tw,
             ),
-            None => reprojection_error(self.world, self.image, self.weights, &rw, &tw),
         };
+        let wsum = self.fr.weight_sum;
         let rot = to_unit_quaternion(&rw);
         let sol = Solution {
             pose: Isometry3::from_parts(Translation3::from(tw), rot),
@@ -177,7 +182,7 @@ impl Output<'_> {
             cost: if mode == Refinement::Algebraic {
                 f / self.scale
             } else {
-                e
+                e * self.fr.weight_unit
             },
             algebraic_cost: f / self.scale,
             // Infinite (not NaN) when a point lies in the focal plane (depth 0) of the pose,
@@ -242,25 +247,26 @@ pub(crate) fn rank_all(
     all.first().copied().ok_or(PnpError::NoSolution)
 }
 
-/// Weighted sum of squared normalised reprojection residuals of a world-frame pose, and the
-/// weight sum. Points at or behind the camera plane contribute an infinite residual.
+/// Weighted sum of squared normalised reprojection residuals of a world-frame pose, with the
+/// weights multiplied by `inv_weight` (S1's weight unit). Points at or behind the camera plane
+/// contribute an infinite residual.
 fn reprojection_error(
     world: &[Point3<f64>],
     image: &[Point2<f64>],
     weights: Option<&[f64]>,
+    inv_weight: f64,
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
-) -> (f64, f64) {
-    let (mut e, mut wsum) = (0.0, 0.0);
+) -> f64 {
+    let mut e = 0.0;
     for (i, (x, m)) in world.iter().zip(image).enumerate() {
-        let w = weights.map_or(1.0, |w| w[i]);
+        let w = weights.map_or(1.0, |w| w[i] * inv_weight);
         if w == 0.0 {
             continue;
         }
         let p = r * x.coords + t;
         let (du, dv) = (m.x - p.x / p.z, m.y - p.y / p.z);
         e += w * (du * du + dv * dv);
-        wsum += w;
     }
-    (e, wsum)
+    e
 }

@@ -55,6 +55,7 @@ mod pass;
 
 use pass::{pass, PassInputs};
 
+use super::frame::WorkingFrame;
 use crate::numeric::linalg::solve_damped6;
 use crate::numeric::rotation::exp_so3;
 
@@ -178,6 +179,9 @@ struct Problem<'a> {
     world: &'a [Point3<f64>],
     image: &'a [Point2<f64>],
     weights: Option<&'a [f64]>,
+    /// `1 / w_unit` (S1's power-of-two weight unit): the passes use the weights in that unit,
+    /// so that the sums neither overflow nor underflow for any scale of the weights.
+    inv_weight: f64,
     c: Vector3<f64>,
     n: usize,
     row_weights: (f64, f64),
@@ -238,8 +242,9 @@ impl Problem<'_> {
 /// (weighted) reprojection error of the caller's world points.
 ///
 /// `world`, `image` (normalised coordinates) and `weights` (optional, one per point, >= 0) are
-/// the caller's inputs as validated by S1; `c`, `d`, `rw` are S1's working frame
-/// (`P_i = rw (X_i - c) / d`). The pose is the working-frame pose in and out (S8 maps it to the
+/// the caller's inputs as validated by S1; `fr` is S1's working frame
+/// (`P_i = rw (X_i - c) / d`). Costs (`e0`, `e`) are in S1's weight unit: the caller's cost is
+/// `e * fr.weight_unit` (exact: a power of two). The pose is the working-frame pose in and out (S8 maps it to the
 /// world frame). A point of weight 0 contributes nothing and gives bit-identical results to
 /// dropping it. If some starting depth is (relatively) zero the pose is returned unchanged with
 /// [`ReprojStop::SkippedZeroDepth`]. At most `opts.max_iterations` iterations; no allocation.
@@ -248,9 +253,7 @@ pub(crate) fn refine_reprojection(
     world: &[Point3<f64>],
     image: &[Point2<f64>],
     weights: Option<&[f64]>,
-    c: &Vector3<f64>,
-    d: f64,
-    rw: &Matrix3<f64>,
+    fr: &WorkingFrame,
     r_work: &Matrix3<f64>,
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
@@ -265,14 +268,15 @@ pub(crate) fn refine_reprojection(
         world,
         image,
         weights,
-        c: *c,
+        inv_weight: 1.0 / fr.weight_unit,
+        c: fr.c,
         n,
         row_weights: opts.row_weights,
     };
 
     let mut r = *r_work;
     let mut t = *t_work;
-    let mut cur = Composed::new(&r, rw, d, &t);
+    let mut cur = Composed::new(&r, &fr.rw, fr.d, &t);
     let skipped = ReprojOutcome {
         r,
         t,
@@ -322,7 +326,7 @@ pub(crate) fn refine_reprojection(
         let w = Vector3::new(delta[0], delta[1], delta[2]);
         let r_new = exp_so3(&w) * r;
         let t_new = t + Vector3::new(delta[3], delta[4], delta[5]);
-        let cand = Composed::new(&r_new, rw, d, &t_new);
+        let cand = Composed::new(&r_new, &fr.rw, fr.d, &t_new);
 
         // Predicted decrease of the linear model: -(2 g.delta + delta.H.delta).
         let mut g_d = 0.0;

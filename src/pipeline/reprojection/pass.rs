@@ -24,6 +24,8 @@ pub(super) struct PassInputs {
     ref_tz: f64,
     wx: f64,
     wy: f64,
+    /// `1 / w_unit`: point weights in S1's weight unit.
+    inv_weight: f64,
 }
 
 impl PassInputs {
@@ -38,6 +40,7 @@ impl PassInputs {
             ref_tz,
             wx: prob.row_weights.0,
             wy: prob.row_weights.1,
+            inv_weight: prob.inv_weight,
         }
     }
 }
@@ -162,7 +165,7 @@ pub(super) fn pass<const CHECK: bool, const HESS: bool>(
                 }
                 let l = filled % LANES;
                 blk.set(l, x, m);
-                blk.w[l] = w;
+                blk.w[l] = w * k.inv_weight;
                 filled = l + 1;
                 if filled == LANES {
                     for l in 0..LANES {

@@ -202,9 +202,18 @@ pub(crate) fn working_frame_qr(
         d,
         rw,
         ratio: sv[2] / sv[0],
+        small_image: false,
         n_active,
+        weight_unit: sw,
+        weight_sum: wsum,
         sums: crate::pipeline::moments::Accumulator::default(),
     };
+    // The sums in the weight unit, as S1's.
+    let mut w_unit: Vec<f64> = Vec::new();
+    let weights = weights.map(|w| {
+        w_unit = w.iter().map(|x| x / sw).collect();
+        &w_unit[..]
+    });
     frame.sums = crate::pipeline::moments::tests::accumulate(world, image, weights, &frame);
     Ok(frame)
 }
@@ -715,7 +724,7 @@ fn thin_clouds_resolved_like_the_svd() {
 #[test]
 fn sums_match_direct_accumulation() {
     // The sums carried to the working frame equal the direct per-point S2 pass in that
-    // frame (the previous implementation of S2): 1e-13 relative to max |M| (rounding of
+    // frame (the previous implementation of S2), weights in the frame's unit: 1e-13 relative to max |M| (rounding of
     // O(N) sums, N <= 200).
     let mut rng = Pcg64::seed_from_u64(21);
     for trial in 0..60 {
@@ -727,6 +736,9 @@ fn sums_match_direct_accumulation() {
         let Ok(f) = working_frame(&world, &image, wopt, trial % 7 != 3 || thin < 0.1) else {
             continue;
         };
+        // The frame's sums are in its weight unit.
+        let w_unit: Vec<f64> = w.iter().map(|x| x / f.weight_unit).collect();
+        let wopt = wopt.map(|_| &w_unit[..]);
         let direct = crate::pipeline::moments::tests::accumulate(&world, &image, wopt, &f);
         for flatten in [false, true] {
             let a = f.sums.system(flatten).unwrap();

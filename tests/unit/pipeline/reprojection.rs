@@ -151,9 +151,8 @@ impl Setup {
         tk: &Vector3<f64>,
         opts: &ReprojOptions,
     ) -> ReprojOutcome {
-        refine_reprojection(
-            world, image, weights, &self.c, self.d, &self.rw, rk, tk, opts,
-        )
+        let fr = frame_of(&self.c, self.d, &self.rw);
+        refine_reprojection(world, image, weights, &fr, rk, tk, opts)
     }
 
     /// S9 with the default options, unweighted, from `(rk, tk)`.
@@ -219,6 +218,7 @@ fn jacobian_matches_central_differences() {
             world: &s.world,
             image: &s.image,
             weights: None,
+            inv_weight: 1.0,
             c: s.c,
             n: s.world.len(),
             row_weights: (1.0, 1.0),
@@ -282,6 +282,7 @@ fn structured_normal_equations_match_outer_products() {
             world: &s.world,
             image: &s.image,
             weights: if seed % 2 == 0 { Some(&w) } else { None },
+            inv_weight: 1.0,
             c: s.c,
             n: s.world.len(),
             row_weights: if seed % 3 == 0 {
@@ -605,6 +606,21 @@ fn depth_signs_are_preserved() {
     }
 }
 
+/// A working frame with the fields S9 reads (weight unit 1: the weights as given).
+fn frame_of(c: &Vector3<f64>, d: f64, rw: &Matrix3<f64>) -> WorkingFrame {
+    WorkingFrame {
+        c: *c,
+        d,
+        rw: *rw,
+        ratio: 1.0,
+        small_image: false,
+        n_active: 0,
+        weight_unit: 1.0,
+        weight_sum: 0.0,
+        sums: Default::default(),
+    }
+}
+
 #[test]
 fn far_offset_millimetre_world() {
     // World in millimetres with a 1e6 offset: the frame composition keeps X - c exact.
@@ -624,9 +640,7 @@ fn far_offset_millimetre_world() {
         &world,
         &s0.image,
         None,
-        &c,
-        d,
-        &rw,
+        &frame_of(&c, d, &rw),
         &rk,
         &tk,
         &ReprojOptions::default(),
