@@ -4,7 +4,7 @@
 use nalgebra::{Point2, Point3};
 
 use crate::camera::Camera;
-use crate::error::PnpError;
+use crate::error::{InputKind, PnpError};
 use crate::pipeline::{
     self, Options, PlanarDetection, Refinement, ReprojOptions, Solution, Solutions,
 };
@@ -261,20 +261,100 @@ impl Solver {
         pixels: &[Point2<f64>],
         camera: &Camera,
     ) -> Result<Solution, PnpError> {
+        self.pixels(world, pixels, camera, None)
+    }
+
+    /// As [`Solver::solve_pixels`] with a non-negative weight per correspondence, as
+    /// [`Solver::solve_weighted`]: the residual of point `i` is weighted by `weights[i]` times
+    /// the lens distortion's local scale of [`Solver::solve_pixels`]. A point of weight 0 is
+    /// ignored; all weights 1 give exactly [`Solver::solve_pixels`].
+    ///
+    /// ```
+    /// use eopnp::{camera::Camera, Solver};
+    /// use nalgebra::{Point2, Point3, Vector3};
+    ///
+    /// let cam = Camera::from_colmap("SIMPLE_RADIAL", 640, 480, vec![800.0, 320.0, 240.0, -0.05])?;
+    /// let t = Vector3::new(0.1, -0.2, 6.0);
+    /// let mut world = vec![
+    ///     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    ///     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// ];
+    /// let mut pixels: Vec<Point2<f64>> = world
+    ///     .iter()
+    ///     .map(|x| { let p = x.coords + t; cam.project(Point2::new(p.x / p.z, p.y / p.z)) })
+    ///     .collect();
+    /// // A wrong seventh correspondence with weight 0 changes nothing.
+    /// world.push(Point3::new(5.0, 5.0, 5.0));
+    /// pixels.push(Point2::new(10.0, 470.0));
+    /// let weights = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0];
+    /// let sol = Solver::default().solve_pixels_weighted(&world, &pixels, &cam, &weights)?;
+    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+    /// assert_eq!((sol.used, sol.skipped), (6, 0));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`PnpError::LengthMismatch`], then [`PnpError::WeightsLength`], then
+    /// [`PnpError::NonFinite`] and [`PnpError::InvalidWeight`] for the first bad weight (its
+    /// index is the correspondence's), otherwise as [`Solver::solve_pixels`].
+    pub fn solve_pixels_weighted(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        camera: &Camera,
+        weights: &[f64],
+    ) -> Result<Solution, PnpError> {
+        self.pixels(world, pixels, camera, Some(weights))
+    }
+
+    /// [`Solver::solve_pixels`] and [`Solver::solve_pixels_weighted`].
+    fn pixels(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        camera: &Camera,
+        user_weights: Option<&[f64]>,
+    ) -> Result<Solution, PnpError> {
         if world.len() != pixels.len() {
             return Err(PnpError::LengthMismatch {
                 world: world.len(),
                 image: pixels.len(),
             });
         }
+        if let Some(uw) = user_weights {
+            if uw.len() != world.len() {
+                return Err(PnpError::WeightsLength {
+                    weights: uw.len(),
+                    points: world.len(),
+                });
+            }
+            for (index, w) in uw.iter().enumerate() {
+                if !w.is_finite() {
+                    return Err(PnpError::NonFinite {
+                        index,
+                        input: InputKind::Weight,
+                    });
+                }
+                if *w < 0.0 {
+                    return Err(PnpError::InvalidWeight { index });
+                }
+            }
+        }
         let mut w = Vec::with_capacity(world.len());
         let mut image = Vec::with_capacity(world.len());
         let mut weights = Vec::with_capacity(world.len());
         let (fx, fy) = camera.intrinsics_scale();
-        for (x, px) in world.iter().zip(pixels) {
+        for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
             let Ok((n, weight)) = camera.undistort_weighted(*px) else {
                 continue;
             };
+            let weight = user_weights.map_or(weight, |uw| uw[i] * weight);
+            if !weight.is_finite() {
+                return Err(PnpError::NonFinite {
+                    index: i,
+                    input: InputKind::Weight,
+                });
+            }
             weights.push(weight);
             w.push(*x);
             image.push(n);

@@ -1,0 +1,114 @@
+//! `Solver::solve_pixels_weighted`: all weights 1 is exactly `solve_pixels`, a weight of 0 is
+//! the same as dropping the point, and bad weights are reported with the correspondence's own
+//! index, also when a pixel before it cannot be undistorted.
+
+use eopnp::camera::Camera;
+use eopnp::{InputKind, PnpError, Solver};
+use nalgebra::{Point2, Point3, Rotation3, Vector2, Vector3};
+
+fn problem(cam: &Camera) -> (Vec<Point3<f64>>, Vec<Point2<f64>>) {
+    let r = Rotation3::from_euler_angles(0.2, -0.1, 0.4);
+    let t = Vector3::new(0.2, -0.1, 7.0);
+    let world: Vec<Point3<f64>> = (0..12)
+        .map(|i| {
+            let a = f64::from(i);
+            Point3::new((1.3 * a).sin(), (0.7 * a).cos(), 0.8 * (2.1 * a).sin())
+        })
+        .collect();
+    let pixels = world
+        .iter()
+        .enumerate()
+        .map(|(i, x)| {
+            let p = r * x + t;
+            let noise = 0.5 * (f64::from(i as u32) * 2.3).sin();
+            cam.project(Point2::new(p.x / p.z, p.y / p.z)) + Vector2::new(noise, -noise)
+        })
+        .collect();
+    (world, pixels)
+}
+
+fn camera() -> Camera {
+    Camera::from_colmap(
+        "OPENCV",
+        640,
+        480,
+        vec![800.0, 790.0, 320.0, 240.0, -0.1, 0.02, 1e-3, -5e-4],
+    )
+    .unwrap()
+}
+
+#[test]
+fn unit_weights_are_solve_pixels() {
+    let cam = camera();
+    let (world, pixels) = problem(&cam);
+    let solver = Solver::default();
+    let plain = solver.solve_pixels(&world, &pixels, &cam).unwrap();
+    let ones = vec![1.0; world.len()];
+    let weighted = solver
+        .solve_pixels_weighted(&world, &pixels, &cam, &ones)
+        .unwrap();
+    assert_eq!(plain, weighted);
+}
+
+#[test]
+fn zero_weight_drops_the_point() {
+    let cam = camera();
+    let (mut world, mut pixels) = problem(&cam);
+    let solver = Solver::default();
+    let reference = solver.solve_pixels(&world, &pixels, &cam).unwrap();
+    world.insert(3, Point3::new(4.0, -3.0, 2.0));
+    pixels.insert(3, Point2::new(12.0, 470.0));
+    let mut weights = vec![1.0; world.len()];
+    weights[3] = 0.0;
+    let sol = solver
+        .solve_pixels_weighted(&world, &pixels, &cam, &weights)
+        .unwrap();
+    assert_eq!((sol.used, sol.skipped), (12, 0));
+    assert!((sol.rotation - reference.rotation).norm() < 1e-12);
+    let dt = sol.pose.translation.vector - reference.pose.translation.vector;
+    assert!(dt.norm() < 1e-11);
+}
+
+#[test]
+fn bad_weights_keep_their_index() {
+    let cam = camera();
+    let (world, mut pixels) = problem(&cam);
+    let solver = Solver::default();
+    // Pixel 1 cannot be undistorted (skipped); the weight errors still name index 5.
+    pixels[1] = Point2::new(f64::NAN, 0.0);
+    let mut weights = vec![1.0; world.len()];
+    weights[5] = -1.0;
+    let err = solver.solve_pixels_weighted(&world, &pixels, &cam, &weights);
+    assert_eq!(err, Err(PnpError::InvalidWeight { index: 5 }));
+    weights[5] = f64::INFINITY;
+    let err = solver.solve_pixels_weighted(&world, &pixels, &cam, &weights);
+    assert_eq!(
+        err,
+        Err(PnpError::NonFinite {
+            index: 5,
+            input: InputKind::Weight
+        })
+    );
+    let err = solver.solve_pixels_weighted(&world, &pixels, &cam, &weights[1..]);
+    assert_eq!(
+        err,
+        Err(PnpError::WeightsLength {
+            weights: 11,
+            points: 12
+        })
+    );
+    let err = solver.solve_pixels_weighted(&world, &pixels[1..], &cam, &weights);
+    assert_eq!(
+        err,
+        Err(PnpError::LengthMismatch {
+            world: 12,
+            image: 11
+        })
+    );
+    // Weight 1 everywhere: the NaN pixel is skipped, as in `solve_pixels`.
+    weights[5] = 1.0;
+    let sol = solver
+        .solve_pixels_weighted(&world, &pixels, &cam, &weights)
+        .unwrap();
+    assert_eq!((sol.used, sol.skipped), (11, 1));
+}
