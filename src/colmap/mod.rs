@@ -65,6 +65,7 @@ use std::path::{Path, PathBuf};
 use crate::camera::Camera;
 
 pub use model::{quaternion_to_matrix, Image, Location, Model, ModelError, Point3D, RegisterError};
+#[cfg(feature = "cli")]
 pub(crate) use register::pixel_rmse;
 pub use register::{register_image, Registration};
 pub use write::{encode_model, write_model, write_model_binary, write_model_with, Overwrite};
