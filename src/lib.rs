@@ -47,6 +47,8 @@
 // `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+#[cfg(feature = "rayon")]
+pub mod batch;
 pub mod camera;
 /// The `eopnp` command line (the binary is a thin `main` around [`cli::run`]). Public so that
 /// the fuzz targets can drive the input parsers; not a stable API.

@@ -315,54 +315,9 @@ impl Solver {
         camera: &Camera,
         user_weights: Option<&[f64]>,
     ) -> Result<Solution, PnpError> {
-        if world.len() != pixels.len() {
-            return Err(PnpError::LengthMismatch {
-                world: world.len(),
-                image: pixels.len(),
-            });
-        }
-        if let Some(uw) = user_weights {
-            if uw.len() != world.len() {
-                return Err(PnpError::WeightsLength {
-                    weights: uw.len(),
-                    points: world.len(),
-                });
-            }
-            for (index, w) in uw.iter().enumerate() {
-                if !w.is_finite() {
-                    return Err(PnpError::NonFinite {
-                        index,
-                        input: InputKind::Weight,
-                    });
-                }
-                if *w < 0.0 {
-                    return Err(PnpError::InvalidWeight { index });
-                }
-            }
-        }
-        let mut w = Vec::with_capacity(world.len());
-        let mut image = Vec::with_capacity(world.len());
-        let mut weights = Vec::with_capacity(world.len());
-        let (fx, fy) = camera.intrinsics_scale();
-        for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
-            let Ok((n, weight)) = camera.undistort_weighted(*px) else {
-                continue;
-            };
-            let weight = user_weights.map_or(weight, |uw| uw[i] * weight);
-            if !weight.is_finite() {
-                return Err(PnpError::NonFinite {
-                    index: i,
-                    input: InputKind::Weight,
-                });
-            }
-            weights.push(weight);
-            w.push(*x);
-            image.push(n);
-        }
-        let fmax = fx.max(fy);
-        let rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
-        let mut sol = self.solve_with_row_weights(&w, &image, Some(&weights), rows)?;
-        sol.skipped = world.len() - w.len();
+        let u = undistort_all(world, pixels, camera, user_weights)?;
+        let mut sol = self.solve_with_row_weights(&u.world, &u.image, Some(&u.weights), u.rows)?;
+        sol.skipped = world.len() - u.used.len();
         Ok(sol)
     }
 
@@ -402,4 +357,86 @@ impl Solver {
 /// See [`Solver::solve`].
 pub fn solve(world: &[Point3<f64>], image: &[Point2<f64>]) -> Result<Solution, PnpError> {
     Solver::default().solve(world, image)
+}
+
+/// Pixel correspondences made ready for the solvers by [`undistort_all`].
+pub(crate) struct Undistorted {
+    /// The world points of the correspondences whose pixel could be undistorted.
+    pub world: Vec<Point3<f64>>,
+    /// Their normalised image points.
+    pub image: Vec<Point2<f64>>,
+    /// Their weights: `|det J_i| / (fx fy)` times the caller's weight.
+    pub weights: Vec<f64>,
+    /// Their indices in the caller's slices.
+    pub used: Vec<usize>,
+    /// The residual row weights `(fx^2, fy^2) / max(fx, fy)^2`.
+    pub rows: (f64, f64),
+    /// The camera's focal lengths `(fx, fy)`, pixels.
+    pub focal: (f64, f64),
+}
+
+/// Undistorts pixel correspondences (the pixel-input path of [`Solver`] and of
+/// [`crate::ransac::Ransac`]): checks the lengths and the caller's weights (their errors carry
+/// the correspondence's index), then keeps every correspondence whose pixel can be
+/// undistorted. Buffers are sized once.
+pub(crate) fn undistort_all(
+    world: &[Point3<f64>],
+    pixels: &[Point2<f64>],
+    camera: &Camera,
+    user_weights: Option<&[f64]>,
+) -> Result<Undistorted, PnpError> {
+    if world.len() != pixels.len() {
+        return Err(PnpError::LengthMismatch {
+            world: world.len(),
+            image: pixels.len(),
+        });
+    }
+    if let Some(uw) = user_weights {
+        if uw.len() != world.len() {
+            return Err(PnpError::WeightsLength {
+                weights: uw.len(),
+                points: world.len(),
+            });
+        }
+        for (index, w) in uw.iter().enumerate() {
+            if !w.is_finite() {
+                return Err(PnpError::NonFinite {
+                    index,
+                    input: InputKind::Weight,
+                });
+            }
+            if *w < 0.0 {
+                return Err(PnpError::InvalidWeight { index });
+            }
+        }
+    }
+    let n = world.len();
+    let mut out = Undistorted {
+        world: Vec::with_capacity(n),
+        image: Vec::with_capacity(n),
+        weights: Vec::with_capacity(n),
+        used: Vec::with_capacity(n),
+        rows: (1.0, 1.0),
+        focal: camera.intrinsics_scale(),
+    };
+    let (fx, fy) = out.focal;
+    let fmax = fx.max(fy);
+    out.rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
+    for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
+        let Ok((m, weight)) = camera.undistort_weighted(*px) else {
+            continue;
+        };
+        let weight = user_weights.map_or(weight, |uw| uw[i] * weight);
+        if !weight.is_finite() {
+            return Err(PnpError::NonFinite {
+                index: i,
+                input: InputKind::Weight,
+            });
+        }
+        out.weights.push(weight);
+        out.world.push(*x);
+        out.image.push(m);
+        out.used.push(i);
+    }
+    Ok(out)
 }

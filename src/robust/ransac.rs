@@ -69,6 +69,7 @@ use rand_pcg::Pcg64;
 use super::p3p::p3p;
 use crate::camera::Camera;
 use crate::error::{InputKind, PnpError};
+use crate::solver::undistort_all;
 use crate::{Solution, Solver};
 
 /// Maximum EOPnP refits per local optimisation.
@@ -478,38 +479,49 @@ impl Ransac {
         world: &[Point3<f64>],
         pixels: &[Point2<f64>],
     ) -> Result<RansacSolution, PnpError> {
+        self.estimate_pixels_impl(solver, camera, world, pixels, None)
+    }
+
+    /// As [`Ransac::estimate_pixels`] with one non-negative weight per correspondence,
+    /// multiplying the lens distortion's local scale (a point of weight 0 is never an inlier
+    /// of a fit).
+    ///
+    /// # Errors
+    /// [`PnpError::WeightsLength`], [`PnpError::NonFinite`] and [`PnpError::InvalidWeight`]
+    /// for the first bad weight (its index is the correspondence's), otherwise as
+    /// [`Ransac::estimate`].
+    pub fn estimate_pixels_weighted(
+        &self,
+        solver: &Solver,
+        camera: &Camera,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        weights: &[f64],
+    ) -> Result<RansacSolution, PnpError> {
+        self.estimate_pixels_impl(solver, camera, world, pixels, Some(weights))
+    }
+
+    fn estimate_pixels_impl(
+        &self,
+        solver: &Solver,
+        camera: &Camera,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        weights: Option<&[f64]>,
+    ) -> Result<RansacSolution, PnpError> {
         let start = Instant::now();
         self.check()?;
-        if world.len() != pixels.len() {
-            return Err(PnpError::LengthMismatch {
-                world: world.len(),
-                image: pixels.len(),
-            });
-        }
-        let (fx, fy) = camera.intrinsics_scale();
-        let mut used = Vec::with_capacity(world.len());
-        let mut w = Vec::with_capacity(world.len());
-        let mut image = Vec::with_capacity(world.len());
-        let mut weights = Vec::with_capacity(world.len());
-        for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
-            let Ok((nrm, weight)) = camera.undistort_weighted(*px) else {
-                continue;
-            };
-            weights.push(weight);
-            w.push(*x);
-            image.push(nrm);
-            used.push(i);
-        }
-        let mut sol = self.estimate(solver, &w, &image, (fx, fy), Some(&weights))?;
-        if used.len() != world.len() {
+        let u = undistort_all(world, pixels, camera, weights)?;
+        let mut sol = self.estimate(solver, &u.world, &u.image, u.focal, Some(&u.weights))?;
+        if u.used.len() != world.len() {
             let mut full = vec![false; world.len()];
-            for (k, &i) in used.iter().enumerate() {
+            for (k, &i) in u.used.iter().enumerate() {
                 full[i] = sol.inliers[k];
             }
             sol.inliers = full;
             sol.stats.inlier_ratio = sol.num_inliers as f64 / world.len() as f64;
         }
-        sol.solution.skipped = world.len() - used.len();
+        sol.solution.skipped = world.len() - u.used.len();
         sol.stats.micros = start.elapsed().as_secs_f64() * 1e6;
         Ok(sol)
     }
