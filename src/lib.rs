@@ -56,6 +56,7 @@ pub mod camera;
 #[doc(hidden)]
 pub mod cli;
 pub mod colmap;
+pub mod covariance;
 mod error;
 pub mod kernels;
 mod numeric;

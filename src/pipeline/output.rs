@@ -13,6 +13,7 @@ use super::nullspace::{CandidateSource, MAX_CANDIDATES};
 use super::options::Refinement;
 use super::reprojection::{self, ReprojOptions};
 use super::select::{in_front, Minimum};
+use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
 use crate::numeric::rotation::to_unit_quaternion;
 
@@ -56,6 +57,9 @@ pub struct Solution {
     /// Correspondences left out because their pixel could not be undistorted
     /// ([`crate::Solver::solve_pixels`]; 0 for normalised input).
     pub skipped: usize,
+    /// The pose's covariance, when [`crate::Solver::covariance`] asks for it (and the normal
+    /// equations at the pose are positive definite); see [`crate::covariance`].
+    pub covariance: Option<PoseCovariance>,
 }
 
 impl Solution {
@@ -200,6 +204,7 @@ impl Output<'_> {
             reprojection_iterations: iters,
             used: self.fr.n_active,
             skipped: 0,
+            covariance: None,
         };
         // Reprojection mode promises the maximum-likelihood pose; a pose with a point at depth
         // 0 has an infinite reprojection error and is not one (found by fuzzing, with an image

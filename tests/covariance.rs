@@ -1,0 +1,116 @@
+//! The pose covariance against Monte Carlo: over many noise draws of one problem, the
+//! estimates' spread matches the predicted covariance (whitened chi-square and the eigenvalues
+//! of the whitened empirical covariance), for normalised input, pixel input through a
+//! distorted camera, and the estimated noise level.
+use eopnp::camera::Camera;
+use eopnp::covariance::NoiseModel;
+use eopnp::Solver;
+use eopnp_testkit::{self as common, Problem, ProblemOptions, RotationKind, Scene};
+use nalgebra::{Matrix6, Point2, Rotation3, Vector6};
+use rand_distr::{Distribution, Normal};
+
+const DRAWS: usize = 2000;
+
+/// `[delta_q, delta_t]` of `(r, t)` from `(r0, t0)`: `r = Exp(2 delta_q) r0` (the covariance's
+/// convention).
+fn tangent(
+    r: &nalgebra::Matrix3<f64>,
+    t: &nalgebra::Vector3<f64>,
+    r0: &nalgebra::Matrix3<f64>,
+    t0: &nalgebra::Vector3<f64>,
+) -> Vector6<f64> {
+    let d = Rotation3::from_matrix_unchecked(r * r0.transpose()).scaled_axis() * 0.5;
+    let dt = t - t0;
+    Vector6::new(d.x, d.y, d.z, dt.x, dt.y, dt.z)
+}
+
+/// Mean whitened chi-square and the extreme eigenvalues of `C^-1/2 S C^-1/2`, `S` the
+/// empirical covariance of `devs` about the truth.
+fn compare(devs: &[Vector6<f64>], c: &Matrix6<f64>) -> (f64, f64, f64) {
+    let l = c.cholesky().unwrap();
+    let linv = l.l().try_inverse().unwrap();
+    let mut s = Matrix6::zeros();
+    let mut chi2 = 0.0;
+    for d in devs {
+        let w = linv * d;
+        chi2 += w.norm_squared();
+        s += w * w.transpose();
+    }
+    let n = devs.len() as f64;
+    s /= n;
+    let ev = s.symmetric_eigen().eigenvalues;
+    (chi2 / n, ev.min(), ev.max())
+}
+
+fn run(camera: &Camera, sigma_px: f64, noise: NoiseModel) -> (f64, f64, f64, f64) {
+    let p = Problem::generate(&ProblemOptions {
+        n: 30,
+        sigma_px: 0.0,
+        scene: Scene::General,
+        rotation: RotationKind::Uniform,
+        seed: common::trial_seed("covariance", 1),
+    });
+    let clean: Vec<Point2<f64>> = p.image.iter().map(|m| camera.project(*m)).collect();
+    let solver = Solver::default().covariance(Some(noise));
+    // The predicted covariance at the noise-free pose, for the stated noise.
+    let c = Solver::default()
+        .covariance(Some(NoiseModel::Sigma(sigma_px)))
+        .solve_pixels(&p.world, &clean, camera)
+        .unwrap()
+        .covariance
+        .unwrap()
+        .matrix;
+    let mut rng = common::rng_from_seed(common::trial_seed("covariance_noise", 1));
+    let normal = Normal::new(0.0, sigma_px).unwrap();
+    let mut devs = Vec::with_capacity(DRAWS);
+    let mut var = 0.0;
+    for _ in 0..DRAWS {
+        let px: Vec<Point2<f64>> = clean
+            .iter()
+            .map(|q| Point2::new(q.x + normal.sample(&mut rng), q.y + normal.sample(&mut rng)))
+            .collect();
+        let sol = solver.solve_pixels(&p.world, &px, camera).unwrap();
+        let cov = sol.covariance.unwrap();
+        var += cov.sigma * cov.sigma;
+        devs.push(tangent(
+            &sol.rotation,
+            &sol.pose.translation.vector,
+            &p.r_gt,
+            &p.t_gt,
+        ));
+    }
+    let (chi2, lo, hi) = compare(&devs, &c);
+    (chi2, lo, hi, (var / DRAWS as f64).sqrt())
+}
+
+fn check(name: &str, camera: &Camera, sigma_px: f64, noise: NoiseModel) {
+    let (chi2, lo, hi, sigma) = run(camera, sigma_px, noise);
+    println!("{name}: mean chi2 {chi2:.3} (6 expected), whitened eigenvalues {lo:.3}..{hi:.3}, sigma {sigma:.4} px");
+    // Mean of 2,000 chi-square(6) draws: standard deviation 0.077; 0.4 is five of them.
+    assert!((chi2 - 6.0).abs() < 0.4, "{name}: {chi2}");
+    // Eigenvalues of a 6 x 6 sample covariance of 2,000 draws: within about 0.1 of 1.
+    assert!(lo > 0.85 && hi < 1.15, "{name}: {lo} {hi}");
+    assert!(
+        (sigma / sigma_px - 1.0).abs() < 0.03,
+        "{name}: sigma {sigma}"
+    );
+}
+
+#[test]
+fn covariance_matches_monte_carlo_pinhole() {
+    let cam = Camera::pinhole(800.0, 800.0, 320.0, 240.0).unwrap();
+    check("pinhole, sigma given", &cam, 0.5, NoiseModel::Sigma(0.5));
+    check("pinhole, sigma estimated", &cam, 2.0, NoiseModel::Estimated);
+}
+
+#[test]
+fn covariance_matches_monte_carlo_through_distortion() {
+    let cam =
+        Camera::from_colmap("RADIAL", 640, 480, vec![800.0, 320.0, 240.0, -0.25, 0.05]).unwrap();
+    check(
+        "radial k1 -0.25, sigma given",
+        &cam,
+        1.0,
+        NoiseModel::Sigma(1.0),
+    );
+}
