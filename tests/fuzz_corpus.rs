@@ -68,6 +68,41 @@ fn corpus_and_regressions_replay() {
     eprintln!("{total} inputs replayed");
 }
 
+/// The exact-pose property runs on most `solve` inputs: replays the seeds and the committed
+/// corpus through `harness::solve_report` and counts the inputs on which the exact-pose
+/// assertion ran (on the decoded problem, when the fuzzer built an exact one, or on the exact
+/// problem derived from every input). Prints the shares; asserts that the derived problem
+/// reaches the assertion on at least 90 % of the inputs.
+#[test]
+fn exact_pose_check_runs_on_most_solve_inputs() {
+    let (mut n, mut decoded, mut derived, mut either) = (0usize, 0usize, 0usize, 0usize);
+    for sub in ["seeds", "corpus"] {
+        for f in files(&fuzz_dir().join(sub).join("solve")) {
+            let Ok(data) = std::fs::read(&f) else {
+                continue;
+            };
+            let r = harness::solve_report(&data);
+            n += 1;
+            decoded += usize::from(r.exact_decoded);
+            derived += usize::from(r.exact_derived);
+            either += usize::from(r.exact_decoded || r.exact_derived);
+        }
+    }
+    let pct = |k: usize| 100.0 * k as f64 / n.max(1) as f64;
+    eprintln!(
+        "solve: {n} inputs; the exact-pose assertion ran on {either} ({:.1} %): on the decoded \
+         problem in {decoded} ({:.1} %), on the derived one in {derived} ({:.1} %)",
+        pct(either),
+        pct(decoded),
+        pct(derived)
+    );
+    assert!(n > 1000, "{n} solve inputs");
+    assert!(
+        derived as f64 >= 0.9 * n as f64,
+        "the exact-pose assertion ran on the derived problem of only {derived} of {n} inputs"
+    );
+}
+
 fn seed(target: &str, name: &str) -> Vec<u8> {
     std::fs::read(
         fuzz_dir()

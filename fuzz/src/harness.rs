@@ -10,7 +10,11 @@
 //!   the quaternion's, finite non-negative costs, and a reprojection rmse that is finite or
 //!   (algebraic mode, a point in the focal plane) +inf, never NaN;
 //! - `Err` for every input with a NaN or infinity, with the matching typed error;
-//! - on well-posed exact problems the pose reprojects exactly (`check_exact`);
+//! - on well-posed exact problems the pose reprojects exactly (`check_exact`): on the decoded
+//!   problem when the fuzzer made it exact (rare: every noise value must be 0), and on an
+//!   exact, well-conditioned problem derived from every input (`derive_exact`), so that the
+//!   assertion runs on almost every input (`tests/fuzz_corpus.rs` asserts >= 90 % of the
+//!   committed `solve` inputs; `fuzz/examples/exact_share.rs` prints the share for any corpus);
 //! - RANSAC options out of range give `InvalidOption`; the inlier mask has one entry per point
 //!   and agrees with the inlier count;
 //! - parsers return a typed error with a message, never a panic; a parsed model or problem is
@@ -327,58 +331,202 @@ fn check_result(p: &Problem, res: &Result<Solution, PnpError>) {
     }
 }
 
-/// The accuracy property on well-posed exact problems: when the image points are exact
-/// projections of a pose, every point is in front of it at a moderate depth, coordinates are
-/// moderate and N >= 6 points span 3D well (or lie exactly on a plane), the returned pose must
-/// reproject (nearly) exactly: a pose with a visible reprojection error while an exact one
-/// exists is a silently wrong answer. Near-degenerate inputs are excluded, where several poses
-/// fit and the conditioning, not the solver, limits the answer.
-fn check_exact(p: &Problem, s: &Solution) {
-    let Some((rot, t)) = &p.exact_pose else {
-        return;
-    };
-    if p.world.len() < 6 || p.weights.is_some() || s.degenerate {
-        return;
+/// Whether the exact-pose property applies to an exact problem (image points that are the
+/// exact projections of `(rot, t)`): N >= 6, no weight outside [1e-3, 1e3] (so every point
+/// counts, none dominates), every point in front of the pose at a moderate depth (0.1..1e3),
+/// moderate coordinates, and world points that span 3D well or lie exactly on a plane.
+/// Near-degenerate inputs are excluded: there several poses fit and the conditioning, not the
+/// solver, limits the answer.
+fn exact_check_applies(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    rot: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> bool {
+    if world.len() < 6 || world.len() != image.len() {
+        return false;
     }
-    let moderate = p.world.iter().all(|x| x.coords.amax() <= 1e3)
-        && p.image.iter().all(|m| m.coords.amax() <= 2.0)
+    if let Some(w) = weights {
+        if w.len() != world.len() || !w.iter().all(|&w| (1e-3..=1e3).contains(&w)) {
+            return false;
+        }
+    }
+    let moderate = world.iter().all(|x| x.coords.amax() <= 1e3)
+        && image.iter().all(|m| m.coords.amax() <= 2.0)
         && t.amax() <= 1e3;
-    let depths: Vec<f64> = p.world.iter().map(|x| (rot * x.coords + t).z).collect();
-    let (zmin, zmax) = depths
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(a, b), &z| (a.min(z), b.max(z)));
+    let depths = world.iter().map(|x| (rot * x.coords + t).z);
+    let (zmin, zmax) = depths.fold((f64::INFINITY, 0.0f64), |(a, b), z| (a.min(z), b.max(z)));
     if !(moderate && zmin >= 0.1 && zmax <= 1e3) {
-        return;
+        return false;
     }
-    // Spread of the world points: singular values of the centred cloud.
-    let n = p.world.len() as f64;
-    let c = p.world.iter().fold(Vector3::zeros(), |a, x| a + x.coords) / n;
-    let mut cov = Matrix3::zeros();
-    for x in &p.world {
-        let d = x.coords - c;
-        cov += d * d.transpose();
-    }
-    let mut ev: Vec<f64> = cov
-        .symmetric_eigenvalues()
-        .iter()
-        .map(|v| v.max(0.0).sqrt())
-        .collect();
-    ev.sort_by(|a, b| b.total_cmp(a));
-    let well_spread =
-        ev[0] >= 0.1 && ev[1] >= 0.1 * ev[0] && (ev[2] >= 0.1 * ev[0] || ev[2] <= 1e-12 * ev[0]);
-    if !well_spread {
-        return;
+    // Spread of the world points: singular values of the centred cloud (of the N x 3 matrix
+    // itself: those of its 3 x 3 scatter would put the rounding floor of an exactly planar
+    // cloud at 1e-8, not 1e-16, of the largest).
+    let n = world.len() as f64;
+    let c = world.iter().fold(Vector3::zeros(), |a, x| a + x.coords) / n;
+    let centred = nalgebra::DMatrix::from_fn(world.len(), 3, |i, j| world[i][j] - c[j]);
+    let mut sv: Vec<f64> = centred.singular_values().iter().copied().collect();
+    sv.sort_by(|a, b| b.total_cmp(a));
+    sv[0] >= 0.1 && sv[1] >= 0.1 * sv[0] && (sv[2] >= 0.1 * sv[0] || sv[2] <= 1e-12 * sv[0])
+}
+
+/// The accuracy property on well-posed exact problems ([`exact_check_applies`]): the returned
+/// pose must reproject (nearly) exactly. A pose with a visible reprojection error while an
+/// exact one exists is a silently wrong answer. `what` names the problem in the message.
+/// Returns whether the assertion ran (a solution flagged `degenerate` is not checked).
+fn check_exact(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    (rot, t): (&Matrix3<f64>, &Vector3<f64>),
+    s: &Solution,
+    what: &str,
+) -> bool {
+    if s.degenerate || !exact_check_applies(world, image, weights, rot, t) {
+        return false;
     }
     assert!(
         s.reprojection_rmse <= 1e-6,
-        "exact well-posed problem, but the pose reprojects with rmse {:e} (source {:?})",
+        "{what}: exact well-posed problem (N = {}), but the pose reprojects with rmse {:e} \
+         (source {:?})",
+        world.len(),
         s.reprojection_rmse,
         s.source
     );
+    true
+}
+
+/// Maps any `f64` into (-2, 2), continuously and monotonically (`2 x / (1 + |x|)`); NaN and
+/// infinities to 0 and +-2.
+fn squash(x: f64) -> f64 {
+    if x.is_nan() {
+        0.0
+    } else if x.is_infinite() {
+        2.0 * x.signum()
+    } else {
+        2.0 * (x / (1.0 + x.abs()))
+    }
+}
+
+/// A fixed pseudo-random number in [-1, 1) for index `k` and salt `s` (splitmix64).
+fn jitter(k: u64, s: u64) -> f64 {
+    let mut z = k
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(s.wrapping_mul(0xD1B5_4A32_D192_ED03))
+        .wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+/// An exact, well-conditioned problem derived from a decoded one, so that the exact-pose
+/// property runs on almost every `solve` input, whatever the fuzzer made of the numbers.
+pub struct ExactProblem {
+    /// World points: the decoded ones (the first 6..=1000; fewer are padded) squashed into
+    /// (-2, 2) ([`squash`]), plus a fixed jitter in [-1, 1) per coordinate (so that repeated,
+    /// tiny or exhausted inputs still span 3D), times 0.75; on the plane `z = a x + b y + c`
+    /// when planar.
+    pub world: Vec<Point3<f64>>,
+    /// Their exact projections through the pose.
+    pub image: Vec<Point2<f64>>,
+    /// The decoded weights squashed into [0.1, 10] (when the decoded problem has weights).
+    pub weights: Option<Vec<f64>>,
+    /// The pose: any rotation (from the decoded projecting pose, else from the bytes after the
+    /// problem), the point cloud's origin 8..40 units in front of the camera and at most 0.2
+    /// of that depth off its axis.
+    pub pose: (Matrix3<f64>, Vector3<f64>),
+    /// Whether the points are exactly planar.
+    pub planar: bool,
+}
+
+/// Derives the [`ExactProblem`] of a decoded problem; reads (after it) a control byte (bit 0:
+/// planar; bits 1-7: the depth), three numbers (the rotation vector, when the decoded problem
+/// has no projecting pose) and three more (the lateral offset and the plane).
+pub fn derive_exact(p: &Problem, r: &mut Reader) -> ExactProblem {
+    let control = r.u8();
+    let planar = control & 1 != 0;
+    let depth = 8.0 + 32.0 * f64::from(control >> 1) / 127.0;
+    let rv = Vector3::new(r.f64(), r.f64(), r.f64());
+    let extra = Vector3::new(r.f64(), r.f64(), r.f64());
+    let rot = match &p.exact_pose {
+        Some((rot, _)) if rot.iter().all(|x| x.is_finite()) => *rot,
+        _ => Rotation3::new(rv.map(|x| 4.0 * squash(x))).into_inner(),
+    };
+    let t = Vector3::new(
+        0.1 * depth * squash(extra.x),
+        0.1 * depth * squash(extra.y),
+        depth,
+    );
+    let (pa, pb, pc) = (
+        0.5 * squash(extra.x),
+        0.5 * squash(extra.y),
+        0.5 * squash(extra.z),
+    );
+    let n = p.world.len().clamp(6, 1000);
+    let salt = u64::from(control);
+    let world: Vec<Point3<f64>> = (0..n)
+        .map(|k| {
+            let x = p.world.get(k).copied().unwrap_or_else(Point3::origin);
+            let kk = 3 * k as u64;
+            let mut q = Point3::new(
+                0.75 * (squash(x.x) + jitter(kk, salt)),
+                0.75 * (squash(x.y) + jitter(kk + 1, salt)),
+                0.75 * (squash(x.z) + jitter(kk + 2, salt)),
+            );
+            if planar {
+                q.z = pa * q.x + pb * q.y + pc;
+            }
+            q
+        })
+        .collect();
+    let image = world
+        .iter()
+        .map(|x| {
+            let c = rot * x.coords + t;
+            Point2::new(c.x / c.z, c.y / c.z)
+        })
+        .collect();
+    let weights = p.weights.as_ref().map(|w| {
+        (0..n)
+            .map(|k| {
+                let v = w.get(k).copied().unwrap_or(1.0);
+                10f64.powf(0.5 * squash(v.abs().log10()))
+            })
+            .collect()
+    });
+    ExactProblem {
+        world,
+        image,
+        weights,
+        pose: (rot, t),
+        planar,
+    }
+}
+
+/// What one `solve` input exercised (for the corpus replay's statistics).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SolveReport {
+    /// The decoded problem is exact and the exact-pose assertion ran on it.
+    pub exact_decoded: bool,
+    /// The exact-pose assertion ran on the derived problem ([`derive_exact`]).
+    pub exact_derived: bool,
 }
 
 /// `solve`, `solve_weighted` and `solve_all` on an arbitrary problem.
 pub fn solve(data: &[u8]) {
+    solve_report(data);
+}
+
+/// [`solve`], reporting which exact-pose assertions ran.
+///
+/// The decoded problem is solved as given; the exact problem derived from it
+/// ([`derive_exact`]) is solved with the same options, except that an iteration budget is
+/// the default one (tiny budgets are for the decoded problem: a bounded answer, no wrong
+/// `Ok`) and a planar detection that contradicts the derived points is `Auto`.
+pub fn solve_report(data: &[u8]) -> SolveReport {
+    let mut report = SolveReport::default();
     let mut r = Reader::new(data);
     let solver_byte = r.u8();
     let solver = decode_solver(solver_byte);
@@ -389,9 +537,50 @@ pub fn solve(data: &[u8]) {
         None => solver.solve(&p.world, &p.image),
     };
     check_result(&p, &res);
-    if let Ok(s) = &res {
-        if full_budget {
-            check_exact(&p, s);
+    if let (Ok(s), Some((rot, t)), true) = (&res, &p.exact_pose, full_budget) {
+        report.exact_decoded = check_exact(
+            &p.world,
+            &p.image,
+            p.weights.as_deref(),
+            (rot, t),
+            s,
+            "decoded problem",
+        );
+    }
+    // The derived exact problem.
+    let e = derive_exact(&p, &mut r);
+    let contradicts = match (solver_byte >> 2) & 3 {
+        1 => !e.planar,
+        2 => e.planar,
+        _ => false,
+    };
+    let exact_solver = decode_solver(solver_byte & if contradicts { 0x03 } else { 0x0f });
+    let eres = match &e.weights {
+        Some(w) => exact_solver.solve_weighted(&e.world, &e.image, w),
+        None => exact_solver.solve(&e.world, &e.image),
+    };
+    match &eres {
+        Ok(s) => {
+            check_solution(s);
+            report.exact_derived = check_exact(
+                &e.world,
+                &e.image,
+                e.weights.as_deref(),
+                (&e.pose.0, &e.pose.1),
+                s,
+                "derived problem",
+            );
+        }
+        Err(err) => {
+            if exact_check_applies(
+                &e.world,
+                &e.image,
+                e.weights.as_deref(),
+                &e.pose.0,
+                &e.pose.1,
+            ) {
+                panic!("derived problem: exact well-posed problem, but {err:?}");
+            }
         }
     }
     // solve_all on small problems: every minimum satisfies the same properties, the best
@@ -424,6 +613,7 @@ pub fn solve(data: &[u8]) {
             }
         }
     }
+    report
 }
 
 /// `Ransac::estimate` on an arbitrary problem with arbitrary options.
