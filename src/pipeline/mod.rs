@@ -145,7 +145,7 @@ pub(crate) fn run(
         nullspace::candidates(&sys.m, &mut cands)?;
     }
     if let Some(sp) = &planar_sys {
-        planar::candidates(sp, world, weights, &fr, &mut cands);
+        planar::candidates(sp, world, weights, &fr, scale, &mut cands);
     }
     nullspace::extra_starts(&mut cands);
 

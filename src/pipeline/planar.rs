@@ -14,16 +14,27 @@ use super::nullspace::{
 };
 use crate::numeric::bounds::{converged, limit, Bound};
 
-/// S4': the planar candidates of the flattened system `sys_p`, appended to `out` (no-op when
-/// the eigen-decomposition of `M_p` fails).
+/// S4': the planar candidates of the flattened system `sys_p`, appended to `out`. When the
+/// eigen-decomposition of `M_p` fails (its iteration bound), only the p1 start, from the
+/// smallest eigenvector by inverse iteration ([`first_start`]): without it the search would
+/// go on from the remaining starts alone and could return a wrong local minimum.
 pub(crate) fn candidates(
     sys_p: &System,
     world: &[Point3<f64>],
     weights: Option<&[f64]>,
     fr: &WorkingFrame,
+    scale: f64,
     out: &mut Candidates,
 ) {
     let Some((_, vecs)) = planar_eigen(sys_p) else {
+        if let Some(r) = first_start(sys_p, world, weights, fr, scale) {
+            if !out.is_full() {
+                out.push(Candidate {
+                    r,
+                    source: CandidateSource::Planar1,
+                });
+            }
+        }
         return;
     };
     planar_vectors(&vecs, |r6, source| {
