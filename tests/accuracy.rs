@@ -16,11 +16,13 @@
 //!    error < 1e-6 deg and |t - t_gt| / |t_gt| < 1e-8. The same
 //!    for algebraic mode (S0-S8) with 1,000 trials per configuration.
 //! 2. Noisy (paper protocol, General, Uniform): N = 6..15 at sigma = 2 px and N = 10 at
-//!    sigma = 0.5, 1, 2, 3, 5 px, 1,000 trials each: default mode mean and median rotation and
+//!    sigma = 0.5, 1, 2, 3, 5 px, 4,000 trials each: default mode mean and median rotation and
 //!    translation errors within 1 % of the LM-from-ground-truth reference, algebraic mode within
 //!    8 %; never a rotation error above 5 deg where the reference is below 1 deg.
-//! 3. N = 4, 5 (1,000 trials each): `solve_all` contains a pose whose errors are within 1 % of
-//!    the reference's in >= 99 % of the trials.
+//! 3. N = 4, 5 (4,000 trials each): `solve_all` contains the maximum-likelihood pose (LM from
+//!    the ground truth, run to convergence) in >= 99 % of the trials: a candidate within 1e-5
+//!    degrees and 1e-7 relative of it, or with a pixel reprojection cost at most its cost
+//!    times (1 + 1e-9).
 
 // `!(err <= tol)` is deliberate throughout: a NaN error must fail the check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -47,6 +49,14 @@ const NOISE_FREE_ALGEBRAIC_TRIALS: u64 = 1_000;
 /// rotation ratio of 1.084 with 1,000 trials and 1.061 with 4,000 (all other ratios 1.025-1.056).
 /// More trials reduce the noise; the tolerance is unchanged.
 const NOISY_TRIALS: u64 = 4_000;
+/// `solve_all` suite: a candidate is the ML pose (LM from the ground truth, run to
+/// convergence) when its rotation is within this many degrees of it (and its translation within
+/// [`SOLVE_ALL_T_REL`]): two correct minimisers of the same cost agree to ~1e-9 degrees
+/// (docs/algorithm.md S9; the LM reference against scipy: at most 2.6e-7), distinct local
+/// minima are degrees apart.
+const SOLVE_ALL_ROT_DEG: f64 = 1e-5;
+/// `solve_all` suite: translation tolerance relative to |t_LM| (see [`SOLVE_ALL_ROT_DEG`]).
+const SOLVE_ALL_T_REL: f64 = 1e-7;
 /// Point counts of the noise-free suite.
 const NOISE_FREE_NS: [usize; 6] = [4, 5, 6, 10, 100, 1000];
 
@@ -440,9 +450,10 @@ fn solve_all_contains_ml_pose_n4_n5() {
     for n in [4usize, 5] {
         let name = format!("accuracy/solve_all/{n}");
         let count = trials(NOISY_TRIALS);
-        let mut hits = 0u64;
+        let (mut hits, mut by_pose, mut by_cost, mut lm_unconverged) = (0u64, 0u64, 0u64, 0u64);
         let mut misses = Vec::new();
         let (mut best_rot, mut lm_rot) = (Vec::new(), Vec::new());
+        let mut closest = Vec::new();
         for trial in 0..count {
             let seed = trial_seed(&name, trial);
             let p = Problem::generate(&ProblemOptions {
@@ -452,9 +463,10 @@ fn solve_all_contains_ml_pose_n4_n5() {
                 rotation: RotationKind::Uniform,
                 seed,
             });
+            // The ML pose: LM from the ground truth, run to convergence.
             let lm = p.lm_from_gt();
-            let (lr, lt) = p.errors(&lm.r, &lm.t);
-            lm_rot.push(lr);
+            lm_unconverged += u64::from(!lm.converged);
+            lm_rot.push(p.errors(&lm.r, &lm.t).0);
             let all = match solver.solve_all(&p.world, &p.image) {
                 Ok(all) => all,
                 Err(e) => {
@@ -466,25 +478,40 @@ fn solve_all_contains_ml_pose_n4_n5() {
                 let (r, t) = pose_of(best);
                 best_rot.push(p.errors(&r, &t).0);
             }
-            // "Within 1 % of the reference's error", plus the 1e-6 deg / 1e-8 relative
-            // agreement of two correct minimisers of the same flat cost (docs/algorithm.md S9).
-            let found = all.iter().any(|s| {
+            let (mut pose_match, mut cost_match) = (false, false);
+            let mut nearest = f64::INFINITY;
+            for s in all.iter() {
                 let (r, t) = pose_of(s);
-                let (er, et) = p.errors(&r, &t);
-                er <= 1.01 * lr + 1e-6 && et <= 1.01 * lt + 1e-8
-            });
-            if found {
+                let (dr, dt) = (rot_err_deg(&r, &lm.r), trans_err_rel(&t, &lm.t));
+                nearest = nearest.min(dr);
+                pose_match |= dr <= SOLVE_ALL_ROT_DEG && dt <= SOLVE_ALL_T_REL;
+                let cost = reprojection_cost(&p.world, &p.pixels, &r, &t, PIXEL_CAMERA);
+                cost_match |= cost <= lm.cost * (1.0 + 1e-9);
+            }
+            closest.push(nearest);
+            by_pose += u64::from(pose_match);
+            by_cost += u64::from(cost_match);
+            if pose_match || cost_match {
                 hits += 1;
             } else if misses.len() < 10 {
                 misses.push(format!(
-                    "seed {seed:#x}: no candidate within 1 % (LM-from-GT {lr:.4} deg)"
+                    "seed {seed:#x}: the ML pose is not among the {} candidates (closest {nearest:.3e} deg away; LM-from-GT {} deg off the truth)",
+                    all.len(),
+                    p.errors(&lm.r, &lm.t).0
                 ));
             }
         }
         let rate = hits as f64 / count as f64;
+        closest.sort_by(f64::total_cmp);
         eprintln!(
-            "solve_all N={n}: {hits}/{count} trials contain the ML pose ({:.2} %); ranked-first mean rot {:.4} deg (median {:.4}), LM-from-GT mean {:.4} (median {:.4})",
+            "solve_all N={n}: {hits}/{count} trials contain the ML pose ({:.2} %): {by_pose} by pose \
+             (<= {SOLVE_ALL_ROT_DEG:e} deg, <= {SOLVE_ALL_T_REL:e} relative), {by_cost} by cost \
+             (<= LM-from-GT's x (1 + 1e-9)); LM not converged in {lm_unconverged}; closest \
+             candidate to the ML pose: median {:.2e} deg, 99th percentile {:.2e} deg; ranked-first \
+             mean rot {:.4} deg (median {:.4}), LM-from-GT mean {:.4} (median {:.4})",
             100.0 * rate,
+            closest[closest.len() / 2],
+            closest[closest.len() * 99 / 100],
             mean(&best_rot),
             median(&best_rot),
             mean(&lm_rot),
