@@ -621,15 +621,24 @@ pub fn case2_cubics(n: usize) -> Measurement {
 /// every input is exact, `C2 = |A (a - a0)|^2` is stationary at `(x0, y0)`, so
 /// `Res(y0) = y0 q(y0^2) = 0` and `g1(x0) = g2(x0) = 0` at `y0` exactly. Bound: the kernel's
 /// own rounding only, `gamma_64 per(|Bez|_abs)` for the resultant, `gamma_64 sum |a_n|_abs |x0|^n`
-/// for the cubics. Reported norm: `|q(beta0)| / sum_j |k_j| beta0^j` (the coefficient scale).
+/// for the cubics. Two measurements on the same samples, each with its own worst ratio (a
+/// resultant error of exactly 0 must not hide the cubics' residual):
+/// - `case2_resultant`: `|q(beta0)| / sum_j |k_j| beta0^j` (the coefficient scale);
+/// - `case2_cubics`: `max_i |g_i(x0)| / sum_n |a_n|_abs |x0|^n`.
 #[must_use]
-pub fn case2_known_root(n: usize) -> Measurement {
+pub fn case2_known_root(n: usize) -> [Measurement; 2] {
     let seed = 103;
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case2_resultant",
-        "known root beta0 = y0^2 (+ case2_cubics at x0)",
+        "known root beta0 = y0^2",
         "|q(beta0)| / sum |k_j| beta0^j",
+        "derived per sample".into(),
+    );
+    let mut tc = Tracker::new(
+        "case2_cubics",
+        "known root x0 at y0 (the same systems)",
+        "max_i |g_i(x0)| / sum |a_n|_abs |x0|^n",
         "derived per sample".into(),
     );
     for i in 0..n {
@@ -642,22 +651,25 @@ pub fn case2_known_root(n: usize) -> Measurement {
         let beta = y0 * y0;
         let (qv, qs) = rf::poly_eval(&kk, beta);
         let (_, _, g1a, g2a) = rf::case2_cubics(&q, &p, y0);
-        let mut ratio = (qv * y0).abs() / (g64() * rf::bezout_abs_permanent(&g1a, &g2a));
-        let cub = k::case2_cubics(&q, &p, y0);
-        for (off, ga) in [(0usize, g1a), (4, g2a)] {
-            let (v, _) = rf::poly_eval(&cub[off..off + 4], x0);
-            let (_, sa) = rf::poly_eval(&ga, x0.abs());
-            ratio = ratio.max(v.abs() / (g64() * sa));
-        }
-        let err = qv.abs() / qs;
-        t.record(err, err / ratio.max(f64::MIN_POSITIVE), || {
+        let ratio = (qv * y0).abs() / (g64() * rf::bezout_abs_permanent(&g1a, &g2a));
+        let input = || {
             format!(
                 "seed {seed} sample {i} x0 = {x0} y0 = {y0} A = {:?}",
                 a.as_slice()
             )
-        });
+        };
+        t.record_ratio(qv.abs() / qs, ratio, input);
+        let cub = k::case2_cubics(&q, &p, y0);
+        let (mut cerr, mut cratio) = (0.0f64, 0.0f64);
+        for (off, ga) in [(0usize, g1a), (4, g2a)] {
+            let (v, _) = rf::poly_eval(&cub[off..off + 4], x0);
+            let (_, sa) = rf::poly_eval(&ga, x0.abs());
+            cerr = cerr.max(v.abs() / sa);
+            cratio = cratio.max(v.abs() / (g64() * sa));
+        }
+        tc.record_ratio(cerr, cratio, input);
     }
-    t.finish()
+    [t.finish(), tc.finish()]
 }
 
 /// `case3_quartic` vs `k^T H k` at random `(k1, k2)`: `|dC3| / (|k|^T |H| |k|) <= 1e-12`.
@@ -759,14 +771,22 @@ pub fn case3_resultant(n: usize) -> Measurement {
 /// with the last entry set to `-(w . k0)` so that `Bm k(x0, y0) = 0` exactly; `H = Bm^T Bm`
 /// exact. `C3 = |Bm k|^2` is stationary at `(x0, y0)`: `Res(y0) = 0` and both cubics vanish at
 /// `x0`. Bound: kernel rounding only (`gamma_64` times the absolute-value scales, as for case 2).
+/// Two measurements on the same samples, as for case 2: `case3_resultant` at `y0` and
+/// `case3_cubics` at `x0`.
 #[must_use]
-pub fn case3_known_root(n: usize) -> Measurement {
+pub fn case3_known_root(n: usize) -> [Measurement; 2] {
     let seed = 114;
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case3_resultant",
-        "known root y0 (+ case3_cubics at x0)",
+        "known root y0",
         "|Res(y0)| / sum |r_j| |y0|^j",
+        "derived per sample".into(),
+    );
+    let mut tc = Tracker::new(
+        "case3_cubics",
+        "known root x0 at y0 (the same systems)",
+        "max_i |g_i(x0)| / sum |a_n|_abs |x0|^n",
         "derived per sample".into(),
     );
     for i in 0..n {
@@ -783,22 +803,25 @@ pub fn case3_known_root(n: usize) -> Measurement {
         let res = k::case3_resultant(&c);
         let (rv, rs) = rf::poly_eval(&res, y0);
         let (_, _, gxa, gya) = rf::case3_cubics(&c, y0);
-        let mut ratio = rv.abs() / (g64() * rf::bezout_abs_permanent(&gxa, &gya));
-        let cub = k::case3_cubics(&c, y0);
-        for (off, ga) in [(0usize, gxa), (4, gya)] {
-            let (v, _) = rf::poly_eval(&cub[off..off + 4], x0);
-            let (_, sa) = rf::poly_eval(&ga, x0.abs());
-            ratio = ratio.max(v.abs() / (g64() * sa));
-        }
-        let err = rv.abs() / rs;
-        t.record(err, err / ratio.max(f64::MIN_POSITIVE), || {
+        let ratio = rv.abs() / (g64() * rf::bezout_abs_permanent(&gxa, &gya));
+        let input = || {
             format!(
                 "seed {seed} sample {i} x0 = {x0} y0 = {y0} Bm = {:?}",
                 bm.as_slice()
             )
-        });
+        };
+        t.record_ratio(rv.abs() / rs, ratio, input);
+        let cub = k::case3_cubics(&c, y0);
+        let (mut cerr, mut cratio) = (0.0f64, 0.0f64);
+        for (off, ga) in [(0usize, gxa), (4, gya)] {
+            let (v, _) = rf::poly_eval(&cub[off..off + 4], x0);
+            let (_, sa) = rf::poly_eval(&ga, x0.abs());
+            cerr = cerr.max(v.abs() / sa);
+            cratio = cratio.max(v.abs() / (g64() * sa));
+        }
+        tc.record_ratio(cerr, cratio, input);
     }
-    t.finish()
+    [t.finish(), tc.finish()]
 }
 
 /// Random case-4 inputs `t` (21 numbers, entries `N(0,1) 10^U(-1, 1)`).
@@ -936,15 +959,23 @@ pub fn case4_known_system(rng: &mut rand_pcg::Pcg64) -> ([f64; 21], [f64; 3]) {
 /// `(k2, k3)` block an integer unimodular `Mm` and `F00` adjusted so that every form vanishes
 /// at a dyadic `(k1*, k2*, k3*)`; `T = -Mm^-1 N(k1)` exactly (adjugate). Then `det M(k1*) = 0`
 /// and `M(k1*) [k2*, k3*, 1] = 0` exactly; bounds: kernel rounding `gamma_64 per(|M|_abs)` and
-/// `gamma_64 (|M|_abs |y*|)_i`. Reported norm: `|det M(k1*)| / Hadamard(|M|_abs)`.
+/// `gamma_64 (|M|_abs |y*|)_i`. Two measurements on the same samples, as for case 2:
+/// - `case4_determinant`: `|det M(k1*)| / Hadamard(|M|_abs)`;
+/// - `case4_matrix`: `max_i |(M(k1*) y*)_i| / (|M|_abs |y*|)_i`.
 #[must_use]
-pub fn case4_known_root(n: usize) -> Measurement {
+pub fn case4_known_root(n: usize) -> [Measurement; 2] {
     let seed = 123;
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case4_determinant",
-        "known root k1* (+ case4_matrix: M(k1*) y* = 0)",
+        "known root k1*",
         "|det M(k1*)| / Hadamard(|M|_abs)",
+        "derived per sample".into(),
+    );
+    let mut tm = Tracker::new(
+        "case4_matrix",
+        "known root: M(k1*) y* = 0 (the same systems)",
+        "max_i |(M(k1*) y*)_i| / (|M|_abs |y*|)_i",
         "derived per sample".into(),
     );
     for i in 0..n {
@@ -953,20 +984,21 @@ pub fn case4_known_root(n: usize) -> Measurement {
         let ma = rf::case4_m_from_t(&ta, true);
         let mad = DMatrix::from_iterator(3, 3, ma.iter().copied());
         let (dv, _) = rf::poly_eval(&k::case4_determinant(&tt), ks[0]);
-        let mut ratio = dv.abs() / (g64() * rf::permanent(&mad));
+        let ratio = dv.abs() / (g64() * rf::permanent(&mad));
+        let input = || format!("seed {seed} sample {i} k* = {ks:?} t = {tt:?}");
+        t.record_ratio(dv.abs() / rf::hadamard(&mad), ratio, input);
         let mk = rf::case4_layout_at(&k::case4_matrix(&tt), ks[0]);
         let y = Vector3::new(ks[1], ks[2], 1.0);
         let resid = mk * y;
         let rscale = ma * y.abs();
+        let (mut merr, mut mratio) = (0.0f64, 0.0f64);
         for r in 0..3 {
-            ratio = ratio.max(resid[r].abs() / (g64() * rscale[r]));
+            merr = merr.max(resid[r].abs() / rscale[r]);
+            mratio = mratio.max(resid[r].abs() / (g64() * rscale[r]));
         }
-        let err = dv.abs() / rf::hadamard(&mad);
-        t.record(err, err / ratio.max(f64::MIN_POSITIVE), || {
-            format!("seed {seed} sample {i} k* = {ks:?} t = {tt:?}")
-        });
+        tm.record_ratio(merr, mratio, input);
     }
-    t.finish()
+    [t.finish(), tm.finish()]
 }
 
 /// Number of samples for the cost / gradient / Hessian / local-model checks.
@@ -1010,14 +1042,14 @@ pub fn all() -> Vec<Measurement> {
         out.push(local_model(a, N_COST));
     }
     out.push(case2_resultant(N_RESULTANT));
-    out.push(case2_known_root(N_RESULTANT));
+    out.extend(case2_known_root(N_RESULTANT));
     out.push(case2_cubics(N_RESULTANT));
     out.push(case3_quartic(N_RESULTANT));
     out.push(case3_resultant(N_RESULTANT));
-    out.push(case3_known_root(N_RESULTANT));
+    out.extend(case3_known_root(N_RESULTANT));
     out.push(case3_cubics(N_RESULTANT));
     out.push(case4_matrix(N_RESULTANT));
     out.push(case4_determinant(N_RESULTANT));
-    out.push(case4_known_root(N_RESULTANT));
+    out.extend(case4_known_root(N_RESULTANT));
     out
 }

@@ -72,6 +72,26 @@ impl Tracker {
         }
     }
 
+    /// Record one sample whose `error / bound` ratio is computed by the caller (a bound that is
+    /// a maximum of several, or not a number in the reported norm). Unlike [`Tracker::record`],
+    /// an error of exactly 0 does not set the ratio to 0: the caller's ratio is kept. A NaN
+    /// ratio counts as infinite.
+    pub fn record_ratio(&mut self, err: f64, ratio: f64, input: impl FnOnce() -> String) {
+        self.m.samples += 1;
+        let ratio = if ratio.is_nan() || err.is_nan() {
+            f64::INFINITY
+        } else {
+            ratio
+        };
+        if err > self.m.worst || err.is_nan() {
+            self.m.worst = if err.is_nan() { f64::INFINITY } else { err };
+        }
+        if ratio > self.m.worst_ratio || self.m.samples == 1 {
+            self.m.worst_ratio = ratio;
+            self.m.worst_input = input();
+        }
+    }
+
     /// The measurement.
     #[must_use]
     pub fn finish(self) -> Measurement {
