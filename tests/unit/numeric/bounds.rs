@@ -247,7 +247,11 @@ fn p3p_eigen_decomposition() {
         assert!(hit >= 300, "seed {seed}: {hit}");
         assert_eq!(
             res.err(),
-            Some(PnpError::NoConsensus { iterations: 300 }),
+            Some(PnpError::NoConsensus {
+                iterations: 300,
+                inliers: 0,
+                needed: 6
+            }),
             "seed {seed}"
         );
         let (res, _) = with_limit(Bound::P3pEigen, 5, || {
