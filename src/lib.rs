@@ -63,6 +63,7 @@ mod numeric;
 mod pipeline;
 mod robust;
 mod solver;
+mod source;
 #[cfg(test)]
 #[path = "../tests/unit/test_data.rs"]
 mod test_data;

@@ -1,57 +1,73 @@
 //! The binary format (`cameras.bin`, `images.bin`, `points3D.bin`; little-endian, COLMAP's
-//! `reconstruction_io` layout): the readers, bounded by the bytes present, and the encoder the
-//! writer (`write.rs`) uses.
+//! `reconstruction_io` layout): the readers, streaming record by record and bounded by the
+//! bytes present (every count is checked against the bytes left before anything is allocated
+//! for it), and the encoder the writer (`write.rs`) uses.
 
 use std::collections::BTreeMap;
+use std::io::{self, BufRead};
 use std::path::Path;
 
 use nalgebra::{Point2, Point3, Vector3};
 
-use super::model::{check_quaternion, Image, Images, Location, Model, ModelError, Point3D};
+use super::limits::{Limit, ReadLimits, MAX_FIELD_BYTES};
+use super::model::{
+    check_quaternion, Image, Images, Location, Model, ModelError, ModelErrorKind, Point3D,
+};
 use crate::camera::{Camera, CameraError, CameraModel};
 
 // Binary format (little-endian; COLMAP's reconstruction_io / read_write_model.py layout).
 
+/// A binary file of `len` bytes read from `src`, with the offset of the next byte.
 struct Reader<'a> {
     path: &'a Path,
-    bytes: &'a [u8],
-    pos: usize,
+    src: &'a mut dyn BufRead,
+    pos: u64,
+    len: u64,
 }
 
 impl<'a> Reader<'a> {
-    fn err_at(&self, pos: usize, reason: impl Into<String>) -> ModelError {
-        ModelError {
-            file: self.path.to_path_buf(),
-            location: Location::Offset(pos as u64),
-            reason: reason.into(),
+    fn new(path: &'a Path, src: &'a mut dyn BufRead, len: u64) -> Self {
+        Reader {
+            path,
+            src,
+            pos: 0,
+            len,
         }
     }
 
-    fn remaining(&self) -> usize {
-        self.bytes.len() - self.pos
+    fn err_at(&self, pos: u64, reason: impl Into<String>) -> ModelError {
+        ModelError::invalid(self.path, Location::Offset(pos), reason)
     }
 
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], ModelError> {
-        if self.remaining() < n {
+    fn remaining(&self) -> u64 {
+        self.len.saturating_sub(self.pos)
+    }
+
+    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], ModelError> {
+        if self.remaining() < N as u64 {
             return Err(self.err_at(
                 self.pos,
                 format!(
-                    "unexpected end of file reading {what}: need {n} bytes, {} left \
+                    "unexpected end of file reading {what}: need {N} bytes, {} left \
                      (truncated file?)",
                     self.remaining()
                 ),
             ));
         }
-        let s = &self.bytes[self.pos..self.pos + n];
-        self.pos += n;
-        Ok(s)
+        let mut a = [0u8; N];
+        self.src.read_exact(&mut a).map_err(|e| self.io_err(&e))?;
+        self.pos += N as u64;
+        Ok(a)
     }
 
-    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], ModelError> {
-        let s = self.take(N, what)?;
-        let mut a = [0u8; N];
-        a.copy_from_slice(s);
-        Ok(a)
+    /// A read error (the file shrank while it was read, or an I/O error).
+    fn io_err(&self, e: &io::Error) -> ModelError {
+        ModelError {
+            file: self.path.to_path_buf(),
+            location: Location::Offset(self.pos),
+            kind: ModelErrorKind::Io,
+            reason: format!("cannot read: {e}"),
+        }
     }
 
     fn u64(&mut self, what: &str) -> Result<u64, ModelError> {
@@ -85,26 +101,76 @@ impl<'a> Reader<'a> {
     }
 
     /// A count of records of at least `min_size` bytes each, checked against the bytes left
-    /// (so a corrupt count can never cause a huge allocation or a long loop).
-    fn count(&mut self, what: &str, min_size: usize) -> Result<usize, ModelError> {
+    /// (so a corrupt count can never cause a huge allocation or a long loop) and against
+    /// `limit` (the limit then hit, for the error).
+    fn count(
+        &mut self,
+        what: &str,
+        min_size: u64,
+        limit: Option<(usize, Limit, &str)>,
+    ) -> Result<usize, ModelError> {
         let at = self.pos;
         let n = self.u64(what)?;
-        let fits = usize::try_from(n)
-            .ok()
-            .and_then(|n| n.checked_mul(min_size))
-            .is_some_and(|b| b <= self.remaining());
-        if !fits {
+        if u128::from(n) * u128::from(min_size) > u128::from(self.remaining()) {
             return Err(self.err_at(
                 at,
                 format!(
                     "{what} = {n} needs at least {} bytes but only {} remain (corrupt or \
                      truncated file?)",
-                    u128::from(n) * min_size as u128,
+                    u128::from(n) * u128::from(min_size),
                     self.remaining()
                 ),
             ));
         }
-        Ok(n as usize)
+        if let Some((max, limit, which)) = limit {
+            if n > max as u64 {
+                return Err(ModelError::limit(
+                    self.path,
+                    Location::Offset(at),
+                    limit,
+                    &format!("{which} has {n}"),
+                ));
+            }
+        }
+        // Fits in the file, which is in memory or at most `usize::MAX` bytes long to read.
+        usize::try_from(n).map_err(|_| self.err_at(at, format!("{what} = {n} is too large")))
+    }
+
+    /// A NUL-terminated name of at most [`MAX_FIELD_BYTES`] bytes.
+    fn name(&mut self) -> Result<String, ModelError> {
+        let at = self.pos;
+        let mut bytes = Vec::new();
+        loop {
+            // Never past the file's length (it may have grown since it was opened).
+            let left = usize::try_from(self.remaining()).unwrap_or(usize::MAX);
+            let buf = match self.src.fill_buf() {
+                Ok(b) => b,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(self.io_err(&e)),
+            };
+            let buf = &buf[..buf.len().min(left)];
+            if buf.is_empty() {
+                return Err(self.err_at(at, "image name is not NUL-terminated (truncated file?)"));
+            }
+            let nul = buf.iter().position(|&b| b == 0);
+            let n = nul.unwrap_or(buf.len());
+            if bytes.len() + n > MAX_FIELD_BYTES {
+                return Err(ModelError::limit(
+                    self.path,
+                    Location::Offset(at),
+                    Limit::FieldBytes(MAX_FIELD_BYTES),
+                    "image name longer than 64 KiB (no NUL byte within it)",
+                ));
+            }
+            bytes.extend_from_slice(&buf[..n]);
+            let used = n + usize::from(nul.is_some());
+            self.src.consume(used);
+            self.pos += used as u64;
+            if nul.is_some() {
+                break;
+            }
+        }
+        String::from_utf8(bytes).map_err(|_| self.err_at(at, "image name is not valid UTF-8"))
     }
 
     fn finish(&self) -> Result<(), ModelError> {
@@ -121,14 +187,12 @@ impl<'a> Reader<'a> {
 
 pub(super) fn parse_cameras_bin(
     path: &Path,
-    bytes: &[u8],
+    src: &mut dyn BufRead,
+    len: u64,
+    _limits: &ReadLimits,
 ) -> Result<BTreeMap<u32, Camera>, ModelError> {
-    let mut r = Reader {
-        path,
-        bytes,
-        pos: 0,
-    };
-    let n = r.count("number of cameras", 24)?;
+    let mut r = Reader::new(path, src, len);
+    let n = r.count("number of cameras", 24, None)?;
     let mut cameras = BTreeMap::new();
     for _ in 0..n {
         let at = r.pos;
@@ -152,17 +216,19 @@ pub(super) fn parse_cameras_bin(
     Ok(cameras)
 }
 
-/// Longest image name accepted (bytes), a bound on the NUL search.
-pub(super) const MAX_NAME: usize = 1 << 16;
+/// Longest image name accepted (bytes), a bound on the NUL search; the writer refuses longer
+/// names.
+pub(super) const MAX_NAME: usize = MAX_FIELD_BYTES;
 
-pub(super) fn parse_images_bin(path: &Path, bytes: &[u8]) -> Result<Images, ModelError> {
-    let mut r = Reader {
-        path,
-        bytes,
-        pos: 0,
-    };
+pub(super) fn parse_images_bin(
+    path: &Path,
+    src: &mut dyn BufRead,
+    len: u64,
+    limits: &ReadLimits,
+) -> Result<Images, ModelError> {
+    let mut r = Reader::new(path, src, len);
     // Smallest record: 4 + 7 * 8 + 4 + 1 (empty name's NUL) + 8 = 73 bytes.
-    let n = r.count("number of images", 73)?;
+    let n = r.count("number of images", 73, None)?;
     let mut images = BTreeMap::new();
     let mut locs = BTreeMap::new();
     for _ in 0..n {
@@ -178,19 +244,17 @@ pub(super) fn parse_images_bin(path: &Path, bytes: &[u8]) -> Result<Images, Mode
             t[k] = r.f64("translation")?;
         }
         let camera_id = r.u32("CAMERA_ID")?;
-        let name_at = r.pos;
-        let window = &r.bytes[r.pos..r.bytes.len().min(r.pos + MAX_NAME + 1)];
-        let Some(len) = window.iter().position(|&b| b == 0) else {
-            return Err(r.err_at(
-                name_at,
-                "image name is not NUL-terminated (truncated file, or name longer than 64 KiB)",
-            ));
-        };
-        let name = std::str::from_utf8(&window[..len])
-            .map_err(|_| r.err_at(name_at, "image name is not valid UTF-8"))?
-            .to_string();
-        r.pos += len + 1;
-        let np = r.count("number of 2D points", 24)?;
+        let name = r.name()?;
+        let which = format!("image {id}: the number of 2D points");
+        let np = r.count(
+            "number of 2D points",
+            24,
+            Some((
+                limits.max_observations,
+                Limit::Observations(limits.max_observations),
+                &which,
+            )),
+        )?;
         let mut points2d = Vec::with_capacity(np);
         for _ in 0..np {
             let x = r.f64("observation x")?;
@@ -215,7 +279,7 @@ pub(super) fn parse_images_bin(path: &Path, bytes: &[u8]) -> Result<Images, Mode
         if images.insert(id, img).is_some() {
             return Err(r.err_at(at, format!("duplicate image id {id}")));
         }
-        locs.insert(id, Location::Offset(at as u64));
+        locs.insert(id, Location::Offset(at));
     }
     r.finish()?;
     Ok((images, locs))
@@ -223,15 +287,13 @@ pub(super) fn parse_images_bin(path: &Path, bytes: &[u8]) -> Result<Images, Mode
 
 pub(super) fn parse_points_bin(
     path: &Path,
-    bytes: &[u8],
+    src: &mut dyn BufRead,
+    len: u64,
+    limits: &ReadLimits,
 ) -> Result<BTreeMap<u64, Point3D>, ModelError> {
-    let mut r = Reader {
-        path,
-        bytes,
-        pos: 0,
-    };
+    let mut r = Reader::new(path, src, len);
     // Smallest record: 8 + 3 * 8 + 3 + 8 + 8 = 51 bytes.
-    let n = r.count("number of 3D points", 51)?;
+    let n = r.count("number of 3D points", 51, None)?;
     let mut points = BTreeMap::new();
     for _ in 0..n {
         let at = r.pos;
@@ -242,7 +304,16 @@ pub(super) fn parse_points_bin(
         }
         let rgb = [r.u8("colour")?, r.u8("colour")?, r.u8("colour")?];
         let error = f64::from_le_bytes(r.array("ERROR")?);
-        let nt = r.count("track length", 8)?;
+        let which = format!("point {id}: the track length");
+        let nt = r.count(
+            "track length",
+            8,
+            Some((
+                limits.max_track_length,
+                Limit::TrackLength(limits.max_track_length),
+                &which,
+            )),
+        )?;
         let mut track = Vec::with_capacity(nt);
         for _ in 0..nt {
             track.push((r.u32("track IMAGE_ID")?, r.u32("track POINT2D_IDX")?));

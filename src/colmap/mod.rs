@@ -7,9 +7,12 @@
 //! `x_cam = R(q) X + t`, with `q = (qw, qx, qy, qz)` a Hamilton quaternion; pixels follow
 //! [`crate::camera`] (upper-left image corner at `(0, 0)`).
 //!
-//! Every reader is bounded and panic-free on any input: a count field can only claim as many
-//! records as the remaining bytes can hold, and every error carries the file name and the
-//! line number (text) or byte offset (binary) with the reason.
+//! Every reader is bounded and panic-free on any input: it streams (text token by token, binary
+//! record by record), a count field can only claim as many records as the remaining bytes can
+//! hold, only regular files are read (a FIFO or `/dev/zero` is refused before it is opened),
+//! and the limits of [`ReadLimits`] bound one record; memory stays proportional to the model
+//! returned. Every error carries the file name and the line number (text) or byte offset
+//! (binary), its kind ([`ModelErrorKind`]: a limit hit names the limit) and the reason.
 //!
 //! ```
 //! use eopnp::colmap::{parse_model_text, read_model, register_image, write_model, ModelFormat};
@@ -54,17 +57,24 @@
 //! ```
 
 mod binary;
+mod limits;
 mod model;
 mod register;
 mod text;
 mod write;
 
 use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
+use crate::source::{not_regular_message, open_regular, OpenError};
 
-pub use model::{quaternion_to_matrix, Image, Location, Model, ModelError, Point3D, RegisterError};
+pub use limits::{Limit, ReadLimits, MAX_FIELD_BYTES};
+pub use model::{
+    quaternion_to_matrix, Image, Location, Model, ModelError, ModelErrorKind, Point3D,
+    RegisterError,
+};
 #[cfg(feature = "cli")]
 pub(crate) use register::pixel_rmse;
 pub use register::{register_image, Registration};
@@ -85,12 +95,14 @@ const TEXT_FILES: [&str; 3] = ["cameras.txt", "images.txt", "points3D.txt"];
 const BIN_FILES: [&str; 3] = ["cameras.bin", "images.bin", "points3D.bin"];
 
 /// The format of the model in `dir`: binary if all three `.bin` files exist (COLMAP's own
-/// default output, and exact), else text if all three `.txt` files exist.
+/// default output, and exact), else text if all three `.txt` files exist. (Existing is
+/// enough here: reading then refuses a model file that is not a regular file.)
 ///
 /// # Errors
-/// A [`ModelError`] naming the directory and the missing files if neither set is complete.
+/// A [`ModelError`] of kind [`ModelErrorKind::Io`] naming the directory and the missing
+/// files if neither set is complete.
 pub fn detect_format(dir: &Path) -> Result<ModelFormat, ModelError> {
-    let all = |names: &[&str; 3]| names.iter().all(|n| dir.join(n).is_file());
+    let all = |names: &[&str; 3]| names.iter().all(|n| dir.join(n).exists());
     if all(&BIN_FILES) {
         Ok(ModelFormat::Binary)
     } else if all(&TEXT_FILES) {
@@ -110,6 +122,7 @@ pub fn detect_format(dir: &Path) -> Result<ModelFormat, ModelError> {
         Err(ModelError {
             file: dir.to_path_buf(),
             location: Location::File,
+            kind: ModelErrorKind::Io,
             reason,
         })
     }
@@ -117,24 +130,63 @@ pub fn detect_format(dir: &Path) -> Result<ModelFormat, ModelError> {
 
 /// Reads the model in `dir`, text or binary (see [`detect_format`]: binary is preferred when
 /// both are present), and checks its cross-references (every image's camera and every
-/// observed 3D point exist).
+/// observed 3D point exist). With the default [`ReadLimits`]; see there for what reading
+/// costs.
 ///
 /// # Errors
-/// A [`ModelError`] with the file, line or byte offset, and the reason.
+/// A [`ModelError`] with the file, line or byte offset, the kind (a missing or special file,
+/// a limit, malformed content) and the reason.
 pub fn read_model(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
+    read_model_with_limits(dir, &ReadLimits::default())
+}
+
+/// [`read_model`] with the given limits.
+///
+/// # Errors
+/// As [`read_model`]; a limit that is hit is an error of kind [`ModelErrorKind::Limit`].
+pub fn read_model_with_limits(
+    dir: impl AsRef<Path>,
+    limits: &ReadLimits,
+) -> Result<Model, ModelError> {
     let dir = dir.as_ref();
     match detect_format(dir)? {
-        ModelFormat::Text => read_model_text(dir),
-        ModelFormat::Binary => read_model_binary(dir),
+        ModelFormat::Text => read_with(&TEXT, dir, limits),
+        ModelFormat::Binary => read_with(&BINARY, dir, limits),
     }
 }
 
-fn read_file(path: &Path) -> Result<Vec<u8>, ModelError> {
-    std::fs::read(path).map_err(|e| ModelError {
+/// Opens a model file: a regular file within the size limit.
+fn open_file(path: &Path, limits: &ReadLimits) -> Result<(std::fs::File, u64), ModelError> {
+    let error = |kind, reason| ModelError {
         file: path.to_path_buf(),
         location: Location::File,
-        reason: format!("cannot read: {e}"),
-    })
+        kind,
+        reason,
+    };
+    let (file, len) = open_regular(path).map_err(|e| match e {
+        OpenError::NotRegular(what) => error(
+            ModelErrorKind::NotRegularFile,
+            format!(
+                "{}; a model file must be a regular file",
+                not_regular_message(what)
+            ),
+        ),
+        OpenError::Io(e) => error(ModelErrorKind::Io, format!("cannot read: {e}")),
+    })?;
+    check_size(path, len, limits)?;
+    Ok((file, len))
+}
+
+fn check_size(path: &Path, len: u64, limits: &ReadLimits) -> Result<(), ModelError> {
+    if len > limits.max_file_bytes {
+        return Err(ModelError::limit(
+            path,
+            Location::File,
+            Limit::FileBytes(limits.max_file_bytes),
+            &format!("the file is {len} bytes long"),
+        ));
+    }
+    Ok(())
 }
 
 /// Reads a text-format model (`cameras.txt`, `images.txt`, `points3D.txt`) from `dir`.
@@ -142,7 +194,7 @@ fn read_file(path: &Path) -> Result<Vec<u8>, ModelError> {
 /// # Errors
 /// As [`read_model`].
 pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    read_with(&TEXT, dir.as_ref())
+    read_with(&TEXT, dir.as_ref(), &ReadLimits::default())
 }
 
 /// Reads a binary-format model (`cameras.bin`, `images.bin`, `points3D.bin`) from `dir`.
@@ -150,7 +202,7 @@ pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
 /// # Errors
 /// As [`read_model`].
 pub fn read_model_binary(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    read_with(&BINARY, dir.as_ref())
+    read_with(&BINARY, dir.as_ref(), &ReadLimits::default())
 }
 
 /// Parses a text-format model from the contents of its three files (e.g. read from an
@@ -163,10 +215,10 @@ pub fn parse_model_text(
     images: &[u8],
     points3d: &[u8],
 ) -> Result<Model, ModelError> {
-    parse_with(
-        &TEXT,
-        &TEXT.files.map(PathBuf::from),
+    parse_model_with_limits(
+        ModelFormat::Text,
         [cameras, images, points3d],
+        &ReadLimits::default(),
     )
 }
 
@@ -180,15 +232,44 @@ pub fn parse_model_binary(
     images: &[u8],
     points3d: &[u8],
 ) -> Result<Model, ModelError> {
-    parse_with(
-        &BINARY,
-        &BINARY.files.map(PathBuf::from),
+    parse_model_with_limits(
+        ModelFormat::Binary,
         [cameras, images, points3d],
+        &ReadLimits::default(),
     )
 }
 
-/// A file parser: the file's path (for messages) and its bytes.
-type Parser<T> = fn(&Path, &[u8]) -> Result<T, ModelError>;
+/// Parses a model of format `format` from the contents of its three files (cameras, images,
+/// points3D), with the given limits. Errors name the files by their usual names
+/// (`cameras.txt`, ...).
+///
+/// # Errors
+/// As [`read_model_with_limits`].
+pub fn parse_model_with_limits(
+    format: ModelFormat,
+    files: [&[u8]; 3],
+    limits: &ReadLimits,
+) -> Result<Model, ModelError> {
+    let format = match format {
+        ModelFormat::Text => &TEXT,
+        ModelFormat::Binary => &BINARY,
+    };
+    let paths = format.files.map(PathBuf::from);
+    for (path, bytes) in paths.iter().zip(files) {
+        check_size(path, bytes.len() as u64, limits)?;
+    }
+    let [cl, il, pl] = files.map(|f| f.len() as u64);
+    let [mut c, mut i, mut p] = files;
+    parse_with(
+        format,
+        &paths,
+        [(&mut c, cl), (&mut i, il), (&mut p, pl)],
+        limits,
+    )
+}
+
+/// A file parser: the file's path (for messages), its bytes and their number, the limits.
+type Parser<T> = fn(&Path, &mut dyn BufRead, u64, &ReadLimits) -> Result<T, ModelError>;
 
 /// A model format: its file names and the parser of each file.
 struct Format {
@@ -212,24 +293,34 @@ const BINARY: Format = Format {
     points: binary::parse_points_bin,
 };
 
-fn read_with(format: &Format, dir: &Path) -> Result<Model, ModelError> {
+/// Opens the three files (so that a missing or special file is reported before any content),
+/// then streams each through a buffer, never past the size it had when opened.
+fn read_with(format: &Format, dir: &Path, limits: &ReadLimits) -> Result<Model, ModelError> {
     let paths = format.files.map(|n| dir.join(n));
-    let [c, i, p] = [0, 1, 2].map(|k| read_file(&paths[k]));
-    parse_with(format, &paths, [&c?, &i?, &p?])
+    let [c, i, p] = [0, 1, 2].map(|k| open_file(&paths[k], limits));
+    let [c, i, p] = [c?, i?, p?].map(|(file, len)| (BufReader::new(file.take(len)), len));
+    let ((mut c, cl), (mut i, il), (mut p, pl)) = (c, i, p);
+    parse_with(
+        format,
+        &paths,
+        [(&mut c, cl), (&mut i, il), (&mut p, pl)],
+        limits,
+    )
 }
 
 fn parse_with(
     format: &Format,
     paths: &[PathBuf; 3],
-    [c, i, p]: [&[u8]; 3],
+    [(c, cl), (i, il), (p, pl)]: [(&mut dyn BufRead, u64); 3],
+    limits: &ReadLimits,
 ) -> Result<Model, ModelError> {
     let mut model = Model {
-        cameras: (format.cameras)(&paths[0], c)?,
+        cameras: (format.cameras)(&paths[0], c, cl, limits)?,
         ..Model::default()
     };
-    let (images, locs) = (format.images)(&paths[1], i)?;
+    let (images, locs) = (format.images)(&paths[1], i, il, limits)?;
     model.images = images;
-    model.points = (format.points)(&paths[2], p)?;
+    model.points = (format.points)(&paths[2], p, pl, limits)?;
     check_references(&model, &paths[1], &locs)?;
     Ok(model)
 }
@@ -241,11 +332,7 @@ fn check_references(
 ) -> Result<(), ModelError> {
     for img in model.images.values() {
         let location = locs.get(&img.id).copied().unwrap_or(Location::File);
-        let err = |reason: String| ModelError {
-            file: images_file.to_path_buf(),
-            location,
-            reason,
-        };
+        let err = |reason: String| ModelError::invalid(images_file, location, reason);
         if !model.cameras.contains_key(&img.camera_id) {
             return Err(err(format!(
                 "image {} refers to camera {}, which is not in the cameras file",

@@ -3,10 +3,11 @@
 
 use std::collections::BTreeMap;
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
+use super::limits::Limit;
 use crate::camera::Camera;
 use crate::PnpError;
 
@@ -131,15 +132,58 @@ pub enum Location {
     Offset(u64),
 }
 
-/// An error reading a model: the file, where in it, and why.
+/// An error reading a model: the file, where in it, what kind of problem and why.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ModelError {
     /// The file (or directory) concerned.
     pub file: PathBuf,
     /// Where in the file.
     pub location: Location,
+    /// What kind of problem: for callers that react differently to a missing file, a special
+    /// file, a limit of [`ReadLimits`](super::ReadLimits) and malformed content.
+    pub kind: ModelErrorKind,
     /// What is wrong.
     pub reason: String,
+}
+
+impl ModelError {
+    /// An error of kind [`ModelErrorKind::Invalid`] (malformed content).
+    pub(crate) fn invalid(file: &Path, location: Location, reason: impl Into<String>) -> Self {
+        ModelError {
+            file: file.to_path_buf(),
+            location,
+            kind: ModelErrorKind::Invalid,
+            reason: reason.into(),
+        }
+    }
+
+    /// An error of kind [`ModelErrorKind::Limit`]; the reason says what exceeds the limit, and
+    /// the message adds the limit.
+    pub(crate) fn limit(file: &Path, location: Location, limit: Limit, what: &str) -> Self {
+        ModelError {
+            file: file.to_path_buf(),
+            location,
+            kind: ModelErrorKind::Limit(limit),
+            reason: format!("{what}: {limit}"),
+        }
+    }
+}
+
+/// The kind of a [`ModelError`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ModelErrorKind {
+    /// The directory or a file cannot be found, inspected, opened or read (a missing file, a
+    /// permission, an I/O error), or the directory does not hold a model.
+    Io,
+    /// A path where a regular file is expected is something else: a directory, a named pipe
+    /// (FIFO), a device such as `/dev/zero`, a socket. Refused before it is opened.
+    NotRegularFile,
+    /// A limit of [`ReadLimits`](super::ReadLimits) (or the fixed field length limit) was hit: which one, with its
+    /// value.
+    Limit(Limit),
+    /// Malformed content: syntax, values, counts, duplicate ids, dangling references.
+    Invalid,
 }
 
 impl fmt::Display for ModelError {

@@ -19,12 +19,16 @@ fn binary_count_cannot_allocate_beyond_the_file() {
     let mut b = Vec::new();
     b.extend_from_slice(&1_000_000_000_000u64.to_le_bytes());
     b.extend_from_slice(&[0u8; 30]);
-    let e = parse_points_bin(Path::new("points3D.bin"), &b).unwrap_err();
+    let limits = ReadLimits::default();
+    let len = b.len() as u64;
+    let e = parse_points_bin(Path::new("points3D.bin"), &mut &b[..], len, &limits).unwrap_err();
     assert_eq!(e.location, Location::Offset(0));
-    let e = parse_images_bin(Path::new("images.bin"), &b).unwrap_err();
+    let e = parse_images_bin(Path::new("images.bin"), &mut &b[..], len, &limits).unwrap_err();
     assert_eq!(e.location, Location::Offset(0));
-    let e = parse_cameras_bin(Path::new("cameras.bin"), &u64::MAX.to_le_bytes()).unwrap_err();
+    let max = u64::MAX.to_le_bytes();
+    let e = parse_cameras_bin(Path::new("cameras.bin"), &mut &max[..], 8, &limits).unwrap_err();
     assert_eq!(e.location, Location::Offset(0));
+    assert_eq!(e.kind, ModelErrorKind::Invalid);
 }
 
 #[test]

@@ -1,0 +1,134 @@
+//! The limits of the model readers ([`ReadLimits`]) and the error detail naming the one hit
+//! ([`Limit`]).
+
+use std::fmt;
+
+use crate::source::bytes_text;
+
+/// The longest name (image name, camera model name) or number the readers accept, in bytes:
+/// 64 KiB. Longer fields are refused with [`Limit::FieldBytes`]. (The binary writer refuses to
+/// write longer image names, so everything written reads back.)
+pub const MAX_FIELD_BYTES: usize = 1 << 16;
+
+/// Limits of the model readers ([`read_model_with_limits`](super::read_model_with_limits),
+/// [`parse_model_with_limits`](super::parse_model_with_limits); the other readers use
+/// [`ReadLimits::default()`]).
+///
+/// The readers stream: text files token by token, binary files record by record, with every
+/// count checked against the bytes left in the file before anything is allocated for it, and a
+/// regular file is required (a FIFO, `/dev/zero` or a directory is refused before it is opened:
+/// [`ModelErrorKind::NotRegularFile`](super::ModelErrorKind::NotRegularFile)). So memory stays
+/// proportional to the model returned, whatever the input. The limits bound the files and
+/// the records:
+///
+/// | limit | default | bounds |
+/// |---|---|---|
+/// | [`max_file_bytes`](Self::max_file_bytes) | none (`u64::MAX`) | the size of each of the three files |
+/// | [`max_observations`](Self::max_observations) | 1,000,000 | the observations (2D points) of one image |
+/// | [`max_track_length`](Self::max_track_length) | 1,000,000 | the track of one 3D point |
+/// | [`MAX_FIELD_BYTES`] (fixed) | 64 KiB | one name or number |
+///
+/// (COLMAP extracts at most 8,192 features per image by default, and a 3D point's track
+/// usually has one element per image that sees it.) A limit that is hit is an error of kind
+/// [`ModelErrorKind::Limit`](super::ModelErrorKind::Limit) naming it.
+///
+/// ```
+/// use eopnp::colmap::{parse_model_with_limits, Limit, ModelErrorKind, ModelFormat, ReadLimits};
+///
+/// let cameras = b"1 SIMPLE_PINHOLE 640 480 500 320 240\n";
+/// let images = b"1 1 0 0 0 0 0 5 1 a.png\n10 20 -1 30 40 -1 50 60 -1\n";
+/// let limits = ReadLimits::default().max_observations(2);
+/// let e = parse_model_with_limits(ModelFormat::Text, [cameras, images, b""], &limits).unwrap_err();
+/// assert_eq!(e.kind, ModelErrorKind::Limit(Limit::Observations(2)));
+/// assert_eq!(
+///     e.to_string(),
+///     "images.txt:2: image 1 has more than 2 observations: over the limit of 2 observations \
+///      per image (ReadLimits::max_observations)"
+/// );
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct ReadLimits {
+    /// The largest size of each model file, in bytes (checked before reading). Default:
+    /// `u64::MAX` (no limit: memory stays proportional to the model read, and a file of
+    /// garbage fails at its first bad record).
+    pub max_file_bytes: u64,
+    /// The most observations (2D points, with or without a 3D point) of one image. Default:
+    /// `1_000_000` (32 MB in memory).
+    pub max_observations: usize,
+    /// The most elements of one 3D point's track. Default: `1_000_000` (8 MB in memory).
+    pub max_track_length: usize,
+}
+
+impl Default for ReadLimits {
+    fn default() -> Self {
+        ReadLimits {
+            max_file_bytes: u64::MAX,
+            max_observations: 1_000_000,
+            max_track_length: 1_000_000,
+        }
+    }
+}
+
+impl ReadLimits {
+    /// Sets [`ReadLimits::max_file_bytes`].
+    #[must_use]
+    pub fn max_file_bytes(mut self, bytes: u64) -> Self {
+        self.max_file_bytes = bytes;
+        self
+    }
+
+    /// Sets [`ReadLimits::max_observations`].
+    #[must_use]
+    pub fn max_observations(mut self, n: usize) -> Self {
+        self.max_observations = n;
+        self
+    }
+
+    /// Sets [`ReadLimits::max_track_length`].
+    #[must_use]
+    pub fn max_track_length(mut self, n: usize) -> Self {
+        self.max_track_length = n;
+        self
+    }
+}
+
+/// Which limit a model file exceeded, with its value (the detail of
+/// [`ModelErrorKind::Limit`](super::ModelErrorKind::Limit)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Limit {
+    /// [`ReadLimits::max_file_bytes`].
+    FileBytes(u64),
+    /// [`MAX_FIELD_BYTES`]: a name or a number is longer.
+    FieldBytes(usize),
+    /// [`ReadLimits::max_observations`].
+    Observations(usize),
+    /// [`ReadLimits::max_track_length`].
+    TrackLength(usize),
+}
+
+impl fmt::Display for Limit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Limit::FileBytes(n) => write!(
+                f,
+                "over the file size limit of {} (ReadLimits::max_file_bytes)",
+                bytes_text(n)
+            ),
+            Limit::FieldBytes(n) => write!(
+                f,
+                "over the limit of {} for one name or number",
+                bytes_text(n as u64)
+            ),
+            Limit::Observations(n) => write!(
+                f,
+                "over the limit of {n} observations per image (ReadLimits::max_observations)"
+            ),
+            Limit::TrackLength(n) => write!(
+                f,
+                "over the limit of {n} track elements per 3D point (ReadLimits::max_track_length)"
+            ),
+        }
+    }
+}
