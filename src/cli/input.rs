@@ -1,13 +1,26 @@
 //! `eopnp solve`: correspondence files (CSV, JSON) in, pose JSON out.
+//!
+//! Input is streamed, never held whole: CSV line by line (a line, or a quoted record spanning
+//! lines, of at most [`Limits::max_line_bytes`]), JSON through serde_json's reader (a string
+//! or number of at most that length). The input is at most [`Limits::max_input_bytes`] long
+//! (`--max-input-size`), and must be a regular file or standard input (`-`): a FIFO, a device
+//! such as `/dev/zero` or a directory is refused before it is opened. Memory is what is
+//! returned (40 bytes per correspondence, times up to 3 while the vectors grow) plus the
+//! buffers (`tests/reader_memory.rs` measures it).
 
-use std::io::Read;
+use std::cell::Cell;
+use std::fmt;
+use std::io::{self, BufRead, BufReader, Read};
+use std::marker::PhantomData;
 use std::path::Path;
 
 use crate::camera::Camera;
+use crate::source::{bytes_text, not_regular_message, open_regular, OpenError};
 use crate::PnpError;
 use crate::Solver;
 use nalgebra::{Point2, Point3};
-use serde::Deserialize;
+use serde::de::{DeserializeSeed, Error as _, MapAccess, SeqAccess, Visitor};
+use serde::{Deserialize, Deserializer};
 use serde_json::json;
 
 use super::Failure;
@@ -19,10 +32,22 @@ pub struct Problem {
     world: Vec<Point3<f64>>,
 }
 
+impl Problem {
+    /// The number of correspondences.
+    #[must_use]
+    pub fn correspondences(&self) -> usize {
+        self.world.len()
+    }
+}
+
+/// The most parameters a JSON camera may list (the largest model has 18).
+const MAX_CAMERA_PARAMS: usize = 64;
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct JsonCamera {
     model: String,
+    #[serde(deserialize_with = "camera_params")]
     params: Vec<f64>,
     #[serde(default)]
     width: u64,
@@ -30,12 +55,130 @@ struct JsonCamera {
     height: u64,
 }
 
+/// At most [`MAX_CAMERA_PARAMS`] numbers.
+fn camera_params<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+    struct Params;
+    impl<'de> Visitor<'de> for Params {
+        type Value = Vec<f64>;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            write!(f, "an array of at most {MAX_CAMERA_PARAMS} numbers")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Vec<f64>, A::Error> {
+            let mut v = Vec::new();
+            while let Some(x) = seq.next_element()? {
+                if v.len() == MAX_CAMERA_PARAMS {
+                    return Err(A::Error::custom(format!(
+                        "more than {MAX_CAMERA_PARAMS} camera parameters"
+                    )));
+                }
+                v.push(x);
+            }
+            Ok(v)
+        }
+    }
+    d.deserialize_seq(Params)
+}
+
+/// The keys of a JSON problem.
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(field_identifier, rename_all = "lowercase")]
+enum Field {
+    Camera,
+    Points2d,
+    Points3d,
+}
+
+/// A JSON problem as read, with the lines of its `"camera"` and `"points3d"` keys (for the
+/// errors found after parsing).
 struct JsonProblem {
-    camera: Option<JsonCamera>,
-    points2d: Vec<[f64; 2]>,
-    points3d: Vec<[f64; 3]>,
+    camera: Option<(JsonCamera, usize)>,
+    points2d: Vec<Point2<f64>>,
+    points3d: (Vec<Point3<f64>>, usize),
+}
+
+/// Deserializes a [`JsonProblem`], reading the line of each key from `lines` (the newlines
+/// read so far, counted by [`JsonGuard`]).
+struct ProblemSeed<'a> {
+    lines: &'a Cell<usize>,
+}
+
+impl<'de> DeserializeSeed<'de> for ProblemSeed<'_> {
+    type Value = JsonProblem;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<JsonProblem, D::Error> {
+        d.deserialize_map(self)
+    }
+}
+
+impl<'de> Visitor<'de> for ProblemSeed<'_> {
+    type Value = JsonProblem;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("an object with \"camera\", \"points2d\" and \"points3d\"")
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<JsonProblem, A::Error> {
+        let mut camera = None;
+        let mut points2d = None;
+        let mut points3d = None;
+        while let Some(key) = map.next_key::<Field>()? {
+            // The key has just been read: the reader is on its line.
+            let line = self.lines.get() + 1;
+            match key {
+                Field::Camera if camera.is_some() => {
+                    return Err(A::Error::duplicate_field("camera"))
+                }
+                Field::Points2d if points2d.is_some() => {
+                    return Err(A::Error::duplicate_field("points2d"))
+                }
+                Field::Points3d if points3d.is_some() => {
+                    return Err(A::Error::duplicate_field("points3d"))
+                }
+                Field::Camera => {
+                    camera = Some(map.next_value::<Option<JsonCamera>>()?.map(|c| (c, line)));
+                }
+                Field::Points2d => {
+                    let to = |a: [f64; 2]| Point2::new(a[0], a[1]);
+                    points2d = Some(map.next_value_seed(Points(to, PhantomData))?);
+                }
+                Field::Points3d => {
+                    let to = |a: [f64; 3]| Point3::new(a[0], a[1], a[2]);
+                    points3d = Some((map.next_value_seed(Points(to, PhantomData))?, line));
+                }
+            }
+        }
+        Ok(JsonProblem {
+            camera: camera.flatten(),
+            points2d: points2d.ok_or_else(|| A::Error::missing_field("points2d"))?,
+            points3d: points3d.ok_or_else(|| A::Error::missing_field("points3d"))?,
+        })
+    }
+}
+
+/// An array of points, each read as an array `A` and converted (no intermediate vector).
+struct Points<A, T>(fn(A) -> T, PhantomData<A>);
+
+impl<'de, A: Deserialize<'de>, T> DeserializeSeed<'de> for Points<A, T> {
+    type Value = Vec<T>;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Vec<T>, D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de, A: Deserialize<'de>, T> Visitor<'de> for Points<A, T> {
+    type Value = Vec<T>;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("an array of points")
+    }
+
+    fn visit_seq<S: SeqAccess<'de>>(self, mut seq: S) -> Result<Vec<T>, S::Error> {
+        let mut v = Vec::new();
+        while let Some(a) = seq.next_element::<A>()? {
+            v.push((self.0)(a));
+        }
+        v.shrink_to_fit();
+        Ok(v)
+    }
 }
 
 /// Parses `--camera "MODEL P1 P2 ..."`.
@@ -56,14 +199,33 @@ fn parse_camera_arg(s: &str) -> Result<Camera, Failure> {
     Camera::from_colmap(model, 0, 0, params).map_err(|e| Failure::input(format!("--camera: {e}")))
 }
 
-/// 1-based line of the first occurrence of `needle` in `text` (for semantic JSON errors).
-fn line_of(text: &str, needle: &str) -> Option<usize> {
-    text.find(needle)
-        .map(|at| 1 + text[..at].bytes().filter(|&b| b == b'\n').count())
+/// The largest input `eopnp solve` reads by default, from a file or from standard input:
+/// 1 GiB (`--max-input-size` changes it).
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// The longest CSV line (and quoted record spanning lines) and the longest JSON string or
+/// number `eopnp solve` reads: 64 KiB. A correspondence is one short line; comment lines may
+/// be longer (they are skipped unread).
+pub const MAX_LINE_BYTES: usize = 1 << 16;
+
+/// Limits of the input of `eopnp solve`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// The largest input, in bytes. Default [`MAX_INPUT_BYTES`].
+    pub max_input_bytes: u64,
+    /// The longest CSV line or record, JSON string or number, in bytes. Default
+    /// [`MAX_LINE_BYTES`].
+    pub max_line_bytes: usize,
 }
 
-/// The largest input `eopnp solve` reads, from a file or from standard input: 1 GiB.
-pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_input_bytes: MAX_INPUT_BYTES,
+            max_line_bytes: MAX_LINE_BYTES,
+        }
+    }
+}
 
 /// The name standard input goes by in messages.
 pub const STDIN_NAME: &str = "<stdin>";
@@ -89,84 +251,196 @@ impl Format {
 /// Reads a CSV or JSON problem from the file `path`, or from standard input if `path` is `-`.
 ///
 /// The format is `format` if given; otherwise the file's extension (`.csv`, `.json`) or, for
-/// standard input and other extensions, the content (JSON if it starts with `{`). Inputs
-/// larger than [`MAX_INPUT_BYTES`] are refused.
-pub(crate) fn read_problem(
+/// standard input and other extensions, the content (JSON if it starts with `{`). The file
+/// must be a regular file; inputs larger than `limits.max_input_bytes` are refused (a file
+/// before it is read).
+pub fn read_problem(
     path: &Path,
     format: Option<Format>,
     camera_arg: Option<&str>,
+    limits: &Limits,
 ) -> Result<Problem, Failure> {
-    let (name, bytes, ext) = if path.as_os_str() == "-" {
-        let bytes = read_capped(STDIN_NAME, std::io::stdin().lock(), MAX_INPUT_BYTES)?;
-        (STDIN_NAME.to_string(), bytes, None)
-    } else {
-        let name = path.display().to_string();
-        let file = std::fs::File::open(path).map_err(|e| Failure::input(format!("{name}: {e}")))?;
-        if let Ok(meta) = file.metadata() {
-            if meta.is_file() && meta.len() > MAX_INPUT_BYTES {
-                return Err(too_large(&name, MAX_INPUT_BYTES));
-            }
-        }
-        let bytes = read_capped(&name, file, MAX_INPUT_BYTES)?;
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        (name, bytes, ext)
-    };
-    let ext = format.map(Format::ext).or(ext.as_deref());
-    parse_problem(&name, &bytes, ext, camera_arg)
-}
-
-/// Reads all of `r`, refusing more than `cap` bytes.
-fn read_capped(name: &str, r: impl Read, cap: u64) -> Result<Vec<u8>, Failure> {
-    let mut bytes = Vec::new();
-    r.take(cap.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(|e| Failure::input(format!("{name}: {e}")))?;
-    if bytes.len() as u64 > cap {
-        return Err(too_large(name, cap));
+    let format_ext = format.map(Format::ext);
+    if path.as_os_str() == "-" {
+        let stdin = io::stdin().lock();
+        return read_problem_from(STDIN_NAME, stdin, format_ext, camera_arg, limits);
     }
-    Ok(bytes)
+    let name = path.display().to_string();
+    let (file, len) = open_regular(path).map_err(|e| match e {
+        OpenError::NotRegular(what) => Failure::input(format!(
+            "{name}: {}; the input must be a regular file, or `-` for standard input",
+            not_regular_message(what)
+        )),
+        OpenError::Io(e) => Failure::input(format!("{name}: {e}")),
+    })?;
+    if len > limits.max_input_bytes {
+        return Err(too_large(&name, limits.max_input_bytes));
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    // Never more than the size checked (the file may grow while it is read).
+    let src = BufReader::with_capacity(1 << 16, file.take(len));
+    let ext = format_ext.or(ext.as_deref());
+    read_problem_from(&name, src, ext, camera_arg, limits)
 }
 
 fn too_large(name: &str, cap: u64) -> Failure {
-    const GIB: u64 = 1 << 30;
-    let limit = if cap.is_multiple_of(GIB) {
-        format!("{} GiB", cap / GIB)
-    } else {
-        format!("{cap} bytes")
-    };
     Failure::input(format!(
-        "{name}: larger than {limit}, the input size limit of `eopnp solve`"
+        "{name}: larger than {}, the input size limit of `eopnp solve` (--max-input-size)",
+        bytes_text(cap)
     ))
 }
 
-/// Parses the contents of a problem file named `name` (for messages) with extension `ext`
-/// (`"json"`, `"csv"`, or anything else: JSON when the text starts with `{`). A UTF-8
-/// byte-order mark at the start is ignored.
-pub fn parse_problem(
+/// The error a [`Capped`] source returns past its cap.
+#[derive(Debug)]
+struct OverCap;
+
+impl fmt::Display for OverCap {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("input size limit reached")
+    }
+}
+
+impl std::error::Error for OverCap {}
+
+/// A source limited to `left` more bytes: reading past them is an error ([`OverCap`]).
+struct Capped<R> {
+    inner: R,
+    left: u64,
+}
+
+impl<R: BufRead> Read for Capped<R> {
+    fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
+        let avail = self.fill_buf()?;
+        let n = avail.len().min(out.len());
+        out[..n].copy_from_slice(&avail[..n]);
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for Capped<R> {
+    fn fill_buf(&mut self) -> io::Result<&[u8]> {
+        let left = self.left;
+        let buf = self.inner.fill_buf()?;
+        if left == 0 && !buf.is_empty() {
+            return Err(io::Error::other(OverCap));
+        }
+        let n = usize::try_from(left).map_or(buf.len(), |l| l.min(buf.len()));
+        Ok(&buf[..n])
+    }
+
+    fn consume(&mut self, n: usize) {
+        self.left -= n as u64;
+        self.inner.consume(n);
+    }
+}
+
+/// The failure of a read error: the size limit, or the I/O error.
+fn read_failure(name: &str, e: &io::Error, limits: &Limits) -> Failure {
+    if e.get_ref().is_some_and(|i| i.is::<OverCap>()) {
+        too_large(name, limits.max_input_bytes)
+    } else {
+        Failure::input(format!("{name}: {e}"))
+    }
+}
+
+/// The buffered bytes of `src`, more read if needed (empty at the end of the input).
+fn fill<R: BufRead>(src: &mut R) -> io::Result<&[u8]> {
+    while let Err(e) = src.fill_buf() {
+        if e.kind() != io::ErrorKind::Interrupted {
+            return Err(e);
+        }
+    }
+    src.fill_buf()
+}
+
+/// Where parsing starts, after a UTF-8 byte-order mark and, when the format is sniffed, the
+/// leading whitespace.
+struct Start {
+    /// The 1-based line parsing starts on.
+    line: usize,
+    /// The characters of that line already consumed.
+    column: usize,
+    /// The start of a byte-order mark that is not one, to be read again.
+    replay: Vec<u8>,
+    /// Whether the input is JSON.
+    json: bool,
+}
+
+/// Consumes a byte-order mark and, unless `ext` names the format, the leading ASCII
+/// whitespace, to decide the format: JSON when the first character is `{`.
+fn start<R: BufRead>(src: &mut R, ext: Option<&str>) -> io::Result<Start> {
+    const BOM: &[u8] = b"\xef\xbb\xbf";
+    let mut matched = 0;
+    while matched < BOM.len() && fill(src)?.first() == Some(&BOM[matched]) {
+        src.consume(1);
+        matched += 1;
+    }
+    let replay = if matched == BOM.len() {
+        Vec::new()
+    } else {
+        BOM[..matched].to_vec()
+    };
+    let mut s = Start {
+        line: 1,
+        column: 0,
+        replay,
+        json: ext == Some("json"),
+    };
+    if matches!(ext, Some("json" | "csv")) || !s.replay.is_empty() {
+        return Ok(s);
+    }
+    loop {
+        let buf = fill(src)?;
+        let Some(i) = buf.iter().position(|b| !b.is_ascii_whitespace()) else {
+            if buf.is_empty() {
+                return Ok(s);
+            }
+            count_lines(&mut s, buf);
+            let n = buf.len();
+            src.consume(n);
+            continue;
+        };
+        count_lines(&mut s, &buf[..i]);
+        s.json = buf[i] == b'{';
+        src.consume(i);
+        return Ok(s);
+    }
+}
+
+fn count_lines(s: &mut Start, ws: &[u8]) {
+    for &b in ws {
+        if b == b'\n' {
+            s.line += 1;
+            s.column = 0;
+        } else {
+            s.column += 1;
+        }
+    }
+}
+
+/// Reads a CSV or JSON problem from `src`, named `name` in messages, streaming within `limits`.
+/// `ext` is `"json"`, `"csv"`, or anything else or nothing: then JSON when the text starts
+/// with `{`. A UTF-8 byte-order mark at the start is ignored.
+pub fn read_problem_from(
     name: &str,
-    bytes: &[u8],
+    src: impl BufRead,
     ext: Option<&str>,
     camera_arg: Option<&str>,
+    limits: &Limits,
 ) -> Result<Problem, Failure> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count();
-        Failure::input(format!("{name}:{line}: invalid UTF-8"))
-    })?;
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let camera_arg = camera_arg.map(parse_camera_arg).transpose()?;
-    let is_json = match ext {
-        Some("json") => true,
-        Some("csv") => false,
-        _ => text.trim_start().starts_with('{'),
+    let mut src = Capped {
+        inner: src,
+        left: limits.max_input_bytes,
     };
-    if is_json {
-        read_json(name, text, camera_arg)
+    let mut start = start(&mut src, ext).map_err(|e| read_failure(name, &e, limits))?;
+    let src = io::Cursor::new(std::mem::take(&mut start.replay)).chain(src);
+    if start.json {
+        read_json(name, src, camera_arg, &start, limits)
     } else {
         let camera = camera_arg.ok_or_else(|| {
             Failure::input(format!(
@@ -174,63 +448,190 @@ pub fn parse_problem(
                  --camera \"SIMPLE_RADIAL 1245.65 600 800 0.0577\""
             ))
         })?;
-        read_csv(name, text, camera)
+        read_csv(name, src, camera, start.line, limits)
     }
 }
 
-fn read_json(name: &str, text: &str, camera_arg: Option<Camera>) -> Result<Problem, Failure> {
-    // serde_json reports line and column for syntax errors, wrong types and wrong array
-    // lengths.
-    let p: JsonProblem = serde_json::from_str(text).map_err(|e| {
-        // serde_json reports a fixed-size array with too many elements as trailing characters.
-        let after_comma = text
-            .lines()
-            .nth(e.line().saturating_sub(1))
-            .map(|l| {
-                l.chars()
-                    .take(e.column().saturating_sub(1))
-                    .collect::<String>()
-            })
-            .is_some_and(|before| before.trim_end().ends_with(','));
-        let hint = if e.to_string().starts_with("trailing characters") && after_comma {
-            " (a point with too many coordinates? points2d entries are [x, y], points3d entries \
-             are [X, Y, Z])"
-        } else {
-            ""
+/// Parses the contents of a problem file named `name` (for messages) with extension `ext`
+/// (`"json"`, `"csv"`, or anything else: JSON when the text starts with `{`), with the default
+/// [`Limits`]. A UTF-8 byte-order mark at the start is ignored.
+pub fn parse_problem(
+    name: &str,
+    bytes: &[u8],
+    ext: Option<&str>,
+    camera_arg: Option<&str>,
+) -> Result<Problem, Failure> {
+    read_problem_from(name, bytes, ext, camera_arg, &Limits::default())
+}
+
+/// What made [`JsonGuard`] stop the JSON reader.
+enum Violation {
+    /// A string or number longer than the limit, on this line.
+    TooLong(usize),
+    /// A read error (the size limit included).
+    Read(io::Error),
+}
+
+/// States of [`JsonGuard`]'s scan.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Scan {
+    Outside,
+    InString,
+    Escape,
+}
+
+/// The reader under serde_json (which reads it a byte at a time): counts the lines (for the
+/// lines of keys), remembers the last two non-blank bytes (for error hints), and bounds the
+/// length of a string or number (serde_json would buffer it whole).
+struct JsonGuard<'a, R> {
+    src: R,
+    lines: &'a Cell<usize>,
+    scan: Scan,
+    run: usize,
+    max: usize,
+    last: [u8; 2],
+    violation: Option<Violation>,
+}
+
+impl<R: BufRead> Read for JsonGuard<'_, R> {
+    fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
+        let avail = match fill(&mut self.src) {
+            Ok(b) => b,
+            Err(e) => {
+                let copy = io::Error::new(e.kind(), e.to_string());
+                self.violation = Some(Violation::Read(e));
+                return Err(copy);
+            }
         };
-        Failure::input(format!("{name}:{}:{}: {e}{hint}", e.line(), e.column()))
-    })?;
+        let n = avail.len().min(out.len());
+        for (i, &b) in avail[..n].iter().enumerate() {
+            if b == b'\n' {
+                self.lines.set(self.lines.get() + 1);
+            }
+            if !b.is_ascii_whitespace() {
+                self.last = [self.last[1], b];
+            }
+            match self.scan {
+                Scan::Outside if b == b'"' => {
+                    self.scan = Scan::InString;
+                    self.run = 0;
+                }
+                Scan::Outside if matches!(b, b'0'..=b'9' | b'-' | b'+' | b'.' | b'e' | b'E') => {
+                    self.run += 1;
+                }
+                Scan::Outside => self.run = 0,
+                Scan::InString => {
+                    self.run += 1;
+                    match b {
+                        b'\\' => self.scan = Scan::Escape,
+                        b'"' => self.scan = Scan::Outside,
+                        _ => {}
+                    }
+                }
+                Scan::Escape => {
+                    self.run += 1;
+                    self.scan = Scan::InString;
+                }
+            }
+            if self.run > self.max {
+                self.violation = Some(Violation::TooLong(self.lines.get() + 1));
+                out[..i].copy_from_slice(&avail[..i]);
+                self.src.consume(i);
+                return Err(io::Error::other("string or number too long"));
+            }
+        }
+        out[..n].copy_from_slice(&avail[..n]);
+        self.src.consume(n);
+        Ok(n)
+    }
+}
+
+fn read_json<R: BufRead>(
+    name: &str,
+    src: R,
+    camera_arg: Option<Camera>,
+    start: &Start,
+    limits: &Limits,
+) -> Result<Problem, Failure> {
+    let lines = Cell::new(start.line - 1);
+    let mut guard = JsonGuard {
+        src,
+        lines: &lines,
+        scan: Scan::Outside,
+        run: 0,
+        max: limits.max_line_bytes,
+        last: [0; 2],
+        violation: None,
+    };
+    let parsed = {
+        let mut de = serde_json::Deserializer::from_reader(&mut guard);
+        ProblemSeed { lines: &lines }
+            .deserialize(&mut de)
+            .and_then(|p| de.end().map(|()| p))
+    };
+    let p = match parsed {
+        Ok(p) => p,
+        Err(e) => {
+            return Err(match guard.violation.take() {
+                Some(Violation::TooLong(line)) => Failure::input(format!(
+                    "{name}:{line}: a string or number longer than {}, the limit of JSON input",
+                    bytes_text(limits.max_line_bytes as u64)
+                )),
+                Some(Violation::Read(e)) => read_failure(name, &e, limits),
+                None => json_failure(name, &e, start, guard.last),
+            })
+        }
+    };
     let camera = match (camera_arg, p.camera) {
         (Some(c), _) => c,
-        (None, Some(c)) => {
-            Camera::from_colmap(&c.model, c.width, c.height, c.params).map_err(|e| {
-                let line = line_of(text, "\"camera\"").unwrap_or(1);
-                Failure::input(format!("{name}:{line}: camera: {e}"))
-            })?
-        }
+        (None, Some((c, line))) => Camera::from_colmap(&c.model, c.width, c.height, c.params)
+            .map_err(|e| Failure::input(format!("{name}:{line}: camera: {e}")))?,
         (None, None) => {
             return Err(Failure::input(format!(
                 "{name}: no \"camera\" object and no --camera argument"
             )))
         }
     };
-    if p.points2d.len() != p.points3d.len() {
-        let line = line_of(text, "\"points3d\"").unwrap_or(1);
+    let (world, line) = p.points3d;
+    if p.points2d.len() != world.len() {
         return Err(Failure::input(format!(
             "{name}:{line}: {} points2d but {} points3d; they must correspond one to one",
             p.points2d.len(),
-            p.points3d.len()
+            world.len()
         )));
     }
     Ok(Problem {
         camera,
-        pixels: p.points2d.iter().map(|a| Point2::new(a[0], a[1])).collect(),
-        world: p
-            .points3d
-            .iter()
-            .map(|a| Point3::new(a[0], a[1], a[2]))
-            .collect(),
+        pixels: p.points2d,
+        world,
     })
+}
+
+/// The failure of a JSON syntax or data error, at its line and column in the input. `last`:
+/// the last two non-blank bytes read.
+fn json_failure(name: &str, e: &serde_json::Error, start: &Start, last: [u8; 2]) -> Failure {
+    let (line, column) = (e.line(), e.column());
+    let message = e.to_string();
+    let message = message
+        .strip_suffix(&format!(" at line {line} column {column}"))
+        .unwrap_or(&message);
+    let column = if line == 1 {
+        column + start.column
+    } else {
+        column
+    };
+    // serde_json reports a fixed-size array with too many elements as trailing characters,
+    // having read the `,` and the next element's first character.
+    let hint = if message.starts_with("trailing characters") && last[0] == b',' {
+        " (a point with too many coordinates? points2d entries are [x, y], points3d entries \
+         are [X, Y, Z])"
+    } else {
+        ""
+    };
+    Failure::input(format!(
+        "{name}:{}:{column}: {message}{hint}",
+        line + start.line - 1
+    ))
 }
 
 /// The CSV columns, in the order of `Problem`'s coordinates: pixel x, y, world X, Y, Z.
@@ -238,19 +639,6 @@ const COLUMNS: [&str; 5] = ["x", "y", "X", "Y", "Z"];
 
 /// The accepted CSV delimiters, in the order they are tried, and their names for messages.
 const DELIMITERS: [(u8, &str); 3] = [(b',', "comma"), (b';', "semicolon"), (b'\t', "tab")];
-
-/// A CSV reader over `text` with delimiter `delim`: no header handling (done here), any
-/// number of fields per record (checked here), records end at `\n` (a `\r` before it is
-/// trimmed with the field), lines starting with `#` skipped.
-fn csv_reader(text: &str, delim: u8) -> csv::Reader<&[u8]> {
-    csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .delimiter(delim)
-        .terminator(csv::Terminator::Any(b'\n'))
-        .comment(Some(b'#'))
-        .from_reader(text.as_bytes())
-}
 
 /// Whether a line is skipped: blank, or a comment (`#` after optional whitespace).
 fn skipped(line: &str) -> bool {
@@ -329,82 +717,297 @@ fn header_error(name: &str, n: usize, line: &str) -> Failure {
 
 /// The fields (trimmed) of the first record of `line` split at `delim`.
 fn first_record(line: &str, delim: u8) -> Vec<String> {
-    let mut rec = csv::StringRecord::new();
-    match csv_reader(line, delim).read_record(&mut rec) {
-        Ok(true) => rec.iter().map(|f| f.trim().to_string()).collect(),
-        _ => Vec::new(),
+    let mut rec = Record::new(delim);
+    if !rec.feed(line.as_bytes()) {
+        rec.feed(b"");
+    }
+    rec.fields()
+        .map(|f| String::from_utf8_lossy(f).trim().to_string())
+        .collect()
+}
+
+/// One CSV record parsed by `csv_core` (the `csv` crate's parser) from the lines fed to it:
+/// quotes (a quoted field may span lines), `""` inside quotes, records ending at `\n` (a `\r`
+/// before it is trimmed with the field).
+struct Record {
+    rdr: csv_core::Reader,
+    out: Vec<u8>,
+    ends: Vec<usize>,
+    nout: usize,
+    nend: usize,
+}
+
+impl Record {
+    fn new(delim: u8) -> Self {
+        Record {
+            rdr: csv_core::ReaderBuilder::new()
+                .delimiter(delim)
+                .terminator(csv_core::Terminator::Any(b'\n'))
+                .comment(Some(b'#'))
+                .build(),
+            out: vec![0; 256],
+            ends: vec![0; 8],
+            nout: 0,
+            nend: 0,
+        }
+    }
+
+    /// Starts a new record.
+    fn clear(&mut self) {
+        self.nout = 0;
+        self.nend = 0;
+    }
+
+    /// Feeds a line (empty: the end of the input); whether the record is complete.
+    fn feed(&mut self, mut input: &[u8]) -> bool {
+        let eof = input.is_empty();
+        loop {
+            let (res, nin, nout, nend) = self.rdr.read_record(
+                input,
+                &mut self.out[self.nout..],
+                &mut self.ends[self.nend..],
+            );
+            input = &input[nin..];
+            self.nout += nout;
+            self.nend += nend;
+            match res {
+                csv_core::ReadRecordResult::InputEmpty => return eof,
+                csv_core::ReadRecordResult::OutputFull => {
+                    let n = 2 * self.out.len();
+                    self.out.resize(n, 0);
+                }
+                csv_core::ReadRecordResult::OutputEndsFull => {
+                    let n = 2 * self.ends.len();
+                    self.ends.resize(n, 0);
+                }
+                csv_core::ReadRecordResult::Record | csv_core::ReadRecordResult::End => {
+                    return true
+                }
+            }
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.nend
+    }
+
+    fn fields(&self) -> impl Iterator<Item = &[u8]> + '_ {
+        let mut start = 0;
+        self.ends[..self.nend].iter().map(move |&end| {
+            let f = &self.out[start..end];
+            start = end;
+            f
+        })
+    }
+}
+
+/// The lines of CSV input, numbered, each at most `max` bytes (a longer comment line is
+/// skipped unread).
+struct Lines<'a, R> {
+    src: R,
+    name: &'a str,
+    limits: &'a Limits,
+    /// The number of the line last read.
+    line: usize,
+    buf: Vec<u8>,
+}
+
+impl<R: BufRead> Lines<'_, R> {
+    /// The next line, with its `\n`; `None` at the end of the input. `in_record`: the line
+    /// continues a record (a quoted field), so it is not a comment. `header`: a line that is
+    /// too long is returned cut (its rest skipped), for the header error.
+    fn next(&mut self, in_record: bool, header: bool) -> Result<Option<&str>, Failure> {
+        let max = self.limits.max_line_bytes;
+        loop {
+            self.line += 1;
+            let read = read_line(&mut self.src, &mut self.buf, max)
+                .map_err(|e| read_failure(self.name, &e, self.limits))?;
+            match read {
+                None => return Ok(None),
+                Some(true) => break,
+                Some(false) if header => {
+                    skip_line(&mut self.src)
+                        .map_err(|e| read_failure(self.name, &e, self.limits))?;
+                    // Cut at a character boundary.
+                    let valid = match std::str::from_utf8(&self.buf) {
+                        Ok(_) => self.buf.len(),
+                        Err(e) => e.valid_up_to(),
+                    };
+                    self.buf.truncate(valid);
+                    self.buf.push(b'\n');
+                    break;
+                }
+                Some(false) if !in_record && self.buf.trim_ascii_start().starts_with(b"#") => {
+                    skip_line(&mut self.src)
+                        .map_err(|e| read_failure(self.name, &e, self.limits))?;
+                }
+                Some(false) => {
+                    return Err(Failure::input(format!(
+                        "{}:{}: line longer than {}, the line length limit of CSV input",
+                        self.name,
+                        self.line,
+                        bytes_text(max as u64)
+                    )))
+                }
+            }
+        }
+        let (name, line) = (self.name, self.line);
+        std::str::from_utf8(&self.buf)
+            .map(Some)
+            .map_err(|_| Failure::input(format!("{name}:{line}: invalid UTF-8")))
+    }
+}
+
+/// Reads the next line, its `\n` included, into `buf`: `None` at the end of the input,
+/// `Some(false)` if it is longer than `max` bytes (`buf` then holds its start, and the rest is
+/// unread).
+fn read_line<R: BufRead>(src: &mut R, buf: &mut Vec<u8>, max: usize) -> io::Result<Option<bool>> {
+    buf.clear();
+    loop {
+        let avail = fill(src)?;
+        if avail.is_empty() {
+            return Ok((!buf.is_empty()).then_some(true));
+        }
+        let nl = avail.iter().position(|&b| b == b'\n');
+        let n = nl.map_or(avail.len(), |i| i + 1);
+        // The line's `\n` does not count.
+        let room = max + 1 - buf.len();
+        if n > room || (nl.is_none() && n == room) {
+            let take = n.min(room);
+            buf.extend_from_slice(&avail[..take]);
+            src.consume(take);
+            return Ok(Some(false));
+        }
+        buf.extend_from_slice(&avail[..n]);
+        src.consume(n);
+        if nl.is_some() {
+            return Ok(Some(true));
+        }
+    }
+}
+
+/// Skips the rest of the current line, its `\n` included.
+fn skip_line<R: BufRead>(src: &mut R) -> io::Result<()> {
+    loop {
+        let avail = fill(src)?;
+        if avail.is_empty() {
+            return Ok(());
+        }
+        if let Some(i) = avail.iter().position(|&b| b == b'\n') {
+            src.consume(i + 1);
+            return Ok(());
+        }
+        let n = avail.len();
+        src.consume(n);
     }
 }
 
 /// Reads CSV: a header naming the columns x, y, X, Y, Z (any order, separated by `,`, `;` or
 /// tab, which is then the delimiter of the whole file), then one correspondence per line.
 /// Fields may be quoted and are trimmed; blank lines and lines starting with `#` are skipped.
-fn read_csv(name: &str, text: &str, camera: Camera) -> Result<Problem, Failure> {
-    // The header line: the first line not skipped.
-    let Some((header_n, header_line)) = text
-        .split('\n')
-        .enumerate()
-        .map(|(i, l)| (i + 1, l))
-        .find(|(_, l)| !skipped(l))
-    else {
-        return Err(Failure::input(format!(
-            "{name}: empty file; expected the header `x,y,X,Y,Z` and one correspondence per line"
-        )));
+/// `first_line`: the number of the first line `src` holds.
+fn read_csv<R: BufRead>(
+    name: &str,
+    src: R,
+    camera: Camera,
+    first_line: usize,
+    limits: &Limits,
+) -> Result<Problem, Failure> {
+    let mut lines = Lines {
+        src,
+        name,
+        limits,
+        line: first_line - 1,
+        buf: Vec::new(),
     };
+    // The header line: the first line not skipped.
+    let (header_n, header_line) = loop {
+        match lines.next(false, true)? {
+            None => {
+                return Err(Failure::input(format!(
+                    "{name}: empty file; expected the header `x,y,X,Y,Z` and one correspondence \
+                     per line"
+                )))
+            }
+            Some(l) if skipped(l) => {}
+            Some(l) => {
+                let l = l.to_string();
+                break (lines.line, l);
+            }
+        }
+    };
+    let first = header_line
+        .strip_suffix('\n')
+        .unwrap_or(&header_line)
+        .to_string();
     let Some(&(delim, delim_name)) = DELIMITERS.iter().find(|(d, _)| {
-        let fields = first_record(header_line, *d);
+        let fields = first_record(&first, *d);
         header_columns(&fields.iter().map(String::as_str).collect::<Vec<_>>()).is_some()
     }) else {
-        return Err(header_error(name, header_n, header_line));
+        return Err(header_error(name, header_n, &first));
     };
 
     let mut pixels = Vec::new();
     let mut world = Vec::new();
     // The header's fields, in file order, once read.
     let mut header: Option<(Vec<String>, [usize; 5])> = None;
-    let mut rdr = csv_reader(text, delim);
-    let mut rec = csv::StringRecord::new();
-    // Line counting: the number of the line starting at byte `counted`.
-    let (mut counted, mut line) = (0, 1);
-    let bytes = text.as_bytes();
+    let mut rec = Record::new(delim);
+    // The header line is the first record.
+    let mut header_record = Some(header_line);
     loop {
-        let start = rdr.position().byte() as usize;
-        match rdr.read_record(&mut rec) {
-            Ok(true) => {}
-            Ok(false) => break,
-            Err(e) => return Err(Failure::input(format!("{name}: {e}"))),
+        rec.clear();
+        let (line, mut done) = match header_record.take() {
+            Some(h) => (header_n, rec.feed(h.as_bytes())),
+            None => match lines.next(false, false)? {
+                None => break,
+                Some(l) if skipped(l) => continue,
+                Some(l) => {
+                    let done = rec.feed(l.as_bytes());
+                    (lines.line, done)
+                }
+            },
+        };
+        // A quoted field continues on the next lines.
+        let mut bytes = 0;
+        while !done {
+            match lines.next(true, false)? {
+                None => done = rec.feed(b""),
+                Some(l) => {
+                    bytes += l.len();
+                    if bytes > limits.max_line_bytes {
+                        return Err(Failure::input(format!(
+                            "{name}:{line}: record longer than {}, the line length limit of CSV \
+                             input (a quote that is not closed?)",
+                            bytes_text(limits.max_line_bytes as u64)
+                        )));
+                    }
+                    done = rec.feed(l.as_bytes());
+                }
+            }
         }
-        let end = (rdr.position().byte() as usize).min(bytes.len());
-        // The reader skips empty lines and `#` lines before a record, as `record_start` does.
-        let start = record_start(bytes, start.min(end));
-        line += bytes[counted..start]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count();
-        counted = start;
-        // Whitespace-only lines and indented comments reach here as records.
-        if skipped(&text[start..end]) {
-            continue;
-        }
-        let fields: Vec<&str> = rec.iter().map(str::trim).collect();
         let Some((names, at)) = &header else {
-            let at = header_columns(&fields).ok_or_else(|| {
-                header_error(name, line, text[start..end].lines().next().unwrap_or(""))
-            })?;
-            header = Some((fields.iter().map(|f| f.to_string()).collect(), at));
+            let fields: Vec<String> = rec
+                .fields()
+                .map(|f| String::from_utf8_lossy(f).trim().to_string())
+                .collect();
+            let at = header_columns(&fields.iter().map(String::as_str).collect::<Vec<_>>())
+                .ok_or_else(|| header_error(name, line, &first))?;
+            header = Some((fields, at));
             continue;
         };
-        if fields.len() != 5 {
+        if rec.len() != 5 {
             return Err(Failure::input(format!(
                 "{name}:{line}: expected 5 {delim_name}-separated numbers ({}), found {} field{} \
                  (truncated line?)",
                 names.join(", "),
-                fields.len(),
-                if fields.len() == 1 { "" } else { "s" }
+                rec.len(),
+                if rec.len() == 1 { "" } else { "s" }
             )));
         }
         let mut v = [0.0; 5];
-        for (i, f) in fields.iter().enumerate() {
+        for (i, f) in rec.fields().enumerate() {
+            let f = String::from_utf8_lossy(f);
+            let f = f.trim();
             let what = format!("{name}:{line}: field {} ({})", i + 1, names[i]);
             let shown = shown(f);
             let x = match f.parse::<f64>() {
@@ -428,28 +1031,13 @@ fn read_csv(name: &str, text: &str, camera: Camera) -> Result<Problem, Failure> 
              (one correspondence per line expected)"
         )));
     }
+    pixels.shrink_to_fit();
+    world.shrink_to_fit();
     Ok(Problem {
         camera,
         pixels,
         world,
     })
-}
-
-/// Where the record the CSV reader reads from byte `at` starts: past empty lines and lines
-/// starting with `#` (which the reader skips).
-fn record_start(bytes: &[u8], mut at: usize) -> usize {
-    loop {
-        while bytes.get(at) == Some(&b'\n') {
-            at += 1;
-        }
-        if bytes.get(at) != Some(&b'#') {
-            return at;
-        }
-        at = bytes[at..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .map_or(bytes.len(), |p| at + p + 1);
-    }
 }
 
 /// `s` for a message: control and other invisible characters escaped (`\u{1}`, `\t`), quotes

@@ -53,7 +53,9 @@ for standard input, by content: JSON if it starts with `{`):
          \"points2d\": [[x, y], ...], \"points3d\": [[X, Y, Z], ...]}
   (--camera, if given, replaces the file's camera.)
 
-Inputs larger than 1 GiB are refused.
+The input must be a regular file or standard input (a FIFO, a device or a directory is
+refused). Inputs larger than --max-input-size (default 1 GiB) are refused, and so are CSV
+lines (comments excepted) and JSON strings or numbers longer than 64 KiB.
 
 Camera models and parameter orders are COLMAP's: SIMPLE_PINHOLE f,cx,cy; PINHOLE fx,fy,cx,cy;
 SIMPLE_RADIAL f,cx,cy,k; RADIAL f,cx,cy,k1,k2; OPENCV fx,fy,cx,cy,k1,k2,p1,p2; OPENCV_FISHEYE
@@ -122,6 +124,12 @@ pub(crate) struct RegisterOptions {
     /// correspondence mask, model pose) as JSON to FILE, e.g. for scripts/compare_poselib.py.
     #[arg(long, value_name = "FILE")]
     export_problems: Option<PathBuf>,
+    /// Refuse model files larger than SIZE: bytes, or with a suffix K, M, G or T (powers of
+    /// 1024; `KiB` etc. also accepted), or `none`. Default: none (the model is streamed and
+    /// memory stays proportional to it). Images with more than 1,000,000 observations and 3D
+    /// points with tracks longer than 1,000,000 are refused.
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    max_input_size: Option<u64>,
 }
 
 impl Default for RegisterOptions {
@@ -134,6 +142,7 @@ impl Default for RegisterOptions {
             outliers: None,
             seed: 0,
             export_problems: None,
+            max_input_size: None,
         }
     }
 }
@@ -187,6 +196,39 @@ struct SolveArgs {
     /// Use the paper's algebraic cost only (no reprojection-error refinement).
     #[arg(long)]
     algebraic: bool,
+    /// Refuse inputs larger than SIZE: bytes, or with a suffix K, M, G or T (powers of 1024;
+    /// `KiB` etc. also accepted), or `none`.
+    #[arg(long, value_name = "SIZE", value_parser = parse_size, default_value = "1G")]
+    max_input_size: u64,
+}
+
+/// Parses a size: bytes, or a number with a suffix K, M, G or T (powers of 1024, optionally
+/// followed by `iB` or `B`), or `none` (no limit).
+pub(crate) fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    if t.eq_ignore_ascii_case("none") {
+        return Ok(u64::MAX);
+    }
+    let digits = t.find(|c: char| !c.is_ascii_digit()).unwrap_or(t.len());
+    let (number, suffix) = t.split_at(digits);
+    let shift = match suffix.trim_start().to_ascii_lowercase().as_str() {
+        "" | "b" => 0,
+        "k" | "kb" | "kib" => 10,
+        "m" | "mb" | "mib" => 20,
+        "g" | "gb" | "gib" => 30,
+        "t" | "tb" | "tib" => 40,
+        _ => {
+            return Err(format!(
+                "`{s}`: expected bytes, or a number with a suffix K, M, G or T (powers of 1024), \
+                 or `none`"
+            ))
+        }
+    };
+    number
+        .parse::<u64>()
+        .ok()
+        .and_then(|n| n.checked_mul(1 << shift))
+        .ok_or_else(|| format!("`{s}`: expected a whole number of bytes below 2^64"))
 }
 
 /// A failure: the message for stderr and the exit code.
@@ -264,7 +306,11 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             } else {
                 Solver::default()
             };
-            let problem = input::read_problem(&a.file, a.format, a.camera.as_deref())?;
+            let limits = input::Limits {
+                max_input_bytes: a.max_input_size,
+                ..input::Limits::default()
+            };
+            let problem = input::read_problem(&a.file, a.format, a.camera.as_deref(), &limits)?;
             let json = input::solve(&problem, &solver)?;
             emit(&json)
         }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::experiment::{self, ImageProblem, Outliers};
-use crate::colmap::{self, Model, ModelFormat, RegisterError, Registration};
+use crate::colmap::{self, Limit, Model, ModelErrorKind, ModelFormat, RegisterError, Registration};
 use crate::ransac::Ransac;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
@@ -361,7 +361,19 @@ pub(crate) fn run(
         Failure::input(format!("{e}{hint}"))
     })?;
     opts.validate()?;
-    let model = colmap::read_model(dir).map_err(|e| Failure::input(e.to_string()))?;
+    let limits = opts
+        .max_input_size
+        .map_or_else(colmap::ReadLimits::default, |n| {
+            colmap::ReadLimits::default().max_file_bytes(n)
+        });
+    let model = colmap::read_model_with_limits(dir, &limits).map_err(|e| {
+        let hint = if matches!(e.kind, ModelErrorKind::Limit(Limit::FileBytes(_))) {
+            "; raise it with --max-input-size SIZE"
+        } else {
+            ""
+        };
+        Failure::input(format!("{e}{hint}"))
+    })?;
     if let Some(out) = out {
         check_output(dir, &out.dir)?;
     }

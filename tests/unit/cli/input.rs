@@ -269,17 +269,28 @@ fn byte_order_mark_before_json_and_sniffing() {
 
 #[test]
 fn input_size_is_capped() {
-    let ok = read_capped("<stdin>", &b"12345"[..], 5).unwrap();
-    assert_eq!(ok, b"12345");
-    let f = read_capped("<stdin>", &b"123456"[..], 5).unwrap_err();
+    let limits = |max_input_bytes| Limits {
+        max_input_bytes,
+        ..Limits::default()
+    };
+    let text = "x,y,X,Y,Z\n1,2,3,4,5\n";
+    let n = text.len() as u64;
+    let read =
+        |cap| read_problem_from("<stdin>", text.as_bytes(), None, Some(CAMERA), &limits(cap));
+    assert_eq!(read(n).unwrap().correspondences(), 1);
+    let f = read(n - 1).err().unwrap();
     assert_eq!(f.code, 2);
     assert_eq!(
         f.message,
-        "<stdin>: larger than 5 bytes, the input size limit of `eopnp solve`"
+        format!(
+            "<stdin>: larger than {} bytes, the input size limit of `eopnp solve` \
+             (--max-input-size)",
+            n - 1
+        )
     );
     let f = too_large("big.csv", MAX_INPUT_BYTES);
     assert_eq!(
         f.message,
-        "big.csv: larger than 1 GiB, the input size limit of `eopnp solve`"
+        "big.csv: larger than 1 GiB, the input size limit of `eopnp solve` (--max-input-size)"
     );
 }
