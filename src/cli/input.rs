@@ -26,6 +26,7 @@ use serde_json::json;
 use super::Failure;
 
 /// A parsed problem: camera, pixels and world points.
+#[derive(Debug, PartialEq)]
 pub struct Problem {
     camera: Camera,
     pixels: Vec<Point2<f64>>,
@@ -696,7 +697,14 @@ fn header_error(name: &str, n: usize, line: &str) -> Failure {
         }
         if !unknown.is_empty() {
             let s = if unknown.len() == 1 { "" } else { "s" };
-            problems.push(format!("unknown column{s} {}", unknown.join(", ")));
+            let more = unknown.len().saturating_sub(8);
+            unknown.truncate(8);
+            let more = if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            };
+            problems.push(format!("unknown column{s} {}{more}", unknown.join(", ")));
         }
         if !repeated.is_empty() {
             let s = if repeated.len() == 1 { "" } else { "s" };
@@ -726,15 +734,21 @@ fn first_record(line: &str, delim: u8) -> Vec<String> {
         .collect()
 }
 
+/// The most fields of a CSV record that are kept: a record with more is refused (it needs
+/// five), and its fields beyond these are not stored.
+const MAX_FIELDS: usize = 64;
+
 /// One CSV record parsed by `csv_core` (the `csv` crate's parser) from the lines fed to it:
 /// quotes (a quoted field may span lines), `""` inside quotes, records ending at `\n` (a `\r`
-/// before it is trimmed with the field).
+/// before it is trimmed with the field). At most [`MAX_FIELDS`] fields.
 struct Record {
     rdr: csv_core::Reader,
     out: Vec<u8>,
     ends: Vec<usize>,
     nout: usize,
     nend: usize,
+    /// The record has more than [`MAX_FIELDS`] fields (it was cut there).
+    overflow: bool,
 }
 
 impl Record {
@@ -749,6 +763,7 @@ impl Record {
             ends: vec![0; 8],
             nout: 0,
             nend: 0,
+            overflow: false,
         }
     }
 
@@ -756,9 +771,11 @@ impl Record {
     fn clear(&mut self) {
         self.nout = 0;
         self.nend = 0;
+        self.overflow = false;
     }
 
-    /// Feeds a line (empty: the end of the input); whether the record is complete.
+    /// Feeds a line (empty: the end of the input); whether the record is complete (or cut at
+    /// [`MAX_FIELDS`] fields: the caller refuses it).
     fn feed(&mut self, mut input: &[u8]) -> bool {
         let eof = input.is_empty();
         loop {
@@ -775,6 +792,10 @@ impl Record {
                 csv_core::ReadRecordResult::OutputFull => {
                     let n = 2 * self.out.len();
                     self.out.resize(n, 0);
+                }
+                csv_core::ReadRecordResult::OutputEndsFull if self.ends.len() >= MAX_FIELDS => {
+                    self.overflow = true;
+                    return true;
                 }
                 csv_core::ReadRecordResult::OutputEndsFull => {
                     let n = 2 * self.ends.len();
@@ -810,12 +831,23 @@ struct Lines<'a, R> {
     /// The number of the line last read.
     line: usize,
     buf: Vec<u8>,
+    /// The line last read was cut.
+    cut: bool,
 }
 
 impl<R: BufRead> Lines<'_, R> {
-    /// The next line, with its `\n`; `None` at the end of the input. `in_record`: the line
-    /// continues a record (a quoted field), so it is not a comment. `header`: a line that is
-    /// too long is returned cut (its rest skipped), for the header error.
+    fn too_long(&self) -> Failure {
+        Failure::input(format!(
+            "{}:{}: line longer than {}, the line length limit of CSV input",
+            self.name,
+            self.line,
+            bytes_text(self.limits.max_line_bytes as u64)
+        ))
+    }
+
+    /// The next line, with its `\n` (a comment line: `#`); `None` at the end of the input.
+    /// `in_record`: the line continues a record (a quoted field), so it is not a comment. `header`: a line that is
+    /// too long is returned cut, for the header error (and `cut` set; nothing more is read).
     fn next(&mut self, in_record: bool, header: bool) -> Result<Option<&str>, Failure> {
         let max = self.limits.max_line_bytes;
         loop {
@@ -825,31 +857,26 @@ impl<R: BufRead> Lines<'_, R> {
             match read {
                 None => return Ok(None),
                 Some(true) => break,
-                Some(false) if header => {
+                Some(false) if !in_record && self.buf.trim_ascii_start().starts_with(b"#") => {
                     skip_line(&mut self.src)
                         .map_err(|e| read_failure(self.name, &e, self.limits))?;
+                }
+                Some(false) if header => {
                     // Cut at a character boundary.
                     let valid = match std::str::from_utf8(&self.buf) {
                         Ok(_) => self.buf.len(),
                         Err(e) => e.valid_up_to(),
                     };
                     self.buf.truncate(valid);
-                    self.buf.push(b'\n');
+                    self.cut = true;
                     break;
                 }
-                Some(false) if !in_record && self.buf.trim_ascii_start().starts_with(b"#") => {
-                    skip_line(&mut self.src)
-                        .map_err(|e| read_failure(self.name, &e, self.limits))?;
-                }
-                Some(false) => {
-                    return Err(Failure::input(format!(
-                        "{}:{}: line longer than {}, the line length limit of CSV input",
-                        self.name,
-                        self.line,
-                        bytes_text(max as u64)
-                    )))
-                }
+                Some(false) => return Err(self.too_long()),
             }
+        }
+        if !in_record && self.buf.trim_ascii_start().starts_with(b"#") {
+            // A comment: skipped, whatever its bytes (as a longer one is skipped unread).
+            return Ok(Some("#"));
         }
         let (name, line) = (self.name, self.line);
         std::str::from_utf8(&self.buf)
@@ -919,6 +946,7 @@ fn read_csv<R: BufRead>(
         limits,
         line: first_line - 1,
         buf: Vec::new(),
+        cut: false,
     };
     // The header line: the first line not skipped.
     let (header_n, header_line) = loop {
@@ -944,8 +972,20 @@ fn read_csv<R: BufRead>(
         let fields = first_record(&first, *d);
         header_columns(&fields.iter().map(String::as_str).collect::<Vec<_>>()).is_some()
     }) else {
-        return Err(header_error(name, header_n, &first));
+        let mut f = header_error(name, header_n, &first);
+        if lines.cut {
+            f.message.push_str(&format!(
+                " (the line is longer than {}, the line length limit of CSV input: only its \
+                 start was read)",
+                bytes_text(limits.max_line_bytes as u64)
+            ));
+        }
+        return Err(f);
     };
+    if lines.cut {
+        // A header, then more than the line length limit of whitespace.
+        return Err(lines.too_long());
+    }
 
     let mut pixels = Vec::new();
     let mut world = Vec::new();
@@ -995,6 +1035,13 @@ fn read_csv<R: BufRead>(
             header = Some((fields, at));
             continue;
         };
+        if rec.overflow {
+            return Err(Failure::input(format!(
+                "{name}:{line}: expected 5 {delim_name}-separated numbers ({}), found more than \
+                 {MAX_FIELDS} fields",
+                names.join(", "),
+            )));
+        }
         if rec.len() != 5 {
             return Err(Failure::input(format!(
                 "{name}:{line}: expected 5 {delim_name}-separated numbers ({}), found {} field{} \

@@ -294,3 +294,152 @@ fn input_size_is_capped() {
         "big.csv: larger than 1 GiB, the input size limit of `eopnp solve` (--max-input-size)"
     );
 }
+
+#[test]
+fn streaming_through_tiny_buffers_gives_the_same_problem() {
+    let json = format!(
+        "\u{feff}\n\n  {}",
+        serde_json::json!({
+            "camera": {"model": "PINHOLE", "params": [800, 800, 320, 240]},
+            "points2d": points().iter().map(|p| p.0).collect::<Vec<_>>(),
+            "points3d": points().iter().map(|p| p.1).collect::<Vec<_>>(),
+        })
+    );
+    let csv = format!(
+        "\u{feff}# c\n\n{}",
+        csv_text([2, 0, 3, 1, 4], ";", "\"").replace('\n', "\r\n")
+    );
+    for (text, ext) in [
+        (&json, None),
+        (&json, Some("json")),
+        (&csv, None),
+        (&csv, Some("csv")),
+    ] {
+        let whole = read_problem_from("p", text.as_bytes(), ext, Some(CAMERA), &Limits::default())
+            .unwrap_or_else(|f| panic!("{}", f.message));
+        assert_eq!(whole.correspondences(), 8);
+        for capacity in 1..=9 {
+            let src = std::io::BufReader::with_capacity(capacity, text.as_bytes());
+            let p = read_problem_from("p", src, ext, Some(CAMERA), &Limits::default()).unwrap();
+            assert_eq!(p, whole, "{ext:?} through {capacity} bytes");
+        }
+    }
+}
+
+#[test]
+fn lines_after_sniffed_whitespace_are_counted() {
+    // JSON after two blank lines: the syntax error is on line 4, column 9.
+    let text = "\n\n  {\"points2d\": [],\n \"points3d\": [1]}";
+    let f = parse_problem("p", text.as_bytes(), None, None)
+        .err()
+        .unwrap();
+    assert!(f.message.starts_with("p:4:"), "{}", f.message);
+    let f = parse_problem("p", text.as_bytes(), Some("json"), None)
+        .err()
+        .unwrap();
+    assert!(f.message.starts_with("p:4:"), "{}", f.message);
+    // On the line of `{`, the columns count the spaces before it.
+    let text = "\n   {\"points2d\": x}";
+    let f = parse_problem("p", text.as_bytes(), None, None)
+        .err()
+        .unwrap();
+    assert!(
+        f.message.starts_with("p:2:17: expected value"),
+        "{}",
+        f.message
+    );
+    // The camera and count errors are at their keys' lines.
+    let text = "\n{\"points2d\": [[1, 2]],\n\"points3d\": [],\n\"camera\": {\"model\": \"X\", \
+                \"params\": []}}";
+    let f = parse_problem("p", text.as_bytes(), None, None)
+        .err()
+        .unwrap();
+    assert!(f.message.starts_with("p:4: camera: "), "{}", f.message);
+    let f = parse_problem("p", text.as_bytes(), None, Some(CAMERA))
+        .err()
+        .unwrap();
+    assert_eq!(
+        f.message,
+        "p:3: 1 points2d but 0 points3d; they must correspond one to one"
+    );
+    // CSV after blank lines and indentation.
+    let text = "\n\n   x,y,X,Y,Z\n1,2,3,4,five\n";
+    let f = csv_failure(text);
+    assert_eq!(f, "p.csv:4: field 5 (Z) is not a number: `five`");
+    let f = parse_problem("p", text.as_bytes(), None, Some(CAMERA))
+        .err()
+        .unwrap();
+    assert_eq!(f.message, "p:4: field 5 (Z) is not a number: `five`");
+}
+
+#[test]
+fn line_limits_name_themselves() {
+    let limits = Limits {
+        max_input_bytes: u64::MAX,
+        max_line_bytes: 20,
+    };
+    let read =
+        |text: &str| read_problem_from("p", text.as_bytes(), Some("csv"), Some(CAMERA), &limits);
+    // A long comment is skipped unread, whatever its bytes; a long data line is refused.
+    let mut ok = format!("# {}", "c".repeat(100)).into_bytes();
+    ok.extend_from_slice(b"\xff\nx,y,X,Y,Z\n1,2,3,4,5\n");
+    let p = read_problem_from("p", &ok[..], Some("csv"), Some(CAMERA), &limits).unwrap();
+    assert_eq!(p.correspondences(), 1);
+    let f = read("x,y,X,Y,Z\n1,2,3,4,5,6,7,8,9,10,11\n").err().unwrap();
+    assert_eq!(
+        f.message,
+        "p:2: line longer than 20 bytes, the line length limit of CSV input"
+    );
+    // A quoted record spanning lines, past the limit.
+    let f = read("x,y,X,Y,Z\n\"1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n11\n")
+        .err()
+        .unwrap();
+    assert!(
+        f.message.starts_with("p:2: record longer than 20 bytes"),
+        "{}",
+        f.message
+    );
+    // A header followed by spaces past the limit, and a long line that is not a header.
+    let f = read(&format!("x,y,X,Y,Z{}\n1,2,3,4,5\n", " ".repeat(30)))
+        .err()
+        .unwrap();
+    assert!(
+        f.message.starts_with("p:1: line longer than 20 bytes"),
+        "{}",
+        f.message
+    );
+    let f = read("x,y,X,Y,Z,width,height,depth\n").err().unwrap();
+    assert!(
+        f.message.starts_with("p:1: expected the header"),
+        "{}",
+        f.message
+    );
+    assert!(
+        f.message.ends_with("(the line is longer than 20 bytes, the line length limit of CSV input: only its start was read)"),
+        "{}",
+        f.message
+    );
+    // More than 64 fields.
+    let f = csv_failure(&format!("x,y,X,Y,Z\n{}\n", ",".repeat(100)));
+    assert!(f.ends_with("found more than 64 fields"), "{f}");
+    // JSON strings and numbers.
+    let json = |text: &str| read_problem_from("p", text.as_bytes(), Some("json"), None, &limits);
+    let f = json(&format!("{{\"points2d\": [[1.{}, 2]]}}", "0".repeat(30)))
+        .err()
+        .unwrap();
+    assert_eq!(
+        f.message,
+        "p:1: a string or number longer than 20 bytes, the limit of JSON input"
+    );
+    let f = json(&format!(
+        "{{\"camera\": {{\"model\": \"{}\"}}}}",
+        "A".repeat(30)
+    ))
+    .err()
+    .unwrap();
+    assert!(
+        f.message.contains("string or number longer than 20 bytes"),
+        "{}",
+        f.message
+    );
+}
