@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use eopnp::colmap::{
-    read_model, read_model_binary, read_model_text, register_image, write_model_binary, Location,
-    Model, ModelError,
+    parse_model_buffered, read_model, read_model_binary, read_model_text, register_image,
+    write_model_binary, Location, Model, ModelError, ModelFormat, ReadLimits,
 };
 use eopnp::{Refinement, Solver};
 
@@ -134,6 +134,27 @@ fn binary_writer_round_trips_and_matches_the_bundled_copy() {
         eopnp::colmap::ModelFormat::Binary
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The readers stream through a buffer: read through buffers of 1 to 13 bytes (every token,
+/// name and record cut at every place), both bundled copies give the model exactly.
+#[test]
+fn tiny_buffers_read_the_same_model() {
+    let m = text_model();
+    for (format, dir) in [
+        (ModelFormat::Text, "colmap-boxes"),
+        (ModelFormat::Binary, "colmap-boxes-bin"),
+    ] {
+        let files = format
+            .file_names()
+            .map(|n| std::fs::read(data(dir).join(n)).unwrap());
+        let files = [&files[0][..], &files[1][..], &files[2][..]];
+        for capacity in [1, 2, 3, 5, 8, 13] {
+            let read = parse_model_buffered(format, files, &ReadLimits::default(), capacity)
+                .unwrap_or_else(|e| panic!("{format:?} through {capacity} bytes: {e}"));
+            assert!(read == m, "{format:?} through {capacity} bytes");
+        }
+    }
 }
 
 /// The bundled text model with one file replaced by `contents`.

@@ -709,21 +709,76 @@ fn exercise_model(model: &eopnp::colmap::Model) {
     }
 }
 
-/// The COLMAP text reader (three files separated by `\0\0\xff`), then registration.
+/// The COLMAP text reader (three files separated by `\0\0\xff`), then registration; and the
+/// reading properties of [`check_model_reading`].
 pub fn colmap_text(data: &[u8]) {
     let [c, i, p] = three_files(data);
-    match eopnp::colmap::parse_model_text(c, i, p) {
+    let whole = eopnp::colmap::parse_model_text(c, i, p);
+    check_model_reading(eopnp::colmap::ModelFormat::Text, [c, i, p], &whole);
+    match whole {
         Ok(model) => exercise_model(&model),
         Err(e) => assert!(!e.to_string().is_empty()),
     }
 }
 
-/// The COLMAP binary reader (three files separated by `\0\0\xff`), then registration.
+/// The COLMAP binary reader (three files separated by `\0\0\xff`), then registration; and
+/// the reading properties of [`check_model_reading`].
 pub fn colmap_binary(data: &[u8]) {
     let [c, i, p] = three_files(data);
-    match eopnp::colmap::parse_model_binary(c, i, p) {
+    let whole = eopnp::colmap::parse_model_binary(c, i, p);
+    check_model_reading(eopnp::colmap::ModelFormat::Binary, [c, i, p], &whole);
+    match whole {
         Ok(model) => exercise_model(&model),
         Err(e) => assert!(!e.to_string().is_empty()),
+    }
+}
+
+/// Limits small enough for fuzzed inputs to reach: 2 KiB files, 8 observations per image, 8
+/// track elements per point.
+pub fn small_model_limits() -> eopnp::colmap::ReadLimits {
+    eopnp::colmap::ReadLimits::default()
+        .max_file_bytes(2048)
+        .max_observations(8)
+        .max_track_length(8)
+}
+
+/// The streaming readers' properties on one input (`whole`: its result with the default
+/// limits):
+/// - read through a buffer of 1 to 13 bytes (tokens, names and records cut anywhere), the
+///   result is the same;
+/// - with [`small_model_limits`], a model within them reads the same, one beyond them fails
+///   with an error of kind `Limit`, and input that fails still fails.
+fn check_model_reading(
+    format: eopnp::colmap::ModelFormat,
+    files: [&[u8]; 3],
+    whole: &Result<eopnp::colmap::Model, eopnp::colmap::ModelError>,
+) {
+    use eopnp::colmap::{parse_model_buffered, parse_model_with_limits, ModelErrorKind};
+    let len: usize = files.iter().map(|f| f.len()).sum();
+    let capacity = 1 + len % 13;
+    let buffered = parse_model_buffered(format, files, &Default::default(), capacity);
+    match (whole, &buffered) {
+        (Ok(a), Ok(b)) => assert_same_model(a, b, "buffered"),
+        (Err(a), Err(b)) => assert_eq!(a, b, "buffered through {capacity} bytes"),
+        (a, b) => panic!("buffered through {capacity} bytes: {b:?}, whole: {a:?}"),
+    }
+    let small = small_model_limits();
+    let limited = parse_model_with_limits(format, files, &small);
+    match (whole, limited) {
+        (Ok(a), Ok(b)) => assert_same_model(a, &b, "limited"),
+        (Ok(m), Err(e)) => {
+            assert!(matches!(e.kind, ModelErrorKind::Limit(_)), "{e}");
+            let within = files.iter().all(|f| f.len() as u64 <= small.max_file_bytes)
+                && m.images
+                    .values()
+                    .all(|i| i.points2d.len() <= small.max_observations)
+                && m.points
+                    .values()
+                    .all(|p| p.track.len() <= small.max_track_length);
+            assert!(!within, "a model within the limits is refused: {e}");
+        }
+        (Err(e), Ok(_)) => panic!("bad input read under smaller limits: {e}"),
+        (Err(_), Err(_)) => {}
     }
 }
 
@@ -910,7 +965,9 @@ pub fn cli_input(data: &[u8]) {
     } else {
         (None, rest)
     };
-    match eopnp::cli::input::parse_problem("fuzz", body, ext, camera) {
+    let whole = eopnp::cli::input::parse_problem("fuzz", body, ext, camera);
+    check_problem_reading(body, ext, camera, &whole);
+    match whole {
         Ok(problem) => match eopnp::cli::input::solve(&problem, &Solver::default()) {
             Ok(json) => {
                 let v: serde_json::Value = serde_json::from_str(&json).expect("output is JSON");
@@ -932,5 +989,58 @@ pub fn cli_input(data: &[u8]) {
                 );
             }
         }
+    }
+}
+
+/// Limits small enough for fuzzed inputs to reach: 1 KiB of input, lines (and JSON strings
+/// and numbers) of 48 bytes.
+pub fn small_input_limits() -> eopnp::cli::input::Limits {
+    eopnp::cli::input::Limits {
+        max_input_bytes: 1024,
+        max_line_bytes: 48,
+    }
+}
+
+/// The streaming properties of `solve`'s reader on one input (`whole`: its result read from
+/// the slice with the default limits):
+/// - read through a buffer of 1 to 7 bytes (a stream that delivers little at a time: a
+///   byte-order mark, lines, tokens cut anywhere), the result is the same;
+/// - with [`small_input_limits`], a problem that is read is the same, and one that is
+///   refused although it reads with the default limits is refused for a limit, which the
+///   message names.
+fn check_problem_reading(
+    body: &[u8],
+    ext: Option<&str>,
+    camera: Option<&str>,
+    whole: &Result<eopnp::cli::input::Problem, eopnp::cli::Failure>,
+) {
+    use eopnp::cli::input::{read_problem_from, Limits};
+    let capacity = 1 + body.len() % 7;
+    let src = || std::io::BufReader::with_capacity(capacity, body);
+    let buffered = read_problem_from("fuzz", src(), ext, camera, &Limits::default());
+    match (whole, &buffered) {
+        (Ok(a), Ok(b)) => assert_eq!(a, b, "buffered through {capacity} bytes"),
+        (Err(a), Err(b)) => assert_eq!(
+            (a.code, &a.message),
+            (b.code, &b.message),
+            "buffered through {capacity} bytes"
+        ),
+        (a, b) => panic!(
+            "buffered through {capacity} bytes: {:?}, whole: {:?}",
+            b.as_ref().map_err(|f| &f.message),
+            a.as_ref().map_err(|f| &f.message)
+        ),
+    }
+    match (
+        whole,
+        read_problem_from("fuzz", src(), ext, camera, &small_input_limits()),
+    ) {
+        (Ok(a), Ok(b)) => assert_eq!(*a, b, "limited"),
+        (Ok(_), Err(f)) => {
+            assert_eq!(f.code, 2, "{}", f.message);
+            assert!(f.message.contains("limit"), "limited: {}", f.message);
+        }
+        (Err(a), Ok(_)) => panic!("bad input read under smaller limits: {}", a.message),
+        (Err(_), Err(f)) => assert_eq!(f.code, 2, "{}", f.message),
     }
 }

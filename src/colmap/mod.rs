@@ -268,6 +268,34 @@ pub fn parse_model_with_limits(
     )
 }
 
+/// [`parse_model_with_limits`] reading each file through a buffer of `capacity` bytes, as
+/// [`read_model_with_limits`] reads a file: for tests and fuzzing of the streaming (tokens,
+/// names and records cut at buffer boundaries). Not a stable API.
+#[doc(hidden)]
+pub fn parse_model_buffered(
+    format: ModelFormat,
+    files: [&[u8]; 3],
+    limits: &ReadLimits,
+    capacity: usize,
+) -> Result<Model, ModelError> {
+    let format = match format {
+        ModelFormat::Text => &TEXT,
+        ModelFormat::Binary => &BINARY,
+    };
+    let paths = format.files.map(PathBuf::from);
+    for (path, bytes) in paths.iter().zip(files) {
+        check_size(path, bytes.len() as u64, limits)?;
+    }
+    let [cl, il, pl] = files.map(|f| f.len() as u64);
+    let [mut c, mut i, mut p] = files.map(|f| BufReader::with_capacity(capacity.max(1), f));
+    parse_with(
+        format,
+        &paths,
+        [(&mut c, cl), (&mut i, il), (&mut p, pl)],
+        limits,
+    )
+}
+
 /// A file parser: the file's path (for messages), its bytes and their number, the limits.
 type Parser<T> = fn(&Path, &mut dyn BufRead, u64, &ReadLimits) -> Result<T, ModelError>;
 
