@@ -551,4 +551,84 @@ fn register_ransac_shows_an_image_without_consensus_as_not_registered() {
     let text = stdout(&o);
     assert!(text.contains("failed: RANSAC found no consensus"), "{text}");
     assert!(text.contains("5 of 6 images registered"), "{text}");
+
+#[cfg(unix)]
+#[test]
+fn special_files_and_size_limits_are_input_errors() {
+    let camera = "SIMPLE_PINHOLE 1000 600 800";
+    // A device, a directory: refused before they are opened.
+    let o = eopnp(&["solve", "/dev/zero", "--camera", camera]);
+    assert_input_error(
+        &o,
+        &[
+            "/dev/zero: not a regular file (it is a character device)",
+            "`-`",
+        ],
+    );
+    let o = eopnp(&["solve", env!("CARGO_TARGET_TMPDIR"), "--camera", camera]);
+    assert_input_error(&o, &["not a regular file (it is a directory)"]);
+    // Endless zeros on standard input: refused at the first line.
+    let t = std::time::Instant::now();
+    let o = Command::new(env!("CARGO_BIN_EXE_eopnp"))
+        .args(["solve", "-", "--camera", camera])
+        .stdin(std::fs::File::open("/dev/zero").unwrap())
+        .output()
+        .unwrap();
+    assert_input_error(&o, &["<stdin>:1: expected the header"]);
+    assert!(t.elapsed().as_secs() < 5, "{:?}", t.elapsed());
+    // Over --max-input-size, a file and standard input.
+    let text = "x,y,X,Y,Z\n1,2,3,4,5\n";
+    let p = scratch_file("limit.csv", text);
+    let o = eopnp(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--camera",
+        camera,
+        "--max-input-size",
+        "10",
+    ]);
+    assert_input_error(
+        &o,
+        &["limit.csv: larger than 10 bytes", "(--max-input-size)"],
+    );
+    let o = eopnp_stdin(
+        &["solve", "-", "--camera", camera, "--max-input-size", "10"],
+        text.as_bytes(),
+    );
+    assert_input_error(&o, &["<stdin>: larger than 10 bytes"]);
+    let o = eopnp(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--camera",
+        camera,
+        "--max-input-size",
+        "1K",
+    ]);
+    assert!(!stderr(&o).contains("larger than"), "{}", stderr(&o));
+    let o = eopnp(&["solve", p.to_str().unwrap(), "--max-input-size", "12Q"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("12Q"), "{}", stderr(&o));
+    // A model file over --max-input-size, and one that is a device.
+    let o = eopnp(&[
+        "register",
+        data("colmap-boxes").to_str().unwrap(),
+        "--max-input-size",
+        "1K",
+    ]);
+    assert_input_error(
+        &o,
+        &[
+            "images.txt: the file is 925720 bytes long",
+            "over the file size limit of 1 KiB",
+            "raise it with --max-input-size",
+        ],
+    );
+    let dir = model_copy("cli-model-dev-zero", str::to_string);
+    std::fs::remove_file(dir.join("points3D.txt")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.join("points3D.txt")).unwrap();
+    let o = eopnp(&["register", dir.to_str().unwrap()]);
+    assert_input_error(
+        &o,
+        &["points3D.txt: not a regular file (it is a character device)"],
+    );
 }
