@@ -8,10 +8,8 @@
 //! returned (40 bytes per correspondence, times up to 3 while the vectors grow) plus the
 //! buffers (`tests/reader_memory.rs` measures it).
 
-use std::cell::Cell;
 use std::fmt;
 use std::io::{self, BufRead, BufReader, Read};
-use std::marker::PhantomData;
 use std::path::Path;
 
 use crate::camera::Camera;
@@ -19,7 +17,7 @@ use crate::source::{bytes_text, not_regular_message, open_regular, OpenError};
 use crate::PnpError;
 use crate::Solver;
 use nalgebra::{Point2, Point3};
-use serde::de::{DeserializeSeed, Error as _, MapAccess, SeqAccess, Visitor};
+use serde::de::{DeserializeSeed, Error as _, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer};
 use serde_json::json;
 
@@ -89,28 +87,29 @@ enum Field {
     Points3d,
 }
 
-/// A JSON problem as read, with the lines of its `"camera"` and `"points3d"` keys (for the
-/// errors found after parsing).
+/// A JSON problem as read: the file's camera (validated unless `--camera` replaces it) and the
+/// points.
 struct JsonProblem {
-    camera: Option<(JsonCamera, usize)>,
+    camera: Option<Camera>,
     points2d: Vec<Point2<f64>>,
-    points3d: (Vec<Point3<f64>>, usize),
+    points3d: Vec<Point3<f64>>,
 }
 
-/// Deserializes a [`JsonProblem`], reading the line of each key from `lines` (the newlines
-/// read so far, counted by [`JsonGuard`]).
-struct ProblemSeed<'a> {
-    lines: &'a Cell<usize>,
+/// Deserializes a [`JsonProblem`]. Errors found in the values (a bad camera, point counts that
+/// differ) are raised where the value ends, so that serde_json gives their line and column.
+struct ProblemSeed {
+    /// `--camera` is given: the file's camera is read but not used, nor checked.
+    camera_given: bool,
 }
 
-impl<'de> DeserializeSeed<'de> for ProblemSeed<'_> {
+impl<'de> DeserializeSeed<'de> for ProblemSeed {
     type Value = JsonProblem;
     fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<JsonProblem, D::Error> {
         d.deserialize_map(self)
     }
 }
 
-impl<'de> Visitor<'de> for ProblemSeed<'_> {
+impl<'de> Visitor<'de> for ProblemSeed {
     type Value = JsonProblem;
 
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
@@ -119,11 +118,9 @@ impl<'de> Visitor<'de> for ProblemSeed<'_> {
 
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<JsonProblem, A::Error> {
         let mut camera = None;
-        let mut points2d = None;
-        let mut points3d = None;
+        let mut points2d: Option<Vec<Point2<f64>>> = None;
+        let mut points3d: Option<Vec<Point3<f64>>> = None;
         while let Some(key) = map.next_key::<Field>()? {
-            // The key has just been read: the reader is on its line.
-            let line = self.lines.get() + 1;
             match key {
                 Field::Camera if camera.is_some() => {
                     return Err(A::Error::duplicate_field("camera"))
@@ -135,15 +132,31 @@ impl<'de> Visitor<'de> for ProblemSeed<'_> {
                     return Err(A::Error::duplicate_field("points3d"))
                 }
                 Field::Camera => {
-                    camera = Some(map.next_value::<Option<JsonCamera>>()?.map(|c| (c, line)));
+                    let c = map.next_value::<Option<JsonCamera>>()?;
+                    camera = Some(match c {
+                        Some(c) if !self.camera_given => Some(
+                            Camera::from_colmap(&c.model, c.width, c.height, c.params)
+                                .map_err(|e| A::Error::custom(format!("camera: {e}")))?,
+                        ),
+                        _ => None,
+                    });
                 }
                 Field::Points2d => {
                     let to = |a: [f64; 2]| Point2::new(a[0], a[1]);
-                    points2d = Some(map.next_value_seed(Points(to, PhantomData))?);
+                    points2d = Some(map.next_value_seed(Points(to))?);
                 }
                 Field::Points3d => {
                     let to = |a: [f64; 3]| Point3::new(a[0], a[1], a[2]);
-                    points3d = Some((map.next_value_seed(Points(to, PhantomData))?, line));
+                    points3d = Some(map.next_value_seed(Points(to))?);
+                }
+            }
+            if let (Some(p), Some(w)) = (&points2d, &points3d) {
+                if p.len() != w.len() {
+                    return Err(A::Error::custom(format!(
+                        "{} points2d but {} points3d; they must correspond one to one",
+                        p.len(),
+                        w.len()
+                    )));
                 }
             }
         }
@@ -155,30 +168,66 @@ impl<'de> Visitor<'de> for ProblemSeed<'_> {
     }
 }
 
-/// An array of points, each read as an array `A` and converted (no intermediate vector).
-struct Points<A, T>(fn(A) -> T, PhantomData<A>);
+/// An array of points of `N` coordinates, each converted as it is read (no intermediate
+/// vector).
+struct Points<const N: usize, T>(fn([f64; N]) -> T);
 
-impl<'de, A: Deserialize<'de>, T> DeserializeSeed<'de> for Points<A, T> {
+impl<'de, const N: usize, T> DeserializeSeed<'de> for Points<N, T> {
     type Value = Vec<T>;
     fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Vec<T>, D::Error> {
         d.deserialize_seq(self)
     }
 }
 
-impl<'de, A: Deserialize<'de>, T> Visitor<'de> for Points<A, T> {
+impl<'de, const N: usize, T> Visitor<'de> for Points<N, T> {
     type Value = Vec<T>;
 
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str("an array of points")
+        write!(f, "an array of points of {N} coordinates")
     }
 
     fn visit_seq<S: SeqAccess<'de>>(self, mut seq: S) -> Result<Vec<T>, S::Error> {
         let mut v = Vec::new();
-        while let Some(a) = seq.next_element::<A>()? {
+        while let Some(Coords(a)) = seq.next_element::<Coords<N>>()? {
             v.push((self.0)(a));
         }
         v.shrink_to_fit();
         Ok(v)
+    }
+}
+
+/// A point: an array of exactly `N` numbers.
+struct Coords<const N: usize>([f64; N]);
+
+impl<'de, const N: usize> Deserialize<'de> for Coords<N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_tuple(N, CoordsVisitor::<N>)
+    }
+}
+
+struct CoordsVisitor<const N: usize>;
+
+impl<'de, const N: usize> Visitor<'de> for CoordsVisitor<N> {
+    type Value = Coords<N>;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "an array of length {N}")
+    }
+
+    fn visit_seq<S: SeqAccess<'de>>(self, mut seq: S) -> Result<Coords<N>, S::Error> {
+        let mut a = [0.0; N];
+        for (i, x) in a.iter_mut().enumerate() {
+            *x = seq
+                .next_element()?
+                .ok_or_else(|| S::Error::invalid_length(i, &self))?;
+        }
+        if seq.next_element::<IgnoredAny>()?.is_some() {
+            return Err(S::Error::custom(format!(
+                "a point with more than {N} coordinates (points2d entries are [x, y], points3d \
+                 entries are [X, Y, Z])"
+            )));
+        }
+        Ok(Coords(a))
     }
 }
 
@@ -363,17 +412,19 @@ fn fill<R: BufRead>(src: &mut R) -> io::Result<&[u8]> {
 struct Start {
     /// The 1-based line parsing starts on.
     line: usize,
-    /// The characters of that line already consumed.
+    /// The characters of that line already consumed (whitespace).
     column: usize,
-    /// The start of a byte-order mark that is not one, to be read again.
+    /// The start of a byte-order mark that is not one, to be read again; or the whitespace
+    /// consumed on the current line (kept up to `keep` bytes), given back to the CSV reader.
     replay: Vec<u8>,
     /// Whether the input is JSON.
     json: bool,
 }
 
 /// Consumes a byte-order mark and, unless `ext` names the format, the leading ASCII
-/// whitespace, to decide the format: JSON when the first character is `{`.
-fn start<R: BufRead>(src: &mut R, ext: Option<&str>) -> io::Result<Start> {
+/// whitespace, to decide the format: JSON when the first character is `{`. Of the whitespace
+/// on the line of that character, at most `keep` bytes are kept for [`Start::replay`].
+fn start<R: BufRead>(src: &mut R, ext: Option<&str>, keep: usize) -> io::Result<Start> {
     const BOM: &[u8] = b"\xef\xbb\xbf";
     let mut matched = 0;
     while matched < BOM.len() && fill(src)?.first() == Some(&BOM[matched]) {
@@ -396,29 +447,32 @@ fn start<R: BufRead>(src: &mut R, ext: Option<&str>) -> io::Result<Start> {
     }
     loop {
         let buf = fill(src)?;
-        let Some(i) = buf.iter().position(|b| !b.is_ascii_whitespace()) else {
-            if buf.is_empty() {
+        let end = buf.iter().position(|b| !b.is_ascii_whitespace());
+        let ws = &buf[..end.unwrap_or(buf.len())];
+        for &b in ws {
+            if b == b'\n' {
+                s.line += 1;
+                s.column = 0;
+                s.replay.clear();
+            } else {
+                s.column += 1;
+                if s.replay.len() < keep {
+                    s.replay.push(b);
+                }
+            }
+        }
+        let n = ws.len();
+        match end {
+            Some(i) => {
+                s.json = buf[i] == b'{';
+                src.consume(n);
+                if s.json {
+                    s.replay.clear();
+                }
                 return Ok(s);
             }
-            count_lines(&mut s, buf);
-            let n = buf.len();
-            src.consume(n);
-            continue;
-        };
-        count_lines(&mut s, &buf[..i]);
-        s.json = buf[i] == b'{';
-        src.consume(i);
-        return Ok(s);
-    }
-}
-
-fn count_lines(s: &mut Start, ws: &[u8]) {
-    for &b in ws {
-        if b == b'\n' {
-            s.line += 1;
-            s.column = 0;
-        } else {
-            s.column += 1;
+            None if n == 0 => return Ok(s),
+            None => src.consume(n),
         }
     }
 }
@@ -438,7 +492,8 @@ pub fn read_problem_from(
         inner: src,
         left: limits.max_input_bytes,
     };
-    let mut start = start(&mut src, ext).map_err(|e| read_failure(name, &e, limits))?;
+    let mut start = start(&mut src, ext, limits.max_line_bytes.saturating_add(1))
+        .map_err(|e| read_failure(name, &e, limits))?;
     let src = io::Cursor::new(std::mem::take(&mut start.replay)).chain(src);
     if start.json {
         read_json(name, src, camera_arg, &start, limits)
@@ -481,37 +536,33 @@ enum Scan {
     Escape,
 }
 
-/// The reader under serde_json (which reads it a byte at a time): counts the lines (for the
-/// lines of keys), remembers the last two non-blank bytes (for error hints), and bounds the
-/// length of a string or number (serde_json would buffer it whole).
-struct JsonGuard<'a, R> {
+/// The reader under serde_json's buffer: bounds the length of a string or number (serde_json
+/// would buffer it whole), counting lines for the message. It hands over the bytes before a
+/// violation, so that an earlier error in them is reported first, and fails the next read.
+struct JsonGuard<R> {
     src: R,
-    lines: &'a Cell<usize>,
+    lines: usize,
     scan: Scan,
     run: usize,
     max: usize,
-    last: [u8; 2],
     violation: Option<Violation>,
 }
 
-impl<R: BufRead> Read for JsonGuard<'_, R> {
+impl<R: Read> Read for JsonGuard<R> {
     fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
-        let avail = match fill(&mut self.src) {
-            Ok(b) => b,
+        if self.violation.is_some() {
+            return Err(io::Error::other("JSON input refused"));
+        }
+        let n = match self.src.read(out) {
+            Ok(n) => n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => return Err(e),
             Err(e) => {
                 let copy = io::Error::new(e.kind(), e.to_string());
                 self.violation = Some(Violation::Read(e));
                 return Err(copy);
             }
         };
-        let n = avail.len().min(out.len());
-        for (i, &b) in avail[..n].iter().enumerate() {
-            if b == b'\n' {
-                self.lines.set(self.lines.get() + 1);
-            }
-            if !b.is_ascii_whitespace() {
-                self.last = [self.last[1], b];
-            }
+        for (i, &b) in out[..n].iter().enumerate() {
             match self.scan {
                 Scan::Outside if b == b'"' => {
                     self.scan = Scan::InString;
@@ -535,14 +586,18 @@ impl<R: BufRead> Read for JsonGuard<'_, R> {
                 }
             }
             if self.run > self.max {
-                self.violation = Some(Violation::TooLong(self.lines.get() + 1));
-                out[..i].copy_from_slice(&avail[..i]);
-                self.src.consume(i);
-                return Err(io::Error::other("string or number too long"));
+                self.violation = Some(Violation::TooLong(self.lines + 1));
+                // (No byte before it in this block: fail now, as `Ok(0)` would be the end.)
+                return if i == 0 {
+                    Err(io::Error::other("JSON input refused"))
+                } else {
+                    Ok(i)
+                };
+            }
+            if b == b'\n' {
+                self.lines += 1;
             }
         }
-        out[..n].copy_from_slice(&avail[..n]);
-        self.src.consume(n);
         Ok(n)
     }
 }
@@ -554,63 +609,53 @@ fn read_json<R: BufRead>(
     start: &Start,
     limits: &Limits,
 ) -> Result<Problem, Failure> {
-    let lines = Cell::new(start.line - 1);
     let mut guard = JsonGuard {
         src,
-        lines: &lines,
+        lines: start.line - 1,
         scan: Scan::Outside,
         run: 0,
         max: limits.max_line_bytes,
-        last: [0; 2],
         violation: None,
     };
     let parsed = {
-        let mut de = serde_json::Deserializer::from_reader(&mut guard);
-        ProblemSeed { lines: &lines }
-            .deserialize(&mut de)
-            .and_then(|p| de.end().map(|()| p))
+        // serde_json reads a byte at a time: from a buffer, through `std`'s fast path.
+        let mut de = serde_json::Deserializer::from_reader(BufReader::new(&mut guard));
+        ProblemSeed {
+            camera_given: camera_arg.is_some(),
+        }
+        .deserialize(&mut de)
+        .and_then(|p| de.end().map(|()| p))
     };
     let p = match parsed {
         Ok(p) => p,
         Err(e) => {
-            return Err(match guard.violation.take() {
+            return Err(match guard.violation.take().filter(|_| e.is_io()) {
                 Some(Violation::TooLong(line)) => Failure::input(format!(
                     "{name}:{line}: a string or number longer than {}, the limit of JSON input",
                     bytes_text(limits.max_line_bytes as u64)
                 )),
                 Some(Violation::Read(e)) => read_failure(name, &e, limits),
-                None => json_failure(name, &e, start, guard.last),
+                None => json_failure(name, &e, start),
             })
         }
     };
     let camera = match (camera_arg, p.camera) {
-        (Some(c), _) => c,
-        (None, Some((c, line))) => Camera::from_colmap(&c.model, c.width, c.height, c.params)
-            .map_err(|e| Failure::input(format!("{name}:{line}: camera: {e}")))?,
+        (Some(c), _) | (None, Some(c)) => c,
         (None, None) => {
             return Err(Failure::input(format!(
                 "{name}: no \"camera\" object and no --camera argument"
             )))
         }
     };
-    let (world, line) = p.points3d;
-    if p.points2d.len() != world.len() {
-        return Err(Failure::input(format!(
-            "{name}:{line}: {} points2d but {} points3d; they must correspond one to one",
-            p.points2d.len(),
-            world.len()
-        )));
-    }
     Ok(Problem {
         camera,
         pixels: p.points2d,
-        world,
+        world: p.points3d,
     })
 }
 
-/// The failure of a JSON syntax or data error, at its line and column in the input. `last`:
-/// the last two non-blank bytes read.
-fn json_failure(name: &str, e: &serde_json::Error, start: &Start, last: [u8; 2]) -> Failure {
+/// The failure of a JSON syntax or data error, at its line and column in the input.
+fn json_failure(name: &str, e: &serde_json::Error, start: &Start) -> Failure {
     let (line, column) = (e.line(), e.column());
     let message = e.to_string();
     let message = message
@@ -621,16 +666,8 @@ fn json_failure(name: &str, e: &serde_json::Error, start: &Start, last: [u8; 2])
     } else {
         column
     };
-    // serde_json reports a fixed-size array with too many elements as trailing characters,
-    // having read the `,` and the next element's first character.
-    let hint = if message.starts_with("trailing characters") && last[0] == b',' {
-        " (a point with too many coordinates? points2d entries are [x, y], points3d entries \
-         are [X, Y, Z])"
-    } else {
-        ""
-    };
     Failure::input(format!(
-        "{name}:{}:{column}: {message}{hint}",
+        "{name}:{}:{column}: {message}",
         line + start.line - 1
     ))
 }

@@ -348,19 +348,50 @@ fn lines_after_sniffed_whitespace_are_counted() {
         "{}",
         f.message
     );
-    // The camera and count errors are at their keys' lines.
-    let text = "\n{\"points2d\": [[1, 2]],\n\"points3d\": [],\n\"camera\": {\"model\": \"X\", \
-                \"params\": []}}";
+    // The camera and count errors are where their values end.
+    let text = "\n{\"camera\": {\"model\": \"X\",\n \"params\": []},\n\"points2d\": [[1, 2]],\n\
+                \"points3d\": []}";
     let f = parse_problem("p", text.as_bytes(), None, None)
         .err()
         .unwrap();
-    assert!(f.message.starts_with("p:4: camera: "), "{}", f.message);
+    assert!(f.message.starts_with("p:3:"), "{}", f.message);
+    assert!(
+        f.message
+            .contains(": camera: unsupported camera model \"X\""),
+        "{}",
+        f.message
+    );
     let f = parse_problem("p", text.as_bytes(), None, Some(CAMERA))
         .err()
         .unwrap();
-    assert_eq!(
-        f.message,
-        "p:3: 1 points2d but 0 points3d; they must correspond one to one"
+    assert!(f.message.starts_with("p:5:"), "{}", f.message);
+    assert!(
+        f.message
+            .ends_with(": 1 points2d but 0 points3d; they must correspond one to one"),
+        "{}",
+        f.message
+    );
+    // A point with a coordinate too many, or too few.
+    let text = "{\"points2d\": [[1, 2, 3]], \"points3d\": []}";
+    let f = parse_problem("p", text.as_bytes(), None, Some(CAMERA))
+        .err()
+        .unwrap();
+    assert!(
+        f.message.starts_with(
+            "p:1:23: a point with more than 2 coordinates (points2d entries are [x, y]"
+        ),
+        "{}",
+        f.message
+    );
+    let text = "{\"points2d\": [], \"points3d\": [[1, 2]]}";
+    let f = parse_problem("p", text.as_bytes(), None, Some(CAMERA))
+        .err()
+        .unwrap();
+    assert!(
+        f.message
+            .contains("invalid length 2, expected an array of length 3"),
+        "{}",
+        f.message
     );
     // CSV after blank lines and indentation.
     let text = "\n\n   x,y,X,Y,Z\n1,2,3,4,five\n";
