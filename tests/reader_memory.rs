@@ -420,8 +420,8 @@ fn pathological_models_are_refused_with_little_memory() {
     assert!(peak as f64 <= 3.0 * kept as f64 + MIB as f64);
     drop(m);
     drop(images);
-    // One line of 50 million commas, in each file.
-    let commas = ",".repeat(50_000_000);
+    // One line of 50 million commas (then a space), in each file.
+    let commas = format!("{} 1\n", ",".repeat(50_000_000));
     for k in 0..3 {
         let mut files = [cameras, header.as_bytes(), b"".as_slice()];
         files[k] = commas.as_bytes();

@@ -18,15 +18,15 @@ use crate::camera::{Camera, CameraError, CameraModel};
 // Binary format (little-endian; COLMAP's reconstruction_io / read_write_model.py layout).
 
 /// A binary file of `len` bytes read from `src`, with the offset of the next byte.
-struct Reader<'a> {
+struct Reader<'a, R> {
     path: &'a Path,
-    src: &'a mut dyn BufRead,
+    src: &'a mut R,
     pos: u64,
     len: u64,
 }
 
-impl<'a> Reader<'a> {
-    fn new(path: &'a Path, src: &'a mut dyn BufRead, len: u64) -> Self {
+impl<'a, R: BufRead> Reader<'a, R> {
+    fn new(path: &'a Path, src: &'a mut R, len: u64) -> Self {
         Reader {
             path,
             src,
@@ -185,9 +185,9 @@ impl<'a> Reader<'a> {
     }
 }
 
-pub(super) fn parse_cameras_bin(
+pub(super) fn parse_cameras_bin<R: BufRead>(
     path: &Path,
-    src: &mut dyn BufRead,
+    src: &mut R,
     len: u64,
     _limits: &ReadLimits,
 ) -> Result<BTreeMap<u32, Camera>, ModelError> {
@@ -220,9 +220,9 @@ pub(super) fn parse_cameras_bin(
 /// names.
 pub(super) const MAX_NAME: usize = MAX_FIELD_BYTES;
 
-pub(super) fn parse_images_bin(
+pub(super) fn parse_images_bin<R: BufRead>(
     path: &Path,
-    src: &mut dyn BufRead,
+    src: &mut R,
     len: u64,
     limits: &ReadLimits,
 ) -> Result<Images, ModelError> {
@@ -285,9 +285,9 @@ pub(super) fn parse_images_bin(
     Ok((images, locs))
 }
 
-pub(super) fn parse_points_bin(
+pub(super) fn parse_points_bin<R: BufRead>(
     path: &Path,
-    src: &mut dyn BufRead,
+    src: &mut R,
     len: u64,
     limits: &ReadLimits,
 ) -> Result<BTreeMap<u64, Point3D>, ModelError> {

@@ -67,7 +67,6 @@ use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use crate::camera::Camera;
 use crate::source::{not_regular_message, open_regular, OpenError};
 
 pub use limits::{Limit, ReadLimits, MAX_FIELD_BYTES};
@@ -79,8 +78,6 @@ pub use model::{
 pub(crate) use register::pixel_rmse;
 pub use register::{register_image, Registration};
 pub use write::{encode_model, write_model, write_model_binary, write_model_with, Overwrite};
-
-use model::Images;
 
 /// The on-disk format of a model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -149,10 +146,7 @@ pub fn read_model_with_limits(
     limits: &ReadLimits,
 ) -> Result<Model, ModelError> {
     let dir = dir.as_ref();
-    match detect_format(dir)? {
-        ModelFormat::Text => read_with(&TEXT, dir, limits),
-        ModelFormat::Binary => read_with(&BINARY, dir, limits),
-    }
+    read_with(detect_format(dir)?, dir, limits)
 }
 
 /// Opens a model file: a regular file within the size limit.
@@ -194,7 +188,7 @@ fn check_size(path: &Path, len: u64, limits: &ReadLimits) -> Result<(), ModelErr
 /// # Errors
 /// As [`read_model`].
 pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    read_with(&TEXT, dir.as_ref(), &ReadLimits::default())
+    read_with(ModelFormat::Text, dir.as_ref(), &ReadLimits::default())
 }
 
 /// Reads a binary-format model (`cameras.bin`, `images.bin`, `points3D.bin`) from `dir`.
@@ -202,7 +196,7 @@ pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
 /// # Errors
 /// As [`read_model`].
 pub fn read_model_binary(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    read_with(&BINARY, dir.as_ref(), &ReadLimits::default())
+    read_with(ModelFormat::Binary, dir.as_ref(), &ReadLimits::default())
 }
 
 /// Parses a text-format model from the contents of its three files (e.g. read from an
@@ -250,11 +244,7 @@ pub fn parse_model_with_limits(
     files: [&[u8]; 3],
     limits: &ReadLimits,
 ) -> Result<Model, ModelError> {
-    let format = match format {
-        ModelFormat::Text => &TEXT,
-        ModelFormat::Binary => &BINARY,
-    };
-    let paths = format.files.map(PathBuf::from);
+    let paths = format.file_names().map(PathBuf::from);
     for (path, bytes) in paths.iter().zip(files) {
         check_size(path, bytes.len() as u64, limits)?;
     }
@@ -278,11 +268,7 @@ pub fn parse_model_buffered(
     limits: &ReadLimits,
     capacity: usize,
 ) -> Result<Model, ModelError> {
-    let format = match format {
-        ModelFormat::Text => &TEXT,
-        ModelFormat::Binary => &BINARY,
-    };
-    let paths = format.files.map(PathBuf::from);
+    let paths = format.file_names().map(PathBuf::from);
     for (path, bytes) in paths.iter().zip(files) {
         check_size(path, bytes.len() as u64, limits)?;
     }
@@ -296,35 +282,10 @@ pub fn parse_model_buffered(
     )
 }
 
-/// A file parser: the file's path (for messages), its bytes and their number, the limits.
-type Parser<T> = fn(&Path, &mut dyn BufRead, u64, &ReadLimits) -> Result<T, ModelError>;
-
-/// A model format: its file names and the parser of each file.
-struct Format {
-    files: [&'static str; 3],
-    cameras: Parser<BTreeMap<u32, Camera>>,
-    images: Parser<Images>,
-    points: Parser<BTreeMap<u64, Point3D>>,
-}
-
-const TEXT: Format = Format {
-    files: TEXT_FILES,
-    cameras: text::parse_cameras_text,
-    images: text::parse_images_text,
-    points: text::parse_points_text,
-};
-
-const BINARY: Format = Format {
-    files: BIN_FILES,
-    cameras: binary::parse_cameras_bin,
-    images: binary::parse_images_bin,
-    points: binary::parse_points_bin,
-};
-
 /// Opens the three files (so that a missing or special file is reported before any content),
 /// then streams each through a buffer, never past the size it had when opened.
-fn read_with(format: &Format, dir: &Path, limits: &ReadLimits) -> Result<Model, ModelError> {
-    let paths = format.files.map(|n| dir.join(n));
+fn read_with(format: ModelFormat, dir: &Path, limits: &ReadLimits) -> Result<Model, ModelError> {
+    let paths = format.file_names().map(|n| dir.join(n));
     let [c, i, p] = [0, 1, 2].map(|k| open_file(&paths[k], limits));
     let [c, i, p] = [c?, i?, p?].map(|(file, len)| (BufReader::new(file.take(len)), len));
     let ((mut c, cl), (mut i, il), (mut p, pl)) = (c, i, p);
@@ -336,19 +297,31 @@ fn read_with(format: &Format, dir: &Path, limits: &ReadLimits) -> Result<Model, 
     )
 }
 
-fn parse_with(
-    format: &Format,
+/// Parses the three files of a model: each source with its length in bytes. (Generic, not
+/// `dyn`: the readers call the source for every token.)
+fn parse_with<R: BufRead>(
+    format: ModelFormat,
     paths: &[PathBuf; 3],
-    [(c, cl), (i, il), (p, pl)]: [(&mut dyn BufRead, u64); 3],
+    [(c, cl), (i, il), (p, pl)]: [(&mut R, u64); 3],
     limits: &ReadLimits,
 ) -> Result<Model, ModelError> {
-    let mut model = Model {
-        cameras: (format.cameras)(&paths[0], c, cl, limits)?,
-        ..Model::default()
+    let (cameras, (images, locs), points) = match format {
+        ModelFormat::Text => (
+            text::parse_cameras_text(&paths[0], c, cl, limits)?,
+            text::parse_images_text(&paths[1], i, il, limits)?,
+            text::parse_points_text(&paths[2], p, pl, limits)?,
+        ),
+        ModelFormat::Binary => (
+            binary::parse_cameras_bin(&paths[0], c, cl, limits)?,
+            binary::parse_images_bin(&paths[1], i, il, limits)?,
+            binary::parse_points_bin(&paths[2], p, pl, limits)?,
+        ),
     };
-    let (images, locs) = (format.images)(&paths[1], i, il, limits)?;
-    model.images = images;
-    model.points = (format.points)(&paths[2], p, pl, limits)?;
+    let model = Model {
+        cameras,
+        images,
+        points,
+    };
     check_references(&model, &paths[1], &locs)?;
     Ok(model)
 }

@@ -34,23 +34,17 @@ fn io_err(path: &Path, line: usize, e: &io::Error) -> ModelError {
     }
 }
 
-/// The buffered bytes of `src` (more read if it is empty; empty at the end of the file).
-fn fill<'b>(src: &'b mut dyn BufRead, path: &Path, line: usize) -> Result<&'b [u8], ModelError> {
-    while let Err(e) = src.fill_buf() {
-        if e.kind() != io::ErrorKind::Interrupted {
-            return Err(io_err(path, line, &e));
-        }
-    }
-    // Buffered now (or at the end of the file): the borrow checker does not let the loop
-    // return the buffer itself.
+/// The buffered bytes of `src` (more read if it is empty; empty at the end of the file). (A
+/// regular file's read is not interrupted by signals; any error is the file's.)
+fn fill<'b, R: BufRead>(src: &'b mut R, path: &Path, line: usize) -> Result<&'b [u8], ModelError> {
     src.fill_buf().map_err(|e| io_err(path, line, &e))
 }
 
 /// A text model file as lines of whitespace-separated tokens, whitespace as
 /// `str::split_whitespace` sees it (Unicode included), read through the caller's buffer: a token
 /// is at most [`MAX_FIELD_BYTES`], everything else (whitespace, comments) streams.
-struct Tokens<'a> {
-    src: &'a mut dyn BufRead,
+struct Tokens<'a, R> {
+    src: &'a mut R,
     path: &'a Path,
     /// The current line, 1-based (0 before the first).
     line: usize,
@@ -67,8 +61,8 @@ struct Tokens<'a> {
     raw: Vec<u8>,
 }
 
-impl<'a> Tokens<'a> {
-    fn new(path: &'a Path, src: &'a mut dyn BufRead) -> Self {
+impl<'a, R: BufRead> Tokens<'a, R> {
+    fn new(path: &'a Path, src: &'a mut R) -> Self {
         Tokens {
             src,
             path,
@@ -156,6 +150,24 @@ impl<'a> Tokens<'a> {
             }
             if self.at_eol {
                 return Ok(None);
+            }
+            // Usually the blanks before the token and the token are in the buffer, and ASCII.
+            let buf = fill(self.src, self.path, self.line)?;
+            if let Some(start) = buf.iter().position(|&b| !is_space(b)) {
+                let rest = &buf[start..];
+                if !buf[..start].contains(&b'\n') {
+                    let end = rest.iter().position(|&b| is_space(b));
+                    if let Some(len) = end.filter(|&len| len <= MAX_FIELD_BYTES) {
+                        if let Ok(tok) = std::str::from_utf8(&rest[..len]) {
+                            if tok.is_ascii() {
+                                self.cur.clear();
+                                self.cur.push_str(tok);
+                                self.src.consume(start + len);
+                                return Ok(Some(&self.cur));
+                            }
+                        }
+                    }
+                }
             }
             // Whitespace up to the token or the end of the line.
             loop {
@@ -293,9 +305,9 @@ fn truncate(s: &str) -> String {
     }
 }
 
-pub(super) fn parse_cameras_text(
+pub(super) fn parse_cameras_text<R: BufRead>(
     path: &Path,
-    src: &mut dyn BufRead,
+    src: &mut R,
     _len: u64,
     _limits: &ReadLimits,
 ) -> Result<BTreeMap<u32, Camera>, ModelError> {
@@ -344,9 +356,9 @@ const IMAGE_FIELDS: [&str; 9] = [
     "CAMERA_ID",
 ];
 
-pub(super) fn parse_images_text(
+pub(super) fn parse_images_text<R: BufRead>(
     path: &Path,
-    src: &mut dyn BufRead,
+    src: &mut R,
     _len: u64,
     limits: &ReadLimits,
 ) -> Result<Images, ModelError> {
@@ -439,9 +451,9 @@ pub(super) fn parse_images_text(
     Ok((images, locs))
 }
 
-pub(super) fn parse_points_text(
+pub(super) fn parse_points_text<R: BufRead>(
     path: &Path,
-    src: &mut dyn BufRead,
+    src: &mut R,
     _len: u64,
     limits: &ReadLimits,
 ) -> Result<BTreeMap<u64, Point3D>, ModelError> {
