@@ -551,6 +551,7 @@ fn register_ransac_shows_an_image_without_consensus_as_not_registered() {
     let text = stdout(&o);
     assert!(text.contains("failed: RANSAC found no consensus"), "{text}");
     assert!(text.contains("5 of 6 images registered"), "{text}");
+}
 
 #[cfg(unix)]
 #[test]
