@@ -1,0 +1,68 @@
+"""eopnp: camera pose from 2D-3D point correspondences (the Perspective-n-Point problem).
+
+EOPnP (Zhou and Kaess, IROS 2019) followed by default by a Levenberg-Marquardt refinement of
+the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopnp``.
+
+>>> import numpy as np, eopnp
+>>> sol = eopnp.solve(world, image)            # world (N, 3), image (N, 2) normalised
+>>> sol.R, sol.t, sol.rvec, sol.cost           # x_cam = R @ X + t
+>>> cam = eopnp.Camera("SIMPLE_RADIAL", [1245.6, 600, 800, 0.06], 1200, 1600)
+>>> sol = eopnp.solve(world, pixels, camera=cam)
+>>> sol, info = eopnp.solve_ransac(world, pixels, camera=cam)   # info["inliers"]: bool mask
+
+Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
+read as float64; results are new float64 arrays. Errors raise the exceptions of
+``eopnp.PnpError``'s hierarchy (see ``eopnp._errors``). Every solve releases the GIL.
+"""
+
+from ._errors import (
+    CameraError,
+    DegenerateError,
+    InputTypeError,
+    InvalidInputError,
+    InvalidOptionError,
+    ModelError,
+    NoConsensusError,
+    NoSolutionError,
+    PnpError,
+    UnknownIdError,
+)
+from ._eopnp import (
+    Camera,
+    Image,
+    Model,
+    RansacOptions,
+    Registration,
+    Solution,
+    __version__,
+    read_colmap_model,
+    register_image,
+    solve,
+    solve_all,
+    solve_ransac,
+)
+
+__all__ = [
+    "Camera",
+    "CameraError",
+    "DegenerateError",
+    "Image",
+    "InputTypeError",
+    "InvalidInputError",
+    "InvalidOptionError",
+    "Model",
+    "ModelError",
+    "NoConsensusError",
+    "NoSolutionError",
+    "PnpError",
+    "RansacOptions",
+    "Registration",
+    "Solution",
+    "UnknownIdError",
+    "__version__",
+    "read_colmap_model",
+    "register_image",
+    "solve",
+    "solve_all",
+    "solve_ransac",
+]

@@ -1,0 +1,343 @@
+"""Type stubs of the eopnp package (the extension module eopnp._eopnp and eopnp._errors).
+
+Conventions: world points are (N, 3), image points (N, 2), normalised (x/z, y/z) unless a
+``camera`` is given (then pixels). Any array-like of real numbers is accepted (float or integer
+dtype, any layout) and read as float64; arrays returned are new float64 arrays (bool for
+inlier masks). Poses map world to camera: ``x_cam = R @ X + t``.
+"""
+
+import os
+from typing import Any, Literal, Mapping, Sequence, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from ._errors import (
+    CameraError as CameraError,
+    DegenerateError as DegenerateError,
+    InputTypeError as InputTypeError,
+    InvalidInputError as InvalidInputError,
+    InvalidOptionError as InvalidOptionError,
+    ModelError as ModelError,
+    NoConsensusError as NoConsensusError,
+    NoSolutionError as NoSolutionError,
+    PnpError as PnpError,
+    UnknownIdError as UnknownIdError,
+)
+
+__version__: str
+
+ArrayLike = npt.ArrayLike
+F64Array = npt.NDArray[np.float64]
+Refinement = Literal["ml", "reprojection", "algebraic"]
+Planar = Literal["auto", "planar", "nonplanar"]
+Source = Literal[
+    "case1", "case2", "case3", "case4", "planar1", "planar2", "extra_start", "other"
+]
+
+class Solution:
+    """A camera pose (world to camera, ``x_cam = R @ X + t``) and how it was found.
+
+    Picklable; ``==`` compares every field exactly.
+    """
+
+    @property
+    def R(self) -> F64Array:
+        """Rotation matrix, shape (3, 3)."""
+    @property
+    def t(self) -> F64Array:
+        """Translation, shape (3,)."""
+    @property
+    def rvec(self) -> F64Array:
+        """OpenCV's rotation vector (axis times angle in radians, ``cv2.Rodrigues``), (3,)."""
+    @property
+    def q(self) -> F64Array:
+        """Unit quaternion (w, x, y, z), COLMAP's order, shape (4,)."""
+    @property
+    def Rt(self) -> F64Array:
+        """The 3x4 matrix [R | t]."""
+    @property
+    def cost(self) -> float:
+        """The minimised cost: sum of (weighted) squared normalised reprojection residuals
+        (refinement "ml"), or the algebraic cost (refinement "algebraic")."""
+    @property
+    def algebraic_cost(self) -> float:
+        """The paper's algebraic cost of the rotation."""
+    @property
+    def reprojection_rmse(self) -> float:
+        """RMS normalised reprojection residual (times the focal length: pixels); inf if a
+        point lies in the focal plane (algebraic mode only)."""
+    @property
+    def cheirality_ok(self) -> bool:
+        """More than half of the points are in front of the camera."""
+    @property
+    def degenerate(self) -> bool:
+        """The configuration is close to degenerate: the pose may be ambiguous."""
+    @property
+    def planar(self) -> bool:
+        """The planar branch produced the winning start."""
+    @property
+    def source(self) -> Source:
+        """The candidate generator of the winning start."""
+    @property
+    def newton_iterations(self) -> int:
+        """Damped-Newton iterations of the winning candidate."""
+    @property
+    def reprojection_iterations(self) -> int:
+        """Levenberg-Marquardt iterations of the refinement (0 in algebraic mode)."""
+    @property
+    def used(self) -> int:
+        """Correspondences that entered the solve (weight > 0, undistorted)."""
+    @property
+    def skipped(self) -> int:
+        """Correspondences left out because their pixel could not be undistorted."""
+    def as_dict(self) -> dict[str, Any]:
+        """Every field as a dict (arrays for R, t, rvec, q)."""
+
+class Camera:
+    """A camera model: COLMAP's model name and parameters (COLMAP's order), image size.
+
+    Models: SIMPLE_PINHOLE (f, cx, cy), PINHOLE (fx, fy, cx, cy), SIMPLE_RADIAL (f, cx, cy, k),
+    RADIAL (f, cx, cy, k1, k2), OPENCV (fx, fy, cx, cy, k1, k2, p1, p2), OPENCV_FISHEYE
+    (fx, fy, cx, cy, k1, k2, k3, k4), FULL_OPENCV (fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5,
+    k6), SIMPLE_RADIAL_FISHEYE (f, cx, cy, k), RADIAL_FISHEYE (f, cx, cy, k1, k2), and
+    OPENCV_THIN_PRISM_TILTED (FULL_OPENCV's 12, s1, s2, s3, s4, tau_x, tau_y; OpenCV's, not
+    COLMAP's). Picklable.
+
+    Raises:
+        CameraError: unknown model, wrong parameter count, non-finite parameters,
+            non-positive focal lengths.
+    """
+
+    def __init__(
+        self, model: str, params: ArrayLike, width: int = 0, height: int = 0
+    ) -> None: ...
+    @staticmethod
+    def from_opencv(K: ArrayLike, dist: ArrayLike | None = None) -> "Camera":
+        """From OpenCV's camera matrix (zero skew) and distortion vector (0, 4, 5, 8, 12 or 14
+        coefficients in OpenCV's order; shape (n,), (1, n) or (n, 1)): ``project`` equals
+        ``cv2.projectPoints`` with rvec = tvec = 0 (OpenCV's pixel convention)."""
+    @staticmethod
+    def from_opencv_fisheye(K: ArrayLike, dist: ArrayLike) -> "Camera":
+        """From ``cv2.fisheye``'s K (zero skew) and its 4 coefficients: OPENCV_FISHEYE."""
+    @staticmethod
+    def pinhole(fx: float, fy: float, cx: float, cy: float) -> "Camera":
+        """PINHOLE without distortion, image size 0."""
+    @property
+    def model(self) -> str:
+        """The model's name, e.g. "SIMPLE_RADIAL"."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def params(self) -> F64Array:
+        """The parameters in COLMAP's order, shape (n,)."""
+    @property
+    def focal(self) -> tuple[float, float]:
+        """(fx, fy) in pixels."""
+    @property
+    def principal_point(self) -> tuple[float, float]:
+        """(cx, cy) in pixels."""
+    @property
+    def has_distortion(self) -> bool: ...
+    def to_opencv(self) -> tuple[F64Array, F64Array] | None:
+        """OpenCV's (K, dist), or None for the fisheye models."""
+    def to_opencv_fisheye(self) -> tuple[F64Array, F64Array] | None:
+        """cv2.fisheye's (K, dist) of an OPENCV_FISHEYE camera, else None."""
+    def project(self, normalised: ArrayLike) -> F64Array:
+        """Pixels of normalised points (x/z, y/z): (N, 2) -> (N, 2)."""
+    def undistort(self, pixels: ArrayLike) -> F64Array:
+        """Normalised points of pixels: (N, 2) -> (N, 2); NaN rows for pixels that cannot be
+        undistorted."""
+
+class RansacOptions:
+    """RANSAC options; each is a settable attribute. Out-of-range values raise
+    ``InvalidOptionError`` when used. Picklable."""
+
+    threshold_px: float
+    confidence: float
+    max_iterations: int
+    min_iterations: int
+    seed: int
+    local_optimisation: bool
+    final_threshold_factor: float
+    def __init__(
+        self,
+        *,
+        threshold_px: float | None = None,
+        confidence: float | None = None,
+        max_iterations: int | None = None,
+        min_iterations: int | None = None,
+        seed: int | None = None,
+        local_optimisation: bool | None = None,
+        final_threshold_factor: float | None = None,
+    ) -> None:
+        """Defaults: threshold_px 4.0, confidence 0.999, max_iterations 10000,
+        min_iterations 20, seed 0, local_optimisation True, final_threshold_factor 2.0."""
+    def as_dict(self) -> dict[str, Any]: ...
+
+RansacArg = Union[RansacOptions, Mapping[str, Any], None]
+
+class RansacInfo(TypedDict):
+    inliers: npt.NDArray[np.bool_]
+    num_inliers: int
+    inlier_ratio: float
+    iterations: int
+    hypotheses: int
+    local_fits: int
+    final_fits: int
+    cost: float
+    rmse: float
+    rmse_px: float
+    micros: float
+
+class Image:
+    """An image of a COLMAP model."""
+
+    @property
+    def id(self) -> int: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def camera_id(self) -> int: ...
+    @property
+    def q(self) -> F64Array:
+        """Pose quaternion (w, x, y, z) as stored."""
+    @property
+    def t(self) -> F64Array:
+        """Pose translation (3,)."""
+    @property
+    def R(self) -> F64Array:
+        """Pose rotation (3, 3)."""
+    @property
+    def points2D(self) -> F64Array:
+        """Observations' pixels (K, 2)."""
+    @property
+    def point3D_ids(self) -> npt.NDArray[np.int64]:
+        """Observations' 3D point ids (K,), -1 if untriangulated."""
+
+class Model:
+    """A COLMAP sparse reconstruction (read-only)."""
+
+    @property
+    def cameras(self) -> dict[int, Camera]: ...
+    @property
+    def images(self) -> dict[int, Image]: ...
+    @property
+    def image_ids(self) -> list[int]: ...
+    @property
+    def num_points3D(self) -> int: ...
+    @property
+    def point3D_ids(self) -> npt.NDArray[np.uint64]: ...
+    @property
+    def points3D(self) -> F64Array:
+        """3D points (M, 3) in the order of point3D_ids."""
+    def image(self, image_id: int) -> Image: ...
+    def camera_of(self, image_id: int) -> Camera: ...
+    def correspondences(self, image_id: int) -> tuple[F64Array, F64Array]:
+        """(world (N, 3), pixels (N, 2)) of the image's triangulated observations."""
+    def __len__(self) -> int: ...
+
+class Registration:
+    """The result of ``register_image``."""
+
+    @property
+    def image_id(self) -> int: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def n(self) -> int:
+        """The image's 2D-3D correspondences."""
+    @property
+    def inliers(self) -> int:
+        """Correspondences the pose was fitted to."""
+    @property
+    def skipped(self) -> int: ...
+    @property
+    def solution(self) -> Solution: ...
+    @property
+    def ransac(self) -> dict[str, Any] | None:
+        """iterations, hypotheses, local_fits, final_fits, inliers, inlier_ratio, micros."""
+    @property
+    def rotation_error_deg(self) -> float: ...
+    @property
+    def translation_error_pct(self) -> float: ...
+    @property
+    def rmse_px(self) -> float: ...
+    @property
+    def model_rmse_px(self) -> float: ...
+    @property
+    def micros(self) -> float: ...
+
+def solve(
+    world: ArrayLike,
+    image: ArrayLike,
+    weights: ArrayLike | None = None,
+    *,
+    camera: Camera | None = None,
+    refinement: Refinement = "ml",
+    planar: Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+) -> Solution:
+    """The camera pose from N >= 4 correspondences: world (N, 3), image (N, 2) normalised, or
+    pixels with ``camera``; optional weights (N,) >= 0. Default: EOPnP + maximum-likelihood
+    refinement. Releases the GIL.
+
+    Raises InvalidInputError (InputTypeError), DegenerateError, NoSolutionError,
+    InvalidOptionError."""
+
+def solve_all(
+    world: ArrayLike,
+    image: ArrayLike,
+    *,
+    refinement: Refinement = "ml",
+    planar: Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+) -> list[Solution]:
+    """Every distinct local minimum, best first (normalised image points)."""
+
+def solve_ransac(
+    world: ArrayLike,
+    image: ArrayLike,
+    weights: ArrayLike | None = None,
+    *,
+    camera: Camera | None = None,
+    focal: tuple[float, float] | None = None,
+    ransac: RansacArg = None,
+    refinement: Refinement = "ml",
+    planar: Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+) -> tuple[Solution, RansacInfo]:
+    """Robust pose by RANSAC: pixels with ``camera``, or normalised points with
+    ``focal=(fx, fy)`` (exactly one). Returns the pose and the info dict (inlier mask,
+    iterations, inlier ratio, cost, RMSE). Raises NoConsensusError if no pose has 4 inliers."""
+
+def read_colmap_model(path: str | os.PathLike[str]) -> Model:
+    """Reads a COLMAP model directory (text or binary). Raises ModelError."""
+
+def register_image(
+    model: Model,
+    image_id: int,
+    *,
+    ransac: RansacArg | bool = None,
+    refinement: Refinement = "ml",
+    planar: Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+) -> Registration:
+    """Re-estimates an image's pose from its correspondences (plain, or RANSAC with
+    ``ransac=True`` / options) and compares it with the model's. Raises UnknownIdError."""
+
+__all__: list[str]

@@ -1,0 +1,381 @@
+//! COLMAP models: `eopnp.read_colmap_model`, `eopnp.Model`, `eopnp.Image` and
+//! `eopnp.register_image` (`eopnp.Registration`).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use eopnp::colmap::{self, Image, Model};
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::camera::PyCamera;
+use crate::convert::{array1, array2};
+use crate::errors::{model_error, register_error};
+use crate::options::SolverOptions;
+use crate::ransac::ransac_arg;
+use crate::solution::PySolution;
+
+/// A COLMAP sparse reconstruction, as read by ``read_colmap_model`` (read-only).
+///
+/// Poses are COLMAP's: world to camera, ``x_cam = R(q) X + t``.
+#[pyclass(frozen, module = "eopnp", name = "Model")]
+pub(crate) struct PyModel {
+    inner: Arc<Model>,
+}
+
+/// An image of a COLMAP model: its pose, camera and 2D observations.
+#[pyclass(frozen, module = "eopnp", name = "Image")]
+pub(crate) struct PyImage {
+    inner: Image,
+}
+
+fn image_by_id<'m>(py: Python<'_>, model: &'m Model, id: u32) -> PyResult<&'m Image> {
+    model
+        .images
+        .get(&id)
+        .ok_or_else(|| register_error(py, &colmap::RegisterError::UnknownImage(id)))
+}
+
+#[pymethods]
+impl PyModel {
+    /// Cameras by id (a new dict of new ``Camera`` objects on each access).
+    #[getter]
+    fn cameras<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (id, c) in &self.inner.cameras {
+            d.set_item(*id, PyCamera { inner: c.clone() })?;
+        }
+        Ok(d)
+    }
+
+    /// Images by id (a new dict of new ``Image`` objects on each access).
+    #[getter]
+    fn images<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (id, i) in &self.inner.images {
+            d.set_item(*id, PyImage { inner: i.clone() })?;
+        }
+        Ok(d)
+    }
+
+    /// The image ids, ascending.
+    #[getter]
+    fn image_ids(&self) -> Vec<u32> {
+        self.inner.images.keys().copied().collect()
+    }
+
+    /// Number of 3D points.
+    #[getter]
+    #[allow(non_snake_case)]
+    fn num_points3D(&self) -> usize {
+        self.inner.points.len()
+    }
+
+    /// The 3D points' ids (ascending), shape (M,).
+    #[getter]
+    #[allow(non_snake_case)]
+    fn point3D_ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
+        PyArray1::from_iter(py, self.inner.points.keys().copied())
+    }
+
+    /// The 3D points' coordinates in the order of ``point3D_ids``, shape (M, 3).
+    #[getter]
+    #[allow(non_snake_case)]
+    fn points3D<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        let xyz: Vec<f64> = self
+            .inner
+            .points
+            .values()
+            .flat_map(|p| [p.xyz.x, p.xyz.y, p.xyz.z])
+            .collect();
+        array2(py, self.inner.points.len(), 3, &xyz).into_any()
+    }
+
+    /// The image with this id. Raises ``UnknownIdError`` if there is none.
+    fn image(&self, py: Python<'_>, image_id: u32) -> PyResult<PyImage> {
+        let inner = image_by_id(py, &self.inner, image_id)?.clone();
+        Ok(PyImage { inner })
+    }
+
+    /// The camera of an image. Raises ``UnknownIdError``.
+    fn camera_of(&self, py: Python<'_>, image_id: u32) -> PyResult<PyCamera> {
+        let (_, cam) = self
+            .inner
+            .image_and_camera(image_id)
+            .map_err(|e| register_error(py, &e))?;
+        Ok(PyCamera { inner: cam.clone() })
+    }
+
+    /// The 2D-3D correspondences of an image: ``(world (N, 3), pixels (N, 2))``, the
+    /// observations that have a 3D point, in the image's order. Raises ``UnknownIdError``.
+    fn correspondences<'py>(
+        &self,
+        py: Python<'py>,
+        image_id: u32,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        image_by_id(py, &self.inner, image_id)?;
+        let (w, p) = self.inner.correspondences(image_id);
+        let wf: Vec<f64> = w.iter().flat_map(|x| [x.x, x.y, x.z]).collect();
+        let pf: Vec<f64> = p.iter().flat_map(|x| [x.x, x.y]).collect();
+        Ok((
+            array2(py, w.len(), 3, &wf).into_any(),
+            array2(py, p.len(), 2, &pf).into_any(),
+        ))
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.images.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Model({} cameras, {} images, {} points3D)",
+            self.inner.cameras.len(),
+            self.inner.images.len(),
+            self.inner.points.len()
+        )
+    }
+}
+
+#[pymethods]
+impl PyImage {
+    /// Image id.
+    #[getter]
+    fn id(&self) -> u32 {
+        self.inner.id
+    }
+
+    /// Image name.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.inner.name
+    }
+
+    /// Id of the image's camera.
+    #[getter]
+    fn camera_id(&self) -> u32 {
+        self.inner.camera_id
+    }
+
+    /// The pose's quaternion (w, x, y, z) as stored, shape (4,).
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        array1(py, &self.inner.q).into_any()
+    }
+
+    /// The pose's translation, shape (3,).
+    #[getter]
+    fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        let t = &self.inner.t;
+        array1(py, &[t.x, t.y, t.z]).into_any()
+    }
+
+    /// The pose's rotation matrix (from the normalised quaternion), shape (3, 3).
+    #[getter(R)]
+    fn r<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        let (r, _) = self.inner.pose();
+        let rows: Vec<f64> = (0..3)
+            .flat_map(|i| (0..3).map(move |j| r[(i, j)]))
+            .collect();
+        array2(py, 3, 3, &rows).into_any()
+    }
+
+    /// The observations' pixels, shape (K, 2).
+    #[getter]
+    #[allow(non_snake_case)]
+    fn points2D<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        let p: Vec<f64> = self
+            .inner
+            .points2d
+            .iter()
+            .flat_map(|(px, _)| [px.x, px.y])
+            .collect();
+        array2(py, self.inner.points2d.len(), 2, &p).into_any()
+    }
+
+    /// The observations' 3D point ids, -1 for an untriangulated observation, shape (K,).
+    #[getter]
+    #[allow(non_snake_case)]
+    fn point3D_ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        PyArray1::from_iter(
+            py,
+            self.inner
+                .points2d
+                .iter()
+                .map(|(_, id)| id.and_then(|i| i64::try_from(i).ok()).unwrap_or(-1)),
+        )
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Image(id={}, name={:?}, camera_id={}, {} observations)",
+            self.inner.id,
+            self.inner.name,
+            self.inner.camera_id,
+            self.inner.points2d.len()
+        )
+    }
+}
+
+/// Reads a COLMAP sparse model directory: ``cameras``, ``images`` and ``points3D``, in the text
+/// (``.txt``) or binary (``.bin``) format (binary preferred when both are present), and checks
+/// its cross-references.
+///
+/// Raises:
+///     ModelError: a missing or malformed file, with the file, line or byte offset and reason.
+#[pyfunction]
+pub(crate) fn read_colmap_model(py: Python<'_>, path: PathBuf) -> PyResult<PyModel> {
+    let model = py
+        .detach(|| colmap::read_model(&path))
+        .map_err(|e| model_error(py, &e))?;
+    Ok(PyModel {
+        inner: Arc::new(model),
+    })
+}
+
+/// The result of ``register_image``.
+///
+/// Attributes:
+///     image_id, name: the image.
+///     n: its 2D-3D correspondences.
+///     inliers: correspondences the pose was fitted to (all that could be undistorted, or
+///         RANSAC's inliers).
+///     skipped: observations whose pixel could not be undistorted.
+///     solution: the estimated pose (``Solution``).
+///     ransac: RANSAC's statistics (dict: iterations, hypotheses, local_fits, final_fits,
+///         inliers, inlier_ratio, micros), or None without RANSAC.
+///     rotation_error_deg: rotation difference to the model's pose, degrees.
+///     translation_error_pct: translation difference, percent of the model's ``|t|``.
+///     rmse_px: RMS pixel reprojection error of the estimated pose over the fitted points.
+///     model_rmse_px: the same for the model's own pose.
+///     micros: wall time of undistortion plus solve, microseconds.
+#[pyclass(frozen, module = "eopnp", name = "Registration")]
+pub(crate) struct PyRegistration {
+    #[pyo3(get)]
+    image_id: u32,
+    #[pyo3(get)]
+    name: String,
+    #[pyo3(get)]
+    n: usize,
+    #[pyo3(get)]
+    inliers: usize,
+    #[pyo3(get)]
+    skipped: usize,
+    #[pyo3(get)]
+    solution: Py<PySolution>,
+    #[pyo3(get)]
+    ransac: Option<Py<PyDict>>,
+    #[pyo3(get)]
+    rotation_error_deg: f64,
+    #[pyo3(get)]
+    translation_error_pct: f64,
+    #[pyo3(get)]
+    rmse_px: f64,
+    #[pyo3(get)]
+    model_rmse_px: f64,
+    #[pyo3(get)]
+    micros: f64,
+}
+
+#[pymethods]
+impl PyRegistration {
+    fn __repr__(&self) -> String {
+        format!(
+            "Registration(image_id={}, name={:?}, n={}, inliers={}, rotation_error_deg={:.3e}, \
+             rmse_px={:.4})",
+            self.image_id, self.name, self.n, self.inliers, self.rotation_error_deg, self.rmse_px
+        )
+    }
+}
+
+/// Re-estimates an image's pose from its 2D-3D correspondences alone and compares it with the
+/// model's pose.
+///
+/// Args:
+///     model: a ``Model`` from ``read_colmap_model``.
+///     image_id: the image.
+///     ransac: None or False: ``solve`` on every correspondence through the image's camera;
+///         True (default options), a ``RansacOptions`` or a dict of its fields: robust, as
+///         ``solve_ransac``.
+///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
+///         exhaustive: as ``solve``.
+///
+/// Returns:
+///     Registration: the pose, its errors against the model's, RANSAC's statistics.
+///
+/// Raises:
+///     UnknownIdError: no such image (or its camera is missing).
+///     InvalidInputError, DegenerateError, NoConsensusError, ...: as ``solve`` and
+///         ``solve_ransac`` on the image's correspondences.
+#[pyfunction]
+#[pyo3(signature = (model, image_id, *, ransac = None, refinement = "ml", planar = "auto",
+    newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
+    exhaustive = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn register_image(
+    py: Python<'_>,
+    model: &Bound<'_, PyModel>,
+    image_id: u32,
+    ransac: Option<&Bound<'_, PyAny>>,
+    refinement: &str,
+    planar: &str,
+    newton_iterations: Option<i64>,
+    newton_step_tolerance: Option<f64>,
+    reprojection_iterations: Option<i64>,
+    exhaustive: bool,
+) -> PyResult<PyRegistration> {
+    let solver = SolverOptions {
+        refinement,
+        planar,
+        newton_iterations,
+        newton_step_tolerance,
+        reprojection_iterations,
+        exhaustive,
+    }
+    .solver(py)?;
+    // `ransac`: None or False (plain), True (defaults), RansacOptions or a dict.
+    let ransac = match ransac {
+        None => None,
+        Some(r) if r.is_instance_of::<pyo3::types::PyBool>() => {
+            if r.extract::<bool>()? {
+                Some(ransac_arg(py, None)?)
+            } else {
+                None
+            }
+        }
+        Some(r) => Some(ransac_arg(py, Some(r))?),
+    };
+    let m = Arc::clone(&model.get().inner);
+    let reg = py
+        .detach(|| colmap::register_image(&m, image_id, &solver, ransac.as_ref()))
+        .map_err(|e| register_error(py, &e))?;
+    let stats = match reg.ransac {
+        None => None,
+        Some(s) => {
+            let d = PyDict::new(py);
+            d.set_item("iterations", s.iterations)?;
+            d.set_item("hypotheses", s.hypotheses)?;
+            d.set_item("local_fits", s.local_fits)?;
+            d.set_item("final_fits", s.final_fits)?;
+            d.set_item("inliers", s.inliers)?;
+            d.set_item("inlier_ratio", s.inlier_ratio)?;
+            d.set_item("micros", s.micros)?;
+            Some(d.unbind())
+        }
+    };
+    Ok(PyRegistration {
+        image_id: reg.image_id,
+        name: reg.name,
+        n: reg.n,
+        inliers: reg.inliers,
+        skipped: reg.skipped,
+        solution: Py::new(py, PySolution::from(&reg.solution))?,
+        ransac: stats,
+        rotation_error_deg: reg.rotation_error_deg,
+        translation_error_pct: reg.translation_error_pct,
+        rmse_px: reg.rmse_px,
+        model_rmse_px: reg.model_rmse_px,
+        micros: reg.micros,
+    })
+}

@@ -1,0 +1,190 @@
+//! Arrays in and out: any array-like of real numbers (float or integer dtype, any strides and
+//! byte order) is read as `f64`; other dtypes and wrong shapes raise `InputTypeError` and
+//! `InvalidInputError`. Results are new C-contiguous `float64` arrays.
+
+use nalgebra::{Point2, Point3};
+use numpy::ndarray::Ix2;
+use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::PyModule;
+
+use crate::errors::{dtype_error, error, shape_error};
+
+static NUMPY: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
+
+fn shape_str(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => {
+            let dims: Vec<String> = shape.iter().map(ToString::to_string).collect();
+            format!("({})", dims.join(", "))
+        }
+    }
+}
+
+/// `obj` as a `float64` array: as is if it is one, otherwise through `numpy.asarray` when its
+/// dtype is a float or integer type.
+fn float_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    if let Ok(a) = obj.cast::<PyArrayDyn<f64>>() {
+        return Ok(a.clone());
+    }
+    let py = obj.py();
+    let np = NUMPY
+        .get_or_try_init(py, || PyModule::import(py, "numpy").map(Bound::unbind))?
+        .bind(py);
+    let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
+        shape_error(
+            py,
+            name,
+            format!("{name}: cannot be read as an array of numbers: {e}"),
+        )
+    })?;
+    let dtype = arr.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "f" | "i" | "u") {
+        return Err(dtype_error(
+            py,
+            name,
+            format!(
+                "{name}: expected real numbers (a float or integer array), got dtype {}",
+                dtype.str()?
+            ),
+        ));
+    }
+    let arr = arr.call_method1("astype", (np.getattr("float64")?,))?;
+    Ok(arr.cast_into::<PyArrayDyn<f64>>()?)
+}
+
+/// The rows of an `(N, C)` array, each mapped by `f`.
+fn rows<T>(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    cols: usize,
+    f: impl Fn(&[f64]) -> T,
+) -> PyResult<Vec<T>> {
+    let arr = float_array(obj, name)?;
+    let py = obj.py();
+    let shape = arr.shape();
+    if shape.len() != 2 || shape[1] != cols {
+        return Err(shape_error(
+            py,
+            name,
+            format!(
+                "{name}: expected an array of shape (N, {cols}), got shape {}",
+                shape_str(shape)
+            ),
+        ));
+    }
+    let ro = arr.try_readonly().map_err(|e| {
+        error(
+            py,
+            "InvalidInputError",
+            "Borrow",
+            format!("{name}: {e}"),
+            vec![],
+        )
+    })?;
+    // `as_slice` also accepts Fortran order: the rows are contiguous only in C order.
+    if ro.is_c_contiguous() {
+        if let Ok(s) = ro.as_slice() {
+            return Ok(s.chunks_exact(cols).map(f).collect());
+        }
+    }
+    let view = ro
+        .as_array()
+        .into_dimensionality::<Ix2>()
+        .expect("checked: two dimensions");
+    let mut buf = [0.0; 4];
+    Ok(view
+        .rows()
+        .into_iter()
+        .map(|row| {
+            for (b, x) in buf.iter_mut().zip(row.iter()) {
+                *b = *x;
+            }
+            f(&buf[..cols])
+        })
+        .collect())
+}
+
+/// `(N, 3)` world points.
+pub(crate) fn points3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Point3<f64>>> {
+    rows(obj, name, 3, |r| Point3::new(r[0], r[1], r[2]))
+}
+
+/// `(N, 2)` image points (normalised or pixels).
+pub(crate) fn points2(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Point2<f64>>> {
+    rows(obj, name, 2, |r| Point2::new(r[0], r[1]))
+}
+
+/// A `(3, 3)` matrix, row-major.
+pub(crate) fn matrix3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[[f64; 3]; 3]> {
+    let r = rows(obj, name, 3, |r| [r[0], r[1], r[2]])?;
+    if r.len() != 3 {
+        return Err(shape_error(
+            obj.py(),
+            name,
+            format!("{name}: expected a 3x3 matrix, got shape ({}, 3)", r.len()),
+        ));
+    }
+    Ok([r[0], r[1], r[2]])
+}
+
+/// A one-dimensional array of numbers; with `flatten`, also a `(1, n)` or `(n, 1)` array (as
+/// OpenCV returns distortion vectors).
+pub(crate) fn vector(obj: &Bound<'_, PyAny>, name: &str, flatten: bool) -> PyResult<Vec<f64>> {
+    let arr = float_array(obj, name)?;
+    let py = obj.py();
+    let shape = arr.shape();
+    let ok = shape.len() == 1 || (flatten && shape.len() == 2 && (shape[0] == 1 || shape[1] == 1));
+    if !ok {
+        let want = if flatten {
+            "(n,), (1, n) or (n, 1)"
+        } else {
+            "(n,)"
+        };
+        return Err(shape_error(
+            py,
+            name,
+            format!(
+                "{name}: expected an array of shape {want}, got shape {}",
+                shape_str(shape)
+            ),
+        ));
+    }
+    let ro = arr.try_readonly().map_err(|e| {
+        error(
+            py,
+            "InvalidInputError",
+            "Borrow",
+            format!("{name}: {e}"),
+            vec![],
+        )
+    })?;
+    let v = ro.as_array();
+    Ok(v.iter().copied().collect())
+}
+
+/// A new `(rows, cols)` array holding `data` (row-major).
+pub(crate) fn array2<'py>(
+    py: Python<'py>,
+    rows: usize,
+    cols: usize,
+    data: &[f64],
+) -> Bound<'py, PyArray2<f64>> {
+    debug_assert_eq!(rows * cols, data.len());
+    // SAFETY: a new C-contiguous array that nothing else references yet.
+    unsafe {
+        let a = PyArray2::<f64>::new(py, [rows, cols], false);
+        a.as_slice_mut()
+            .expect("new array is contiguous")
+            .copy_from_slice(data);
+        a
+    }
+}
+
+/// A new one-dimensional array holding `data`.
+pub(crate) fn array1<'py>(py: Python<'py>, data: &[f64]) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_slice(py, data)
+}

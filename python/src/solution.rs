@@ -1,0 +1,307 @@
+//! `eopnp.Solution`: a pose and how it was found (the Rust `Solution`'s fields, flattened to
+//! plain numbers so that it pickles).
+
+use eopnp::{CandidateSource, Solution};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use crate::convert::{array1, array2};
+
+/// A camera pose and how it was found (``x_cam = R @ X + t``, world to camera).
+///
+/// Attributes:
+///     R: rotation matrix, shape (3, 3).
+///     t: translation, shape (3,).
+///     rvec: OpenCV's rotation vector (axis times angle, radians), shape (3,).
+///     q: unit quaternion (w, x, y, z), COLMAP's order, shape (4,).
+///     Rt: the 3x4 matrix [R | t].
+///     cost: the minimised cost: the (weighted) sum of squared normalised reprojection
+///         residuals (refinement "ml"), or the algebraic cost (refinement "algebraic").
+///     algebraic_cost: the paper's algebraic cost of the rotation.
+///     reprojection_rmse: RMS normalised reprojection residual (multiply by the focal length
+///         for pixels); inf if a point lies in the focal plane (algebraic mode only).
+///     cheirality_ok: more than half of the points are in front of the camera.
+///     degenerate: the configuration is close to degenerate; the pose may be ambiguous.
+///     planar: the planar branch produced the starting candidate.
+///     source: the candidate generator of the winning start ("case1", ..., "planar1",
+///         "planar2", "extra_start").
+///     newton_iterations: damped-Newton iterations of the winning candidate.
+///     reprojection_iterations: Levenberg-Marquardt iterations of the refinement.
+///     used: correspondences that entered the solve (weight > 0, undistorted).
+///     skipped: correspondences left out because their pixel could not be undistorted.
+#[pyclass(frozen, module = "eopnp", name = "Solution")]
+#[derive(Clone, Debug)]
+pub(crate) struct PySolution {
+    /// Row-major.
+    r: [f64; 9],
+    t: [f64; 3],
+    /// (w, x, y, z).
+    q: [f64; 4],
+    rvec: [f64; 3],
+    #[pyo3(get)]
+    cost: f64,
+    #[pyo3(get)]
+    algebraic_cost: f64,
+    #[pyo3(get)]
+    reprojection_rmse: f64,
+    #[pyo3(get)]
+    cheirality_ok: bool,
+    #[pyo3(get)]
+    degenerate: bool,
+    #[pyo3(get)]
+    planar: bool,
+    #[pyo3(get)]
+    source: &'static str,
+    #[pyo3(get)]
+    newton_iterations: u32,
+    #[pyo3(get)]
+    reprojection_iterations: u32,
+    #[pyo3(get)]
+    used: usize,
+    #[pyo3(get)]
+    skipped: usize,
+}
+
+const SOURCES: [&str; 8] = [
+    "case1",
+    "case2",
+    "case3",
+    "case4",
+    "planar1",
+    "planar2",
+    "extra_start",
+    "other",
+];
+
+fn source_name(s: CandidateSource) -> &'static str {
+    match s {
+        CandidateSource::Case1 => SOURCES[0],
+        CandidateSource::Case2 => SOURCES[1],
+        CandidateSource::Case3 => SOURCES[2],
+        CandidateSource::Case4 => SOURCES[3],
+        CandidateSource::Planar1 => SOURCES[4],
+        CandidateSource::Planar2 => SOURCES[5],
+        CandidateSource::ExtraStart => SOURCES[6],
+        _ => SOURCES[7],
+    }
+}
+
+impl From<&Solution> for PySolution {
+    fn from(s: &Solution) -> Self {
+        let m = &s.rotation;
+        let t = &s.pose.translation.vector;
+        let q = s.pose.rotation.quaternion();
+        let rv = s.rvec();
+        PySolution {
+            r: [
+                m[(0, 0)],
+                m[(0, 1)],
+                m[(0, 2)],
+                m[(1, 0)],
+                m[(1, 1)],
+                m[(1, 2)],
+                m[(2, 0)],
+                m[(2, 1)],
+                m[(2, 2)],
+            ],
+            t: [t.x, t.y, t.z],
+            q: [q.w, q.i, q.j, q.k],
+            rvec: [rv.x, rv.y, rv.z],
+            cost: s.cost,
+            algebraic_cost: s.algebraic_cost,
+            reprojection_rmse: s.reprojection_rmse,
+            cheirality_ok: s.cheirality_ok,
+            degenerate: s.degenerate,
+            planar: s.planar,
+            source: source_name(s.source),
+            newton_iterations: s.newton_iterations,
+            reprojection_iterations: s.reprojection_iterations,
+            used: s.used,
+            skipped: s.skipped,
+        }
+    }
+}
+
+/// Six decimals, or six significant digits in exponent form for very large or small values.
+fn num(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x:.6}")
+    } else {
+        format!("{x:.6e}")
+    }
+}
+
+impl PySolution {
+    /// Row-major rotation.
+    pub(crate) fn rotation(&self) -> &[f64; 9] {
+        &self.r
+    }
+
+    pub(crate) fn translation(&self) -> &[f64; 3] {
+        &self.t
+    }
+}
+
+#[pymethods]
+impl PySolution {
+    /// Rotation matrix, shape (3, 3) (a new array on each access).
+    #[getter(R)]
+    fn r<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        array2(py, 3, 3, &self.r).into_any()
+    }
+
+    /// Translation, shape (3,).
+    #[getter]
+    fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        array1(py, &self.t).into_any()
+    }
+
+    /// OpenCV's rotation vector (``cv2.Rodrigues``), shape (3,).
+    #[getter]
+    fn rvec<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        array1(py, &self.rvec).into_any()
+    }
+
+    /// Unit quaternion (w, x, y, z), shape (4,).
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        array1(py, &self.q).into_any()
+    }
+
+    /// The 3x4 matrix [R | t].
+    #[getter(Rt)]
+    fn rt<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        let r = &self.r;
+        let t = &self.t;
+        let m = [
+            r[0], r[1], r[2], t[0], r[3], r[4], r[5], t[1], r[6], r[7], r[8], t[2],
+        ];
+        array2(py, 3, 4, &m).into_any()
+    }
+
+    /// Every field as a dict (arrays for R, t, rvec, q).
+    fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("R", self.r(py))?;
+        d.set_item("t", self.t(py))?;
+        d.set_item("rvec", self.rvec(py))?;
+        d.set_item("q", self.q(py))?;
+        d.set_item("cost", self.cost)?;
+        d.set_item("algebraic_cost", self.algebraic_cost)?;
+        d.set_item("reprojection_rmse", self.reprojection_rmse)?;
+        d.set_item("cheirality_ok", self.cheirality_ok)?;
+        d.set_item("degenerate", self.degenerate)?;
+        d.set_item("planar", self.planar)?;
+        d.set_item("source", self.source)?;
+        d.set_item("newton_iterations", self.newton_iterations)?;
+        d.set_item("reprojection_iterations", self.reprojection_iterations)?;
+        d.set_item("used", self.used)?;
+        d.set_item("skipped", self.skipped)?;
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        let v = |a: &[f64]| a.iter().map(|x| num(*x)).collect::<Vec<_>>().join(", ");
+        format!(
+            "Solution(rvec=[{}], t=[{}], cost={:.3e}, cheirality_ok={}, degenerate={}, used={}, \
+             skipped={})",
+            v(&self.rvec),
+            v(&self.t),
+            self.cost,
+            if self.cheirality_ok { "True" } else { "False" },
+            if self.degenerate { "True" } else { "False" },
+            self.used,
+            self.skipped
+        )
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        match other.cast::<PySolution>() {
+            Ok(o) => {
+                let o = o.get();
+                self.r == o.r
+                    && self.t == o.t
+                    && self.cost.to_bits() == o.cost.to_bits()
+                    && self.algebraic_cost.to_bits() == o.algebraic_cost.to_bits()
+                    && self.reprojection_rmse.to_bits() == o.reprojection_rmse.to_bits()
+                    && (self.cheirality_ok, self.degenerate, self.planar)
+                        == (o.cheirality_ok, o.degenerate, o.planar)
+                    && self.source == o.source
+                    && (self.newton_iterations, self.reprojection_iterations)
+                        == (o.newton_iterations, o.reprojection_iterations)
+                    && (self.used, self.skipped) == (o.used, o.skipped)
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// Pickling: the fields as a tuple of plain numbers.
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let rebuild = py.import("eopnp._eopnp")?.getattr("_solution_from_state")?;
+        let state = (
+            self.r.to_vec(),
+            self.t.to_vec(),
+            self.q.to_vec(),
+            self.rvec.to_vec(),
+            (self.cost, self.algebraic_cost, self.reprojection_rmse),
+            (self.cheirality_ok, self.degenerate, self.planar),
+            self.source,
+            (self.newton_iterations, self.reprojection_iterations),
+            (self.used, self.skipped),
+        );
+        Ok((rebuild, PyTuple::new(py, [state.into_pyobject(py)?])?))
+    }
+}
+
+type State = (
+    Vec<f64>,
+    Vec<f64>,
+    Vec<f64>,
+    Vec<f64>,
+    (f64, f64, f64),
+    (bool, bool, bool),
+    String,
+    (u32, u32),
+    (usize, usize),
+);
+
+/// Rebuilds a `Solution` from `__reduce__`'s state (private; for pickle).
+#[pyfunction]
+pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
+    let (r, t, q, rvec, costs, flags, source, iters, counts) = state;
+    let arr = |v: Vec<f64>, n: usize| -> PyResult<Vec<f64>> {
+        if v.len() == n {
+            Ok(v)
+        } else {
+            Err(pyo3::exceptions::PyValueError::new_err(
+                "bad Solution state",
+            ))
+        }
+    };
+    let (r, t, q, rvec) = (arr(r, 9)?, arr(t, 3)?, arr(q, 4)?, arr(rvec, 3)?);
+    let source = SOURCES
+        .iter()
+        .find(|s| **s == source)
+        .copied()
+        .unwrap_or(SOURCES[7]);
+    Ok(PySolution {
+        r: r.try_into().expect("checked"),
+        t: t.try_into().expect("checked"),
+        q: q.try_into().expect("checked"),
+        rvec: rvec.try_into().expect("checked"),
+        cost: costs.0,
+        algebraic_cost: costs.1,
+        reprojection_rmse: costs.2,
+        cheirality_ok: flags.0,
+        degenerate: flags.1,
+        planar: flags.2,
+        source,
+        newton_iterations: iters.0,
+        reprojection_iterations: iters.1,
+        used: counts.0,
+        skipped: counts.1,
+    })
+}

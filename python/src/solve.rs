@@ -1,0 +1,214 @@
+//! `eopnp.solve` and `eopnp.solve_all`: one problem, normalised or pixels through a camera.
+//! The solve runs with the GIL released.
+
+use eopnp::{InputKind, PnpError};
+use nalgebra::{Point2, Point3};
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+
+use crate::camera::PyCamera;
+use crate::convert::{points2, points3, vector};
+use crate::errors::pnp_error;
+use crate::options::SolverOptions;
+use crate::solution::PySolution;
+
+/// NaN or infinite input as the library reports it on normalised input (lengths first, then
+/// the first offending index, world before image before weight). The pixel APIs of the library
+/// would skip a NaN pixel as one that cannot be undistorted; the package rejects it instead.
+pub(crate) fn check_finite(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+) -> Result<(), PnpError> {
+    if world.len() != image.len() {
+        return Err(PnpError::LengthMismatch {
+            world: world.len(),
+            image: image.len(),
+        });
+    }
+    if let Some(w) = weights {
+        if w.len() != world.len() {
+            return Err(PnpError::WeightsLength {
+                weights: w.len(),
+                points: world.len(),
+            });
+        }
+    }
+    for (index, (x, p)) in world.iter().zip(image).enumerate() {
+        let input = if !x.coords.iter().all(|v| v.is_finite()) {
+            InputKind::World
+        } else if !(p.x.is_finite() && p.y.is_finite()) {
+            InputKind::Image
+        } else if weights.is_some_and(|w| !w[index].is_finite()) {
+            InputKind::Weight
+        } else {
+            continue;
+        };
+        return Err(PnpError::NonFinite { index, input });
+    }
+    Ok(())
+}
+
+/// The camera pose from 2D-3D correspondences.
+///
+/// Args:
+///     world: world points, shape (N, 3), N >= 4.
+///     image: their image points, shape (N, 2): normalised coordinates (x/z, y/z), or pixels
+///         when ``camera`` is given.
+///     weights: optional non-negative weight per point, shape (N,); a point of weight 0 is
+///         ignored (exactly as if dropped), weights scale the squared residuals.
+///     camera: a ``Camera``: ``image`` holds observed (distorted) pixels. They are undistorted
+///         and, in the default mode, the refinement minimises (to first order) the pixel
+///         reprojection error through the lens. Pixels that cannot be undistorted are left out
+///         and counted in ``Solution.skipped``.
+///     refinement: "ml" (default; alias "reprojection"): EOPnP then Levenberg-Marquardt on
+///         the reprojection error, the maximum-likelihood pose; "algebraic": EOPnP alone.
+///     planar: planar branch selection: "auto" (default), "planar" or "nonplanar".
+///     newton_iterations: maximum damped-Newton iterations per candidate (default 50).
+///     newton_step_tolerance: Newton stops when the step falls to this (default 1e-12).
+///     reprojection_iterations: maximum Levenberg-Marquardt iterations (default 50).
+///     exhaustive: refine every start of every generator (default False: a start certified
+///         globally optimal ends the search).
+///
+/// Returns:
+///     Solution: the pose (``R``, ``t``, ``rvec``, ``q``), its cost and diagnostics.
+///
+/// Raises:
+///     InvalidInputError: wrong shapes, too few points, mismatched lengths, NaN or infinite
+///         values, negative weights (``InputTypeError`` for non-numeric arrays).
+///     DegenerateError: coincident or collinear world points, coincident image points.
+///     NoSolutionError: numerical failure (not observed on valid input).
+///     InvalidOptionError: an option out of its range.
+#[pyfunction]
+#[pyo3(signature = (world, image, weights = None, *, camera = None, refinement = "ml",
+    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
+    reprojection_iterations = None, exhaustive = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve(
+    py: Python<'_>,
+    world: &Bound<'_, PyAny>,
+    image: &Bound<'_, PyAny>,
+    weights: Option<&Bound<'_, PyAny>>,
+    camera: Option<&Bound<'_, PyCamera>>,
+    refinement: &str,
+    planar: &str,
+    newton_iterations: Option<i64>,
+    newton_step_tolerance: Option<f64>,
+    reprojection_iterations: Option<i64>,
+    exhaustive: bool,
+) -> PyResult<PySolution> {
+    let solver = SolverOptions {
+        refinement,
+        planar,
+        newton_iterations,
+        newton_step_tolerance,
+        reprojection_iterations,
+        exhaustive,
+    }
+    .solver(py)?;
+    let w = points3(world, "world")?;
+    let img = points2(image, "image")?;
+    let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
+    let result = match camera {
+        None => py.detach(|| match &wts {
+            None => solver.solve(&w, &img),
+            Some(wts) => solver.solve_weighted(&w, &img, wts),
+        }),
+        Some(cam) => {
+            let cam = &cam.get().inner;
+            check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
+            py.detach(|| match &wts {
+                None => solver.solve_pixels(&w, &img, cam),
+                Some(wts) => solver.solve_pixels_weighted(&w, &img, cam, wts),
+            })
+        }
+    };
+    match result {
+        Ok(s) => Ok(PySolution::from(&s)),
+        Err(e) => Err(pnp_error(py, &e)),
+    }
+}
+
+/// Every distinct local minimum of the cost, best first: poses with most points in front of
+/// the camera first, then by increasing reprojection error (at most 32). For N <= 6 and for
+/// planar scenes several poses can explain the data about equally well; this lists them.
+///
+/// ``world`` (N, 3) and ``image`` (N, 2) normalised, and the solver options, as ``solve``
+/// (no weights or camera: undistort pixels first with ``Camera.undistort``).
+///
+/// Returns:
+///     list[Solution]: at least one.
+///
+/// Raises:
+///     As ``solve``.
+#[pyfunction]
+#[pyo3(signature = (world, image, *, refinement = "ml", planar = "auto",
+    newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
+    exhaustive = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve_all<'py>(
+    py: Python<'py>,
+    world: &Bound<'py, PyAny>,
+    image: &Bound<'py, PyAny>,
+    refinement: &str,
+    planar: &str,
+    newton_iterations: Option<i64>,
+    newton_step_tolerance: Option<f64>,
+    reprojection_iterations: Option<i64>,
+    exhaustive: bool,
+) -> PyResult<Bound<'py, PyList>> {
+    let solver = SolverOptions {
+        refinement,
+        planar,
+        newton_iterations,
+        newton_step_tolerance,
+        reprojection_iterations,
+        exhaustive,
+    }
+    .solver(py)?;
+    let w = points3(world, "world")?;
+    let img = points2(image, "image")?;
+    let all = py
+        .detach(|| solver.solve_all(&w, &img))
+        .map_err(|e| pnp_error(py, &e))?;
+    PyList::new(py, all.iter().map(PySolution::from))
+}
+
+/// Seconds per solve of `repeats` solves of the same problem in Rust, with the GIL released
+/// and no conversion: the benchmark's reference for the Python call overhead (private).
+#[pyfunction]
+#[pyo3(signature = (world, image, repeats, *, refinement = "ml"))]
+pub(crate) fn _time_solve(
+    py: Python<'_>,
+    world: &Bound<'_, PyAny>,
+    image: &Bound<'_, PyAny>,
+    repeats: u32,
+    refinement: &str,
+) -> PyResult<f64> {
+    let solver = SolverOptions {
+        refinement,
+        planar: "auto",
+        newton_iterations: None,
+        newton_step_tolerance: None,
+        reprojection_iterations: None,
+        exhaustive: false,
+    }
+    .solver(py)?;
+    let w = points3(world, "world")?;
+    let img = points2(image, "image")?;
+    let r = py.detach(|| {
+        let start = std::time::Instant::now();
+        let mut last = None;
+        for _ in 0..repeats.max(1) {
+            last = Some(solver.solve(std::hint::black_box(&w), std::hint::black_box(&img)));
+        }
+        (
+            start.elapsed().as_secs_f64() / f64::from(repeats.max(1)),
+            last,
+        )
+    });
+    match r.1 {
+        Some(Err(e)) => Err(pnp_error(py, &e)),
+        _ => Ok(r.0),
+    }
+}

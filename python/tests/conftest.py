@@ -1,0 +1,81 @@
+"""Shared helpers of the eopnp Python tests: synthetic problems, rotation metrics, paths."""
+
+import math
+import os
+import pathlib
+
+import numpy as np
+import pytest
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+DATA = REPO / "data"
+
+
+def rodrigues(rvec):
+    """Rotation matrix of an axis-angle vector."""
+    rvec = np.asarray(rvec, dtype=float)
+    th = np.linalg.norm(rvec)
+    if th == 0.0:
+        return np.eye(3)
+    k = rvec / th
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(th) * kx + (1 - math.cos(th)) * kx @ kx
+
+
+def rotation_error_deg(r, r_ref):
+    """Largest angle between corresponding columns, degrees (the crate's metric)."""
+    worst = 0.0
+    for k in range(3):
+        a, b = r[:, k], r_ref[:, k]
+        worst = max(worst, math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), a @ b)))
+    return worst
+
+
+def random_rotation(rng):
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    w, x, y, z = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def problem(rng, n, sigma_px=0.0, f=800.0, planar=False):
+    """The paper's protocol: points in [-2, 2]^2 x [4, 8] in the camera frame (planar: z = 0
+    in the world frame), a random pose, noise of sigma_px pixels at focal length f.
+
+    Returns (world (n, 3), image (n, 2) normalised, R, t)."""
+    r = random_rotation(rng)
+    if planar:
+        world = np.column_stack([rng.uniform(-2, 2, (n, 2)), np.zeros(n)])
+        t = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(4, 8)])
+    else:
+        cam = np.column_stack([rng.uniform(-2, 2, (n, 2)), rng.uniform(4, 8, n)])
+        t = cam.mean(axis=0)
+        world = (cam - t) @ r  # R^T (cam - t): R @ world + t = cam
+    c = world @ r.T + t
+    image = c[:, :2] / c[:, 2:]
+    if sigma_px > 0:
+        image = image + rng.normal(0.0, sigma_px / f, image.shape)
+    return world, image, r, t
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(12345)
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """The eopnp CLI built by `cargo test --workspace --release` (path in $EOPNP_CLI, as
+    scripts/test.sh sets it): skipped when unset, an error when set but missing."""
+    path = os.environ.get("EOPNP_CLI")
+    if not path:
+        pytest.skip("EOPNP_CLI not set (scripts/test.sh sets it to the release CLI)")
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"EOPNP_CLI={path} does not exist")
+    return path
