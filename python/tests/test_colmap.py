@@ -1,0 +1,80 @@
+"""COLMAP models: reading the bundled model (text and binary), its images and cameras, and
+registering every image plainly and with RANSAC."""
+
+import numpy as np
+import pytest
+
+import eopnp
+from conftest import DATA, rotation_error_deg
+
+
+@pytest.fixture(scope="module")
+def model():
+    return eopnp.read_colmap_model(str(DATA / "colmap-boxes"))
+
+
+def test_read(model):
+    assert len(model) == 6 and model.image_ids == [1, 2, 3, 4, 5, 6]
+    assert model.num_points3D == len(model.point3D_ids) == model.points3D.shape[0]
+    assert model.points3D.shape[1] == 3
+    cams = model.cameras
+    assert set(cams) == {1, 2, 3, 4, 5, 6}
+    assert all(c.model == "SIMPLE_RADIAL" and (c.width, c.height) == (1200, 1600)
+               for c in cams.values())
+    img = model.image(1)
+    assert img.id == 1 and img.camera_id in cams and img.name.endswith(".jpeg")
+    assert img.points2D.shape == (len(img.point3D_ids), 2)
+    assert np.allclose(img.R @ img.R.T, np.eye(3), atol=1e-12)
+    assert np.linalg.norm(img.q) == pytest.approx(1.0, abs=1e-6)
+    assert model.images[1].name == img.name
+    assert model.camera_of(1) == cams[img.camera_id]
+    assert "Model(6 cameras, 6 images" in repr(model) and "Image(id=1" in repr(img)
+
+
+def test_text_and_binary_equal(model):
+    binary = eopnp.read_colmap_model(DATA / "colmap-boxes-bin")
+    for i in model.image_ids:
+        w1, p1 = model.correspondences(i)
+        w2, p2 = binary.correspondences(i)
+        assert w1.shape == w2.shape and np.abs(w1 - w2).max() < 1e-9
+        assert np.abs(p1 - p2).max() < 1e-9
+
+
+def test_correspondences(model):
+    img = model.image(2)
+    world, pixels = model.correspondences(2)
+    ids = img.point3D_ids
+    assert len(world) == (ids >= 0).sum() and pixels.shape == (len(world), 2)
+    assert np.array_equal(pixels, img.points2D[ids >= 0])
+    lookup = dict(zip(model.point3D_ids.tolist(), model.points3D))
+    assert np.array_equal(world[0], lookup[int(ids[ids >= 0][0])])
+
+
+def test_register_every_image(model):
+    """Within README's bounds of COLMAP's poses (tests/colmap.rs: 0.01 deg, 0.05 %)."""
+    for i in model.image_ids:
+        reg = eopnp.register_image(model, i)
+        assert reg.image_id == i and reg.n > 1000 and reg.inliers == reg.n - reg.skipped
+        assert reg.rotation_error_deg < 0.01 and reg.translation_error_pct < 0.05
+        assert reg.ransac is None and reg.rmse_px < 2.0 and reg.model_rmse_px < 2.0
+        assert rotation_error_deg(reg.solution.R, model.image(i).R) == pytest.approx(
+            reg.rotation_error_deg, abs=1e-9)
+        # The same as solve() on the correspondences through the image's camera.
+        world, pixels = model.correspondences(i)
+        sol = eopnp.solve(world, pixels, camera=model.camera_of(i))
+        assert sol == reg.solution
+
+
+def test_register_ransac(model):
+    for ransac in [True, eopnp.RansacOptions(), {"threshold_px": 4.0}]:
+        reg = eopnp.register_image(model, 3, ransac=ransac)
+        assert reg.rotation_error_deg < 0.01
+        assert set(reg.ransac) == {"iterations", "hypotheses", "local_fits", "final_fits",
+                                   "inliers", "inlier_ratio", "micros"}
+        assert reg.ransac["inliers"] == reg.inliers
+    world, pixels = model.correspondences(3)
+    sol, info = eopnp.solve_ransac(world, pixels, camera=model.camera_of(3))
+    assert sol == reg.solution and info["num_inliers"] == reg.inliers
+    assert eopnp.register_image(model, 3, ransac=False).ransac is None
+    alg = eopnp.register_image(model, 3, refinement="algebraic")
+    assert alg.rotation_error_deg < 0.05
