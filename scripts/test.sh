@@ -30,8 +30,12 @@ fi
 start=$(date +%s)
 target_dir=$(cargo metadata --format-version 1 --no-deps --offline |
   sed -E 's/.*"target_directory":"([^"]*)".*/\1/')
-# The CLI the Python tests compare with: the binary of step 1 (a no-op build after it).
-cargo build --release --all-features --bin eopnp --quiet
+# The CLI the Python tests compare with: the release binary that step 1 built for the CLI's
+# integration tests. (`cargo build` would build it again: without the dev-dependencies, some
+# dependencies resolve to other features.)
+if $python_only; then
+  cargo build --release --all-features --bin eopnp --quiet
+fi
 export EOPNP_CLI="$target_dir/release/eopnp"
 
 python=${PYTHON:-python3}

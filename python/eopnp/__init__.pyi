@@ -309,7 +309,7 @@ def solve_ransac(
     weights: ArrayLike | None = None,
     *,
     camera: Camera | None = None,
-    focal: tuple[float, float] | None = None,
+    focal: float | tuple[float, float] | None = None,
     ransac: RansacArg = None,
     refinement: Refinement = "ml",
     planar: Planar = "auto",

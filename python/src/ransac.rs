@@ -234,6 +234,24 @@ pub(crate) fn ransac_arg(py: Python<'_>, arg: Option<&Bound<'_, PyAny>>) -> PyRe
     }
 }
 
+/// `focal=`: one number (fx = fy) or two, `(fx, fy)`.
+fn focal_arg(py: Python<'_>, f: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+    if let Ok(v) = f.extract::<f64>() {
+        return Ok((v, v));
+    }
+    match vector(f, "focal", false)?.as_slice() {
+        [fx, fy] => Ok((*fx, *fy)),
+        other => Err(option_error(
+            py,
+            "focal",
+            format!(
+                "focal must be one focal length or two, (fx, fy), got {} values",
+                other.len()
+            ),
+        )),
+    }
+}
+
 /// As `Ransac::estimate_pixels`, with `weights[i]` multiplying the lens distortion's weight.
 fn estimate_pixels_weighted(
     ransac: &Ransac,
@@ -322,8 +340,8 @@ fn rmse_px(
 ///     weights: optional non-negative weight per point, shape (N,).
 ///     camera: a ``Camera``; the threshold applies to pixel reprojection errors through the
 ///         lens model. Pixels that cannot be undistorted are outliers.
-///     focal: ``(fx, fy)`` in pixels, for normalised ``image``: the threshold applies to
-///         ``sqrt(fx^2 dx^2 + fy^2 dy^2)``. Exactly one of ``camera`` and ``focal``.
+///     focal: ``(fx, fy)`` (or one ``f``) in pixels, for normalised ``image``: the threshold
+///         applies to ``sqrt(fx^2 dx^2 + fy^2 dy^2)``. Exactly one of ``camera`` and ``focal``.
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None (defaults: 4 px threshold,
 ///         confidence 0.999, at most 10000 samples, seed 0).
 ///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
@@ -352,7 +370,7 @@ pub(crate) fn solve_ransac<'py>(
     image: &Bound<'py, PyAny>,
     weights: Option<&Bound<'py, PyAny>>,
     camera: Option<&Bound<'py, PyCamera>>,
-    focal: Option<(f64, f64)>,
+    focal: Option<&Bound<'py, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
     refinement: &str,
     planar: &str,
@@ -371,6 +389,7 @@ pub(crate) fn solve_ransac<'py>(
     }
     .solver(py)?;
     let ransac = ransac_arg(py, ransac)?;
+    let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;

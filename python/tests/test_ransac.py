@@ -104,3 +104,12 @@ def test_minimum_points(rng):
     assert info["num_inliers"] == 4
     with pytest.raises(eopnp.InvalidInputError, match="too few"):
         eopnp.solve_ransac(world[:3], image[:3], focal=(800.0, 800.0))
+
+
+def test_focal_forms(rng):
+    world, image, _, _, _ = with_outliers(rng, 60, 0.3)
+    ref = eopnp.solve_ransac(world, image, focal=(800.0, 800.0))[0]
+    for f in [800.0, 800, [800, 800], np.array([800.0, 800.0])]:
+        assert eopnp.solve_ransac(world, image, focal=f)[0] == ref
+    with pytest.raises(eopnp.InvalidOptionError, match="one focal length or two"):
+        eopnp.solve_ransac(world, image, focal=(800.0, 800.0, 1.0))
