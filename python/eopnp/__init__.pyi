@@ -7,7 +7,7 @@ inlier masks). Poses map world to camera: ``x_cam = R @ X + t``.
 """
 
 import os
-from typing import Any, Literal, Mapping, Sequence, TypedDict, Union
+from typing import Any, Literal, Mapping, TypedDict, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -27,14 +27,15 @@ from ._errors import (
 
 __version__: str
 
-ArrayLike = npt.ArrayLike
-F64Array = npt.NDArray[np.float64]
-Refinement = Literal["ml", "reprojection", "algebraic"]
-Planar = Literal["auto", "planar", "nonplanar"]
-Source = Literal[
+_ArrayLike = npt.ArrayLike
+_F64Array = npt.NDArray[np.float64]
+_Refinement = Literal["ml", "reprojection", "algebraic"]
+_Planar = Literal["auto", "planar", "nonplanar"]
+_Source = Literal[
     "case1", "case2", "case3", "case4", "planar1", "planar2", "extra_start", "other"
 ]
 
+@final
 class Solution:
     """A camera pose (world to camera, ``x_cam = R @ X + t``) and how it was found.
 
@@ -42,19 +43,19 @@ class Solution:
     """
 
     @property
-    def R(self) -> F64Array:
+    def R(self) -> _F64Array:
         """Rotation matrix, shape (3, 3)."""
     @property
-    def t(self) -> F64Array:
+    def t(self) -> _F64Array:
         """Translation, shape (3,)."""
     @property
-    def rvec(self) -> F64Array:
+    def rvec(self) -> _F64Array:
         """OpenCV's rotation vector (axis times angle in radians, ``cv2.Rodrigues``), (3,)."""
     @property
-    def q(self) -> F64Array:
+    def q(self) -> _F64Array:
         """Unit quaternion (w, x, y, z), COLMAP's order, shape (4,)."""
     @property
-    def Rt(self) -> F64Array:
+    def Rt(self) -> _F64Array:
         """The 3x4 matrix [R | t]."""
     @property
     def cost(self) -> float:
@@ -77,7 +78,7 @@ class Solution:
     def planar(self) -> bool:
         """The planar branch produced the winning start."""
     @property
-    def source(self) -> Source:
+    def source(self) -> _Source:
         """The candidate generator of the winning start."""
     @property
     def newton_iterations(self) -> int:
@@ -94,6 +95,7 @@ class Solution:
     def as_dict(self) -> dict[str, Any]:
         """Every field as a dict (arrays for R, t, rvec, q)."""
 
+@final
 class Camera:
     """A camera model: COLMAP's model name and parameters (COLMAP's order), image size.
 
@@ -109,16 +111,16 @@ class Camera:
             non-positive focal lengths.
     """
 
-    def __init__(
-        self, model: str, params: ArrayLike, width: int = 0, height: int = 0
-    ) -> None: ...
+    def __new__(
+        cls, model: str, params: _ArrayLike, width: int = 0, height: int = 0
+    ) -> "Camera": ...
     @staticmethod
-    def from_opencv(K: ArrayLike, dist: ArrayLike | None = None) -> "Camera":
+    def from_opencv(K: _ArrayLike, dist: _ArrayLike | None = None) -> "Camera":
         """From OpenCV's camera matrix (zero skew) and distortion vector (0, 4, 5, 8, 12 or 14
         coefficients in OpenCV's order; shape (n,), (1, n) or (n, 1)): ``project`` equals
         ``cv2.projectPoints`` with rvec = tvec = 0 (OpenCV's pixel convention)."""
     @staticmethod
-    def from_opencv_fisheye(K: ArrayLike, dist: ArrayLike) -> "Camera":
+    def from_opencv_fisheye(K: _ArrayLike, dist: _ArrayLike) -> "Camera":
         """From ``cv2.fisheye``'s K (zero skew) and its 4 coefficients: OPENCV_FISHEYE."""
     @staticmethod
     def pinhole(fx: float, fy: float, cx: float, cy: float) -> "Camera":
@@ -131,7 +133,7 @@ class Camera:
     @property
     def height(self) -> int: ...
     @property
-    def params(self) -> F64Array:
+    def params(self) -> _F64Array:
         """The parameters in COLMAP's order, shape (n,)."""
     @property
     def focal(self) -> tuple[float, float]:
@@ -141,16 +143,17 @@ class Camera:
         """(cx, cy) in pixels."""
     @property
     def has_distortion(self) -> bool: ...
-    def to_opencv(self) -> tuple[F64Array, F64Array] | None:
+    def to_opencv(self) -> tuple[_F64Array, _F64Array] | None:
         """OpenCV's (K, dist), or None for the fisheye models."""
-    def to_opencv_fisheye(self) -> tuple[F64Array, F64Array] | None:
+    def to_opencv_fisheye(self) -> tuple[_F64Array, _F64Array] | None:
         """cv2.fisheye's (K, dist) of an OPENCV_FISHEYE camera, else None."""
-    def project(self, normalised: ArrayLike) -> F64Array:
+    def project(self, normalised: _ArrayLike) -> _F64Array:
         """Pixels of normalised points (x/z, y/z): (N, 2) -> (N, 2)."""
-    def undistort(self, pixels: ArrayLike) -> F64Array:
+    def undistort(self, pixels: _ArrayLike) -> _F64Array:
         """Normalised points of pixels: (N, 2) -> (N, 2); NaN rows for pixels that cannot be
         undistorted."""
 
+@final
 class RansacOptions:
     """RANSAC options; each is a settable attribute. Out-of-range values raise
     ``InvalidOptionError`` when used. Picklable."""
@@ -162,8 +165,8 @@ class RansacOptions:
     seed: int
     local_optimisation: bool
     final_threshold_factor: float
-    def __init__(
-        self,
+    def __new__(
+        cls,
         *,
         threshold_px: float | None = None,
         confidence: float | None = None,
@@ -172,14 +175,14 @@ class RansacOptions:
         seed: int | None = None,
         local_optimisation: bool | None = None,
         final_threshold_factor: float | None = None,
-    ) -> None:
+    ) -> "RansacOptions":
         """Defaults: threshold_px 4.0, confidence 0.999, max_iterations 10000,
         min_iterations 20, seed 0, local_optimisation True, final_threshold_factor 2.0."""
     def as_dict(self) -> dict[str, Any]: ...
 
-RansacArg = Union[RansacOptions, Mapping[str, Any], None]
+_RansacArg = Union[RansacOptions, Mapping[str, Any], None]
 
-class RansacInfo(TypedDict):
+class _RansacInfo(TypedDict):
     inliers: npt.NDArray[np.bool_]
     num_inliers: int
     inlier_ratio: float
@@ -192,6 +195,7 @@ class RansacInfo(TypedDict):
     rmse_px: float
     micros: float
 
+@final
 class Image:
     """An image of a COLMAP model."""
 
@@ -202,21 +206,22 @@ class Image:
     @property
     def camera_id(self) -> int: ...
     @property
-    def q(self) -> F64Array:
+    def q(self) -> _F64Array:
         """Pose quaternion (w, x, y, z) as stored."""
     @property
-    def t(self) -> F64Array:
+    def t(self) -> _F64Array:
         """Pose translation (3,)."""
     @property
-    def R(self) -> F64Array:
+    def R(self) -> _F64Array:
         """Pose rotation (3, 3)."""
     @property
-    def points2D(self) -> F64Array:
+    def points2D(self) -> _F64Array:
         """Observations' pixels (K, 2)."""
     @property
     def point3D_ids(self) -> npt.NDArray[np.int64]:
         """Observations' 3D point ids (K,), -1 if untriangulated."""
 
+@final
 class Model:
     """A COLMAP sparse reconstruction (read-only)."""
 
@@ -231,14 +236,15 @@ class Model:
     @property
     def point3D_ids(self) -> npt.NDArray[np.uint64]: ...
     @property
-    def points3D(self) -> F64Array:
+    def points3D(self) -> _F64Array:
         """3D points (M, 3) in the order of point3D_ids."""
     def image(self, image_id: int) -> Image: ...
     def camera_of(self, image_id: int) -> Camera: ...
-    def correspondences(self, image_id: int) -> tuple[F64Array, F64Array]:
+    def correspondences(self, image_id: int) -> tuple[_F64Array, _F64Array]:
         """(world (N, 3), pixels (N, 2)) of the image's triangulated observations."""
     def __len__(self) -> int: ...
 
+@final
 class Registration:
     """The result of ``register_image``."""
 
@@ -271,13 +277,13 @@ class Registration:
     def micros(self) -> float: ...
 
 def solve(
-    world: ArrayLike,
-    image: ArrayLike,
-    weights: ArrayLike | None = None,
+    world: _ArrayLike,
+    image: _ArrayLike,
+    weights: _ArrayLike | None = None,
     *,
     camera: Camera | None = None,
-    refinement: Refinement = "ml",
-    planar: Planar = "auto",
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
@@ -291,11 +297,11 @@ def solve(
     InvalidOptionError."""
 
 def solve_all(
-    world: ArrayLike,
-    image: ArrayLike,
+    world: _ArrayLike,
+    image: _ArrayLike,
     *,
-    refinement: Refinement = "ml",
-    planar: Planar = "auto",
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
@@ -304,20 +310,20 @@ def solve_all(
     """Every distinct local minimum, best first (normalised image points)."""
 
 def solve_ransac(
-    world: ArrayLike,
-    image: ArrayLike,
-    weights: ArrayLike | None = None,
+    world: _ArrayLike,
+    image: _ArrayLike,
+    weights: _ArrayLike | None = None,
     *,
     camera: Camera | None = None,
     focal: float | tuple[float, float] | None = None,
-    ransac: RansacArg = None,
-    refinement: Refinement = "ml",
-    planar: Planar = "auto",
+    ransac: _RansacArg = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-) -> tuple[Solution, RansacInfo]:
+) -> tuple[Solution, _RansacInfo]:
     """Robust pose by RANSAC: pixels with ``camera``, or normalised points with
     ``focal=(fx, fy)`` (exactly one). Returns the pose and the info dict (inlier mask,
     iterations, inlier ratio, cost, RMSE). Raises NoConsensusError if no pose has 4 inliers."""
@@ -329,9 +335,9 @@ def register_image(
     model: Model,
     image_id: int,
     *,
-    ransac: RansacArg | bool = None,
-    refinement: Refinement = "ml",
-    planar: Planar = "auto",
+    ransac: _RansacArg | bool = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
@@ -340,4 +346,27 @@ def register_image(
     """Re-estimates an image's pose from its correspondences (plain, or RANSAC with
     ``ransac=True`` / options) and compares it with the model's. Raises UnknownIdError."""
 
-__all__: list[str]
+__all__ = [
+    "Camera",
+    "CameraError",
+    "DegenerateError",
+    "Image",
+    "InputTypeError",
+    "InvalidInputError",
+    "InvalidOptionError",
+    "Model",
+    "ModelError",
+    "NoConsensusError",
+    "NoSolutionError",
+    "PnpError",
+    "RansacOptions",
+    "Registration",
+    "Solution",
+    "UnknownIdError",
+    "__version__",
+    "read_colmap_model",
+    "register_image",
+    "solve",
+    "solve_all",
+    "solve_ransac",
+]
