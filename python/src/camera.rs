@@ -34,8 +34,7 @@ pub(crate) struct PyCamera {
     pub(crate) inner: Camera,
 }
 
-fn k_matrix(py: Python<'_>, k: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
-    let _ = py;
+fn k_matrix(k: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
     let m = matrix3(k, "K")?;
     Ok(Matrix3::from_fn(|i, j| m[i][j]))
 }
@@ -83,7 +82,7 @@ impl PyCamera {
         K: &Bound<'_, PyAny>,
         dist: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let k = k_matrix(py, K)?;
+        let k = k_matrix(K)?;
         let d = match dist {
             Some(d) => vector(d, "dist", true)?,
             None => Vec::new(),
@@ -102,7 +101,7 @@ impl PyCamera {
         K: &Bound<'_, PyAny>,
         dist: &Bound<'_, PyAny>,
     ) -> PyResult<Self> {
-        let k = k_matrix(py, K)?;
+        let k = k_matrix(K)?;
         let d = vector(dist, "dist", true)?;
         let d: [f64; 4] = d.as_slice().try_into().map_err(|_| {
             error(

@@ -6,6 +6,12 @@
 //! Every entry point converts its arrays to `f64` points (copies: the arrays may be mutated
 //! while the GIL is released), runs the library with the GIL released, and maps each error
 //! to the exception class of its `PnpError` family.
+//!
+//! Room for what issue 16 adds later: a `solve_batch` is one more function over lists of the
+//! same inputs (`convert`), one `detach` around the crate's batch call, returning
+//! `Solution`s (plain data, picklable, so they cross process boundaries); a `covariance=`
+//! keyword is one more field of `options::SolverOptions` and an optional field of
+//! `solution::PySolution` (None when not asked for).
 
 use pyo3::prelude::*;
 
