@@ -15,7 +15,7 @@ fields as a dict.
     ├── DegenerateError(PnpError, ValueError)    Degenerate (e.degeneracy: which kind)
     ├── NoSolutionError(PnpError, RuntimeError)  NoSolution (numerical failure)
     ├── InvalidOptionError(PnpError, ValueError) InvalidOption: an option out of its range
-    ├── NoConsensusError(PnpError, RuntimeError) NoConsensus: RANSAC found no pose
+    ├── NoConsensusError(PnpError, RuntimeError) NoConsensus: RANSAC found no consensus
     ├── CameraError(PnpError, ValueError)        an invalid camera (model, parameters, K)
     ├── ModelError(PnpError)                     a COLMAP model that cannot be read
     └── UnknownIdError(PnpError, LookupError)    no such image or camera in a COLMAP model
@@ -90,7 +90,9 @@ class InvalidOptionError(PnpError, ValueError):
 
 
 class NoConsensusError(PnpError, RuntimeError):
-    """RANSAC found no pose with at least 4 inliers (``iterations``: samples drawn)."""
+    """RANSAC found no consensus: no pose had enough inliers for a fit, or the best pose's
+    ``inliers`` are no more than a wrong pose reaches by chance (``needed``: the least
+    accepted; ``iterations``: samples drawn)."""
 
 
 class CameraError(PnpError, ValueError):

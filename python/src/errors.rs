@@ -160,10 +160,18 @@ pub(crate) fn pnp_error(py: Python<'_>, e: &PnpError) -> PyErr {
             "InvalidOption",
             vec![("option", option.into())],
         ),
-        PnpError::NoConsensus { iterations } => (
+        PnpError::NoConsensus {
+            iterations,
+            inliers,
+            needed,
+        } => (
             "NoConsensusError",
             "NoConsensus",
-            vec![("iterations", iterations.into())],
+            vec![
+                ("iterations", iterations.into()),
+                ("inliers", inliers.into()),
+                ("needed", needed.into()),
+            ],
         ),
         _ => ("PnpError", "Other", vec![]),
     };

@@ -2,8 +2,7 @@
 //! scoring with an SPRT, EOPnP local optimisation and final fit, seeded).
 
 use eopnp::camera::Camera;
-use eopnp::ransac::{Ransac, RansacSolution};
-use eopnp::{PnpError, Solver};
+use eopnp::ransac::Ransac;
 use nalgebra::{Point2, Point3};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -252,45 +251,6 @@ fn focal_arg(py: Python<'_>, f: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
     }
 }
 
-/// As `Ransac::estimate_pixels`, with `weights[i]` multiplying the lens distortion's weight.
-fn estimate_pixels_weighted(
-    ransac: &Ransac,
-    solver: &Solver,
-    camera: &Camera,
-    world: &[Point3<f64>],
-    pixels: &[Point2<f64>],
-    weights: &[f64],
-) -> Result<RansacSolution, PnpError> {
-    if weights.len() != world.len() {
-        return Err(PnpError::WeightsLength {
-            weights: weights.len(),
-            points: world.len(),
-        });
-    }
-    let (fx, fy) = camera.intrinsics_scale();
-    let (mut used, mut w, mut image, mut ws) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
-        let Ok((n, lens)) = camera.undistort_weighted(*px) else {
-            continue;
-        };
-        used.push(i);
-        w.push(*x);
-        image.push(n);
-        ws.push(weights[i] * lens);
-    }
-    let mut sol = ransac.estimate(solver, &w, &image, (fx, fy), Some(&ws))?;
-    if used.len() != world.len() {
-        let mut full = vec![false; world.len()];
-        for (k, &i) in used.iter().enumerate() {
-            full[i] = sol.inliers[k];
-        }
-        sol.inliers = full;
-        sol.stats.inlier_ratio = sol.num_inliers as f64 / world.len() as f64;
-    }
-    sol.solution.skipped = world.len() - used.len();
-    Ok(sol)
-}
-
 /// RMS pixel reprojection error over the inliers: through the camera, or with the focal
 /// lengths on normalised residuals.
 fn rmse_px(
@@ -415,7 +375,7 @@ pub(crate) fn solve_ransac<'py>(
                 check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
                 py.detach(|| match &wts {
                     None => ransac.estimate_pixels(&solver, cam, &w, &img),
-                    Some(wts) => estimate_pixels_weighted(&ransac, &solver, cam, &w, &img, wts),
+                    Some(wts) => ransac.estimate_pixels_weighted(&solver, cam, &w, &img, wts),
                 })
             }
             (None, Some(f)) => py.detach(|| ransac.estimate(&solver, &w, &img, f, wts.as_deref())),

@@ -194,12 +194,13 @@ def test_no_consensus():
     rng = np.random.default_rng(3)
     world = rng.uniform(-1, 1, (30, 3))
     image = rng.uniform(-0.5, 0.5, (30, 2))
-    with pytest.raises(eopnp.NoConsensusError, match="no pose consistent") as e:
+    with pytest.raises(eopnp.NoConsensusError, match="found no consensus after 50 samples") as e:
         eopnp.solve_ransac(
             world, image, focal=(800.0, 800.0),
             ransac=dict(threshold_px=1e-6, max_iterations=50, final_threshold_factor=1.0),
         )
     assert e.value.kind == "NoConsensus" and e.value.iterations == 50
+    assert e.value.inliers < e.value.needed
 
 
 def test_camera_errors():
