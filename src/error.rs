@@ -115,7 +115,8 @@ pub enum PnpError {
     /// A [`crate::ransac::Ransac`] option is outside its range: `threshold_px` must be finite
     /// and > 0 with a normal square, `confidence` in (0, 1), `max_iterations` >= 1, `final_threshold_factor` finite
     /// and >= 1; or the focal lengths given to [`crate::ransac::Ransac::estimate`] are not
-    /// finite and > 0 (`"focal"`).
+    /// finite and > 0 (`"focal"`); or the initial pose given to [`crate::Solver::refine`] is
+    /// not finite (`"initial"`).
     InvalidOption {
         /// The option's field name.
         option: &'static str,
@@ -164,6 +165,9 @@ impl fmt::Display for PnpError {
             PnpError::NoSolution => f.write_str(
                 "no solution found (numerical failure on every candidate); the input may be \
                  extremely ill-conditioned",
+            ),
+            PnpError::InvalidOption { option: "initial" } => f.write_str(
+                "the initial pose is not finite: its rotation and translation must be finite",
             ),
             PnpError::InvalidOption { option } => {
                 let range = match *option {

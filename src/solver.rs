@@ -1,7 +1,7 @@
 //! The public entry points: [`Solver`] (the options, as a builder) and [`solve`]. Every solve
 //! runs the stages of [`crate::pipeline`].
 
-use nalgebra::{Point2, Point3};
+use nalgebra::{Isometry3, Matrix3, Point2, Point3};
 
 use crate::camera::Camera;
 use crate::covariance::{pose_covariance, Metric, NoiseModel};
@@ -239,6 +239,80 @@ impl Solver {
             *sol = self.with_covariance(*sol, world, image, &|_| 1.0, Metric::Identity);
         }
         Ok(all)
+    }
+
+    /// Refines a prior pose (tracking: the previous frame's pose) to the maximum-likelihood pose
+    /// of the basin it starts in: Levenberg-Marquardt on the reprojection error from
+    /// `initial` (world to camera, `x_cam = R X + t`), without EOPnP's global search
+    /// (OpenCV's `solvePnPRefineLM`, PoseLib's `refine_absolute_pose`). The input is
+    /// validated as by [`Solver::solve`]; [`Solution::converged`] says whether the refinement
+    /// reached a minimum, [`Solution::source`] is [`crate::CandidateSource::Initial`].
+    ///
+    /// ```
+    /// use eopnp::Solver;
+    /// use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion, Vector3};
+    ///
+    /// let t = Vector3::new(0.1, -0.2, 6.0);
+    /// let world = [
+    ///     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    ///     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// ];
+    /// let image: Vec<Point2<f64>> = world
+    ///     .iter()
+    ///     .map(|x| { let p = x.coords + t; Point2::new(p.x / p.z, p.y / p.z) })
+    ///     .collect();
+    /// // The previous frame's pose, a little off.
+    /// let prior = Isometry3::from_parts(
+    ///     Translation3::new(0.12, -0.18, 5.9),
+    ///     UnitQuaternion::from_euler_angles(0.02, -0.01, 0.03),
+    /// );
+    /// let sol = Solver::default().refine(&world, &image, &prior)?;
+    /// assert!(sol.converged);
+    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+    /// # Ok::<(), eopnp::PnpError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Solver::solve`], and [`PnpError::InvalidOption`] (`"initial"`) for an initial pose
+    /// that is not finite.
+    pub fn refine(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        initial: &Isometry3<f64>,
+    ) -> Result<Solution, PnpError> {
+        let r = check_initial(initial)?;
+        let t = initial.translation.vector;
+        let sol = pipeline::refine(&self.opts, world, image, None, &self.opts.reproj, (&r, &t))?;
+        Ok(self.with_covariance(sol, world, image, &|_| 1.0, Metric::Identity))
+    }
+
+    /// [`Solver::refine`] from observed pixels through a camera (as [`Solver::solve_pixels`]).
+    ///
+    /// # Errors
+    /// As [`Solver::refine`] and [`Solver::solve_pixels`].
+    pub fn refine_pixels(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        camera: &Camera,
+        initial: &Isometry3<f64>,
+    ) -> Result<Solution, PnpError> {
+        let r = check_initial(initial)?;
+        let t = initial.translation.vector;
+        let u = undistort_all(world, pixels, camera, None)?;
+        let mut reproj = self.opts.reproj;
+        reproj.row_weights = u.rows;
+        let mut sol = pipeline::refine(
+            &self.opts,
+            &u.world,
+            &u.image,
+            Some(&u.weights),
+            &reproj,
+            (&r, &t),
+        )?;
+        sol.skipped = world.len() - u.used.len();
+        Ok(self.with_covariance(sol, &u.world, &u.image, &|_| 1.0, Metric::Camera(camera)))
     }
 
     /// As [`Solver::solve_weighted`] (weights optional) with the x and y residual rows of the
@@ -497,4 +571,14 @@ pub(crate) fn undistort_all(
         out.used.push(i);
     }
     Ok(out)
+}
+
+/// The rotation of a finite initial pose, or [`PnpError::InvalidOption`] (`"initial"`).
+fn check_initial(initial: &Isometry3<f64>) -> Result<Matrix3<f64>, PnpError> {
+    let finite = initial.translation.vector.iter().all(|x| x.is_finite())
+        && initial.rotation.coords.iter().all(|x| x.is_finite());
+    if !finite {
+        return Err(PnpError::InvalidOption { option: "initial" });
+    }
+    Ok(initial.rotation.to_rotation_matrix().into_inner())
 }

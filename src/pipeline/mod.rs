@@ -185,6 +185,49 @@ pub(crate) fn run(
     out.finish(&minima[pick], opts.refinement, reproj)
 }
 
+/// `Solver::refine`: S1 and S2 (validation, the working frame, `M` for the diagnostics), then
+/// S9 from the caller's world pose `(r, t)` and S8: the minimum of the reprojection error in
+/// the basin of that pose. No search (S3-S7).
+pub(crate) fn refine(
+    opts: &Options,
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    reproj: &ReprojOptions,
+    (r, t): (&Matrix3<f64>, &nalgebra::Vector3<f64>),
+) -> Result<Solution, PnpError> {
+    let fr = frame::working_frame(world, image, weights, opts.align_world_axes)?;
+    let sys = fr.sums.system(false).ok_or(PnpError::NoSolution)?;
+    let scale = sys.trace;
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(PnpError::NoSolution);
+    }
+    let m45 = moments::m_upper(&sys.m);
+    let probe = nullspace::probe(&sys.m, scale);
+    let out = Output {
+        world,
+        image,
+        weights,
+        fr: &fr,
+        m45: &m45,
+        degenerate: probe.degenerate || fr.small_image,
+        scale,
+    };
+    // The world pose in the working frame (the inverse of `WorkingFrame::to_world`).
+    let r_work = r * fr.rw.transpose();
+    let t_work = (t + r * fr.c) / fr.d;
+    let m = Minimum {
+        r: r_work,
+        t: t_work,
+        f: newton::cost_at(&m45, &r_work),
+        source: CandidateSource::Initial,
+        planar: false,
+        iterations: 0,
+        cheirality: None,
+    };
+    out.finish(&m, Refinement::Reprojection, reproj)
+}
+
 /// The refined minima found so far and how a start is refined (S6).
 struct Search<'a> {
     sys: &'a System,

@@ -41,6 +41,8 @@ pub enum CandidateSource {
     Planar2,
     /// S4'': one of the four fixed extra starting rotations.
     ExtraStart,
+    /// The caller's initial pose ([`crate::Solver::refine`]).
+    Initial,
 }
 
 /// Upper bound on the number of candidates: 1 + 4 + 9 + 8 (S4) + 5 (S4') + 4 (S4'') = 31.

@@ -52,6 +52,11 @@ pub struct Solution {
     pub newton_iterations: u32,
     /// Levenberg-Marquardt iterations of the reprojection refinement (S9; 0 in algebraic mode).
     pub reprojection_iterations: u32,
+    /// The reprojection refinement stopped at a minimum: its gradient or step test passed, or
+    /// no step lowered the cost any more. `false` when it ran out of iterations
+    /// ([`crate::Solver::reprojection_iterations`]) or could not start (a point at depth 0);
+    /// `true` in algebraic mode.
+    pub converged: bool,
     /// Correspondences that entered the solve (those with a weight > 0).
     pub used: usize,
     /// Correspondences left out because their pixel could not be undistorted
@@ -130,6 +135,7 @@ impl Output<'_> {
     ) -> Result<Solution, PnpError> {
         let (mut r, mut t) = (m.r, m.t);
         let mut iters = 0;
+        let mut converged = true;
         // What S9 already knows at its final pose: the cost (equal to the reprojection error
         // when the two residual rows are not reweighted) and the depth signs, which it never
         // changes (a step that moves a point across z = 0 is rejected).
@@ -156,6 +162,13 @@ impl Output<'_> {
                 }
             }
             iters = out.iterations;
+            converged = matches!(
+                out.stop,
+                reprojection::ReprojStop::Gradient
+                    | reprojection::ReprojStop::Step
+                    | reprojection::ReprojStop::FinalStep
+                    | reprojection::ReprojStop::Damping
+            );
         }
         // M is positive semi-definite, so f >= 0 in exact arithmetic. With wildly scaled input
         // (found by fuzzing: an image coordinate of 3e9) the accumulated M is not PSD to
@@ -202,6 +215,7 @@ impl Output<'_> {
             source: m.source,
             newton_iterations: m.iterations,
             reprojection_iterations: iters,
+            converged,
             used: self.fr.n_active,
             skipped: 0,
             covariance: None,
