@@ -1,6 +1,7 @@
 //! The solver's keyword options (`refinement=`, `planar=`, iteration limits, `exhaustive=`) as
 //! an `eopnp::Solver`. `None` keeps the library's default.
 
+use eopnp::covariance::NoiseModel;
 use eopnp::{PlanarDetection, Refinement, Solver};
 use pyo3::prelude::*;
 
@@ -76,4 +77,36 @@ impl SolverOptions<'_> {
         }
         Ok(s)
     }
+}
+
+/// `covariance=`: None (no covariance), "estimated" (the noise estimated from the residuals) or
+/// a positive noise standard deviation in image units (pixels with a camera).
+pub(crate) fn covariance_arg(
+    py: Python<'_>,
+    arg: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<NoiseModel>> {
+    let Some(a) = arg else { return Ok(None) };
+    if a.is_none() {
+        return Ok(None);
+    }
+    if let Ok(s) = a.extract::<String>() {
+        if s == "estimated" {
+            return Ok(Some(NoiseModel::Estimated));
+        }
+    } else if !a.is_instance_of::<pyo3::types::PyBool>() {
+        if let Ok(sigma) = a.extract::<f64>() {
+            if sigma.is_finite() && sigma > 0.0 {
+                return Ok(Some(NoiseModel::Sigma(sigma)));
+            }
+        }
+    }
+    Err(option_error(
+        py,
+        "covariance",
+        format!(
+            "covariance must be None, \"estimated\" or a finite noise standard deviation > 0, \
+             got {}",
+            a.repr()?
+        ),
+    ))
 }

@@ -29,6 +29,11 @@ use crate::convert::{array1, array2};
 ///     reprojection_iterations: Levenberg-Marquardt iterations of the refinement.
 ///     used: correspondences that entered the solve (weight > 0, undistorted).
 ///     skipped: correspondences left out because their pixel could not be undistorted.
+///     covariance: the pose's 6x6 covariance (``covariance=`` of ``solve``), or None: of
+///         ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``, ``t = t_hat + delta_t``
+///         (pycolmap's ``return_covariance=True`` convention).
+///     sigma: the image noise standard deviation the covariance assumes (given or estimated;
+///         pixels for pixel input, normalised units otherwise), or None.
 #[pyclass(frozen, module = "eopnp", name = "Solution")]
 #[derive(Clone, Debug)]
 pub(crate) struct PySolution {
@@ -60,6 +65,8 @@ pub(crate) struct PySolution {
     used: usize,
     #[pyo3(get)]
     skipped: usize,
+    /// Row-major covariance and sigma.
+    cov: Option<([f64; 36], f64)>,
 }
 
 const SOURCES: [&str; 8] = [
@@ -118,6 +125,13 @@ impl From<&Solution> for PySolution {
             reprojection_iterations: s.reprojection_iterations,
             used: s.used,
             skipped: s.skipped,
+            cov: s.covariance.map(|c| {
+                let mut m = [0.0; 36];
+                for (k, v) in m.iter_mut().enumerate() {
+                    *v = c.matrix[(k / 6, k % 6)];
+                }
+                (m, c.sigma)
+            }),
         }
     }
 }
@@ -179,7 +193,22 @@ impl PySolution {
         array2(py, 3, 4, &m).into_any()
     }
 
-    /// Every field as a dict (arrays for R, t, rvec, q).
+    /// The pose's 6x6 covariance of ``[delta_q, delta_t]`` (pycolmap's convention), or None
+    /// when not asked for (``covariance=``) or not defined (degenerate normal equations).
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+        self.cov
+            .as_ref()
+            .map(|(m, _)| array2(py, 6, 6, m).into_any())
+    }
+
+    /// The image noise standard deviation the covariance assumes, or None.
+    #[getter]
+    fn sigma(&self) -> Option<f64> {
+        self.cov.as_ref().map(|c| c.1)
+    }
+
+    /// Every field as a dict (arrays for R, t, rvec, q, covariance).
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         d.set_item("R", self.r(py))?;
@@ -197,6 +226,8 @@ impl PySolution {
         d.set_item("reprojection_iterations", self.reprojection_iterations)?;
         d.set_item("used", self.used)?;
         d.set_item("skipped", self.skipped)?;
+        d.set_item("covariance", self.covariance(py))?;
+        d.set_item("sigma", self.sigma())?;
         Ok(d)
     }
 
@@ -230,6 +261,8 @@ impl PySolution {
                     && (self.newton_iterations, self.reprojection_iterations)
                         == (o.newton_iterations, o.reprojection_iterations)
                     && (self.used, self.skipped) == (o.used, o.skipped)
+                    && self.cov.map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
+                        == o.cov.map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
             }
             Err(_) => false,
         }
@@ -251,6 +284,7 @@ impl PySolution {
             self.source,
             (self.newton_iterations, self.reprojection_iterations),
             (self.used, self.skipped),
+            self.cov.map(|(m, s)| (m.to_vec(), s)),
         );
         Ok((rebuild, PyTuple::new(py, [state.into_pyobject(py)?])?))
     }
@@ -266,12 +300,13 @@ type State = (
     String,
     (u32, u32),
     (usize, usize),
+    Option<(Vec<f64>, f64)>,
 );
 
 /// Rebuilds a `Solution` from `__reduce__`'s state (private; for pickle).
 #[pyfunction]
 pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
-    let (r, t, q, rvec, costs, flags, source, iters, counts) = state;
+    let (r, t, q, rvec, costs, flags, source, iters, counts, cov) = state;
     let arr = |v: Vec<f64>, n: usize| -> PyResult<Vec<f64>> {
         if v.len() == n {
             Ok(v)
@@ -282,6 +317,10 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
         }
     };
     let (r, t, q, rvec) = (arr(r, 9)?, arr(t, 3)?, arr(q, 4)?, arr(rvec, 3)?);
+    let cov = match cov {
+        Some((m, s)) => Some((arr(m, 36)?.try_into().expect("checked"), s)),
+        None => None,
+    };
     let source = SOURCES
         .iter()
         .find(|s| **s == source)
@@ -303,5 +342,6 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
         reprojection_iterations: iters.1,
         used: counts.0,
         skipped: counts.1,
+        cov,
     })
 }

@@ -9,7 +9,7 @@ use pyo3::types::PyList;
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
 use crate::errors::pnp_error;
-use crate::options::SolverOptions;
+use crate::options::{covariance_arg, SolverOptions};
 use crate::solution::PySolution;
 
 /// NaN or infinite input as the library reports it on normalised input (lengths first, then
@@ -69,6 +69,12 @@ pub(crate) fn check_finite(
 ///     reprojection_iterations: maximum Levenberg-Marquardt iterations (default 50).
 ///     exhaustive: refine every start of every generator (default False: a start certified
 ///         globally optimal ends the search).
+///     covariance: None (default: no covariance), "estimated" (the noise estimated from the
+///         residuals, ``sigma^2 = sum of squared residuals / (2 n - 6)``) or the noise standard
+///         deviation of each image coordinate (pixels with ``camera``, normalised units
+///         otherwise; pycolmap assumes 1 px): fills ``Solution.covariance``, the 6x6
+///         covariance of ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``,
+///         ``t = t_hat + delta_t`` (pycolmap's convention), and ``Solution.sigma``.
 ///
 /// Returns:
 ///     Solution: the pose (``R``, ``t``, ``rvec``, ``q``), its cost and diagnostics.
@@ -82,7 +88,7 @@ pub(crate) fn check_finite(
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, refinement = "ml",
     planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false))]
+    reprojection_iterations = None, exhaustive = false, covariance = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     py: Python<'_>,
@@ -96,6 +102,7 @@ pub(crate) fn solve(
     newton_step_tolerance: Option<f64>,
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
+    covariance: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PySolution> {
     let solver = SolverOptions {
         refinement,
@@ -105,7 +112,8 @@ pub(crate) fn solve(
         reprojection_iterations,
         exhaustive,
     }
-    .solver(py)?;
+    .solver(py)?
+    .covariance(covariance_arg(py, covariance)?);
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
@@ -134,7 +142,8 @@ pub(crate) fn solve(
 /// planar scenes several poses can explain the data about equally well; this lists them.
 ///
 /// ``world`` (N, 3) and ``image`` (N, 2) normalised, and the solver options, as ``solve``
-/// (no weights or camera: undistort pixels first with ``Camera.undistort``).
+/// (no weights or camera: undistort pixels first with ``Camera.undistort``), and
+/// ``covariance`` as ``solve`` (each pose's own).
 ///
 /// Returns:
 ///     list[Solution]: at least one.
@@ -144,7 +153,7 @@ pub(crate) fn solve(
 #[pyfunction]
 #[pyo3(signature = (world, image, *, refinement = "ml", planar = "auto",
     newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false))]
+    exhaustive = false, covariance = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_all<'py>(
     py: Python<'py>,
@@ -156,6 +165,7 @@ pub(crate) fn solve_all<'py>(
     newton_step_tolerance: Option<f64>,
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
+    covariance: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = SolverOptions {
         refinement,
@@ -165,7 +175,8 @@ pub(crate) fn solve_all<'py>(
         reprojection_iterations,
         exhaustive,
     }
-    .solver(py)?;
+    .solver(py)?
+    .covariance(covariance_arg(py, covariance)?);
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let all = py
