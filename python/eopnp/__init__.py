@@ -9,10 +9,12 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> cam = eopnp.Camera("SIMPLE_RADIAL", [1245.6, 600, 800, 0.06], 1200, 1600)
 >>> sol = eopnp.solve(world, pixels, camera=cam)
 >>> sol, info = eopnp.solve_ransac(world, pixels, camera=cam)   # info["inliers"]: bool mask
+>>> sol = eopnp.solve(world, pixels, camera=cam, covariance=1.0)  # sol.covariance: 6x6
+>>> results = eopnp.solve_batch([(world, pixels), ...], camera=cam, threads=2)
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
 read as float64; results are new float64 arrays. Errors raise the exceptions of
-``eopnp.PnpError``'s hierarchy (see ``eopnp._errors``). Every solve releases the GIL.
+``eopnp.PnpError``'s hierarchy (see ``eopnp._errors``). Every solve releases the GIL; the batch functions run on several threads.
 """
 
 from ._errors import (
@@ -35,11 +37,14 @@ from ._eopnp import (
     Registration,
     Solution,
     __version__,
+    problem_seed,
     read_colmap_model,
     register_image,
     solve,
     solve_all,
+    solve_batch,
     solve_ransac,
+    solve_ransac_batch,
 )
 
 __all__ = [
@@ -60,9 +65,12 @@ __all__ = [
     "Solution",
     "UnknownIdError",
     "__version__",
+    "problem_seed",
     "read_colmap_model",
     "register_image",
     "solve",
     "solve_all",
+    "solve_batch",
     "solve_ransac",
+    "solve_ransac_batch",
 ]

@@ -7,7 +7,7 @@ inlier masks). Poses map world to camera: ``x_cam = R @ X + t``.
 """
 
 import os
-from typing import Any, Literal, Mapping, TypedDict, Union, final
+from typing import Any, Literal, Mapping, Sequence, TypedDict, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -92,8 +92,19 @@ class Solution:
     @property
     def skipped(self) -> int:
         """Correspondences left out because their pixel could not be undistorted."""
+    @property
+    def covariance(self) -> _F64Array | None:
+        """The pose's 6x6 covariance (``covariance=`` of ``solve``), or None: of
+        ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``, ``t = t_hat + delta_t``
+        (pycolmap's ``return_covariance=True`` convention; ``delta_q`` is half the rotation
+        vector, so the covariance of ``[rotation vector, t]`` has the rotation block times 4
+        and the cross blocks times 2)."""
+    @property
+    def sigma(self) -> float | None:
+        """The noise standard deviation the covariance assumes (given or estimated), or
+        None."""
     def as_dict(self) -> dict[str, Any]:
-        """Every field as a dict (arrays for R, t, rvec, q)."""
+        """Every field as a dict (arrays for R, t, rvec, q, covariance)."""
 
 @final
 class Camera:
@@ -181,6 +192,10 @@ class RansacOptions:
     def as_dict(self) -> dict[str, Any]: ...
 
 _RansacArg = Union[RansacOptions, Mapping[str, Any], None]
+_Covariance = Union[Literal["estimated"], float, None]
+_Problem = Union[
+    tuple[_ArrayLike, _ArrayLike], tuple[_ArrayLike, _ArrayLike, _ArrayLike | None]
+]
 
 class _RansacInfo(TypedDict):
     inliers: npt.NDArray[np.bool_]
@@ -288,10 +303,15 @@ def solve(
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
+    covariance: _Covariance = None,
 ) -> Solution:
     """The camera pose from N >= 4 correspondences: world (N, 3), image (N, 2) normalised, or
     pixels with ``camera``; optional weights (N,) >= 0. Default: EOPnP + maximum-likelihood
     refinement. Releases the GIL.
+
+    ``covariance``: None, "estimated" (noise from the residuals) or the noise standard
+    deviation in image units (pixels with ``camera``): fills ``Solution.covariance`` and
+    ``Solution.sigma``.
 
     Raises InvalidInputError (InputTypeError), DegenerateError, NoSolutionError,
     InvalidOptionError."""
@@ -306,8 +326,52 @@ def solve_all(
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
+    covariance: _Covariance = None,
 ) -> list[Solution]:
     """Every distinct local minimum, best first (normalised image points)."""
+
+def solve_batch(
+    problems: Sequence[_Problem],
+    *,
+    camera: Camera | Sequence[Camera] | None = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    covariance: _Covariance = None,
+    threads: int | None = None,
+) -> list[Solution | PnpError]:
+    """``solve`` on many problems, ``(world, image)`` or ``(world, image, weights)`` tuples,
+    in parallel (``threads``: None for rayon's default, or a count), the GIL released.
+    ``camera``: one for all problems or one per problem (pixels), or None (normalised).
+
+    Returns one entry per problem: its ``Solution``, or the exception ``solve`` would raise
+    for it (an instance, not raised). Equal to ``solve`` one by one, whatever ``threads``.
+    Raises InvalidInputError (InputTypeError) for a malformed batch before solving anything,
+    InvalidOptionError for bad options."""
+
+def solve_ransac_batch(
+    problems: Sequence[_Problem],
+    *,
+    camera: Camera | Sequence[Camera] | None = None,
+    focal: float | tuple[float, float] | None = None,
+    ransac: _RansacArg = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    threads: int | None = None,
+) -> list[tuple[Solution, _RansacInfo] | PnpError]:
+    """``solve_ransac`` on many problems in parallel: entry ``i`` is what ``solve_ransac``
+    returns with seed ``problem_seed(ransac.seed, i)`` (or the exception instance it would
+    raise, e.g. NoConsensusError), whatever ``threads``."""
+
+def problem_seed(base: int, index: int) -> int:
+    """The RANSAC seed of problem ``index`` of a batch with base seed ``base``."""
 
 def solve_ransac(
     world: _ArrayLike,
@@ -364,9 +428,12 @@ __all__ = [
     "Solution",
     "UnknownIdError",
     "__version__",
+    "problem_seed",
     "read_colmap_model",
     "register_image",
     "solve",
     "solve_all",
+    "solve_batch",
     "solve_ransac",
+    "solve_ransac_batch",
 ]

@@ -7,14 +7,13 @@
 //! while the GIL is released), runs the library with the GIL released, and maps each error
 //! to the exception class of its `PnpError` family.
 //!
-//! Room for what issue 16 adds later: a `solve_batch` is one more function over lists of the
-//! same inputs (`convert`), one `detach` around the crate's batch call, returning
-//! `Solution`s (plain data, picklable, so they cross process boundaries); a `covariance=`
-//! keyword is one more field of `options::SolverOptions` and an optional field of
-//! `solution::PySolution` (None when not asked for).
+//! `solve_batch` and `solve_ransac_batch` (`batch`) run the crate's batch API (feature
+//! `rayon`) with the GIL released for the whole batch; `covariance=` fills
+//! `Solution.covariance` through `Solver::covariance`.
 
 use pyo3::prelude::*;
 
+mod batch;
 mod camera;
 mod colmap;
 mod convert;
@@ -31,6 +30,9 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve::solve_all, m)?)?;
     m.add_function(wrap_pyfunction!(solve::_time_solve, m)?)?;
     m.add_function(wrap_pyfunction!(ransac::solve_ransac, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::solve_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::solve_ransac_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::problem_seed, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::read_colmap_model, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::register_image, m)?)?;
     m.add_function(wrap_pyfunction!(solution::_solution_from_state, m)?)?;

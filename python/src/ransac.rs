@@ -2,7 +2,7 @@
 //! scoring with an SPRT, EOPnP local optimisation and final fit, seeded).
 
 use eopnp::camera::Camera;
-use eopnp::ransac::Ransac;
+use eopnp::ransac::{Ransac, RansacSolution};
 use nalgebra::{Point2, Point3};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -234,7 +234,7 @@ pub(crate) fn ransac_arg(py: Python<'_>, arg: Option<&Bound<'_, PyAny>>) -> PyRe
 }
 
 /// `focal=`: one number (fx = fy) or two, `(fx, fy)`.
-fn focal_arg(py: Python<'_>, f: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+pub(crate) fn focal_arg(py: Python<'_>, f: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
     if let Ok(v) = f.extract::<f64>() {
         return Ok((v, v));
     }
@@ -381,6 +381,18 @@ pub(crate) fn solve_ransac<'py>(
             (None, Some(f)) => py.detach(|| ransac.estimate(&solver, &w, &img, f, wts.as_deref())),
         };
     let r = result.map_err(|e| pnp_error(py, &e))?;
+    ransac_result(py, &r, &w, &img, cam, focal)
+}
+
+/// `solve_ransac`'s return value: the solution and the info dict.
+pub(crate) fn ransac_result<'py>(
+    py: Python<'py>,
+    r: &RansacSolution,
+    w: &[Point3<f64>],
+    img: &[Point2<f64>],
+    cam: Option<&Camera>,
+    focal: Option<(f64, f64)>,
+) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
     let sol = PySolution::from(&r.solution);
     let focal = cam.map_or(focal.unwrap_or((1.0, 1.0)), Camera::intrinsics_scale);
     let info = PyDict::new(py);
@@ -393,7 +405,7 @@ pub(crate) fn solve_ransac<'py>(
     info.set_item("final_fits", r.stats.final_fits)?;
     info.set_item("cost", r.solution.cost)?;
     info.set_item("rmse", r.solution.reprojection_rmse)?;
-    info.set_item("rmse_px", rmse_px(&sol, &w, &img, &r.inliers, cam, focal))?;
+    info.set_item("rmse_px", rmse_px(&sol, w, img, &r.inliers, cam, focal))?;
     info.set_item("micros", r.stats.micros)?;
     Ok((sol, info))
 }
