@@ -3,14 +3,15 @@
 #
 #   1. `cargo test --workspace --release --all-features`: the Rust workspace.
 #   2. The Python package (python/): builds the wheel (`maturin build --release`, abi3), installs
-#      it into a fresh virtual environment with numpy, pytest and mypy (for stubtest), and runs
-#      python/tests there (from outside python/, so that the installed wheel is what is
+#      it into a fresh virtual environment with numpy, pytest, mypy (for stubtest) and
+#      dask[distributed] (the cluster example's test), and pycolmap when it installs (the
+#      covariance comparison; skipped without it), and runs python/tests there (from outside python/, so that the installed wheel is what is
 #      imported). The tests that compare with the CLI use the release binary of step 1
 #      (EOPNP_CLI).
 #
 # Usage: scripts/test.sh [--python]   (--python: step 2 only, after building the CLI)
 #
-# Needs python3 (>= 3.10, with venv and pip) and PyPI for maturin, numpy, pytest and mypy.
+# Needs python3 (>= 3.10, with venv and pip) and PyPI for maturin, numpy, pytest, mypy and dask.
 # Scratch directories: target/python-test/ (the wheel and the virtual environments; the
 # cargo target of python/ is python/target unless CARGO_TARGET_DIR is set).
 set -euo pipefail
@@ -53,7 +54,11 @@ built=$(date +%s)
 
 echo "== python package: install $(basename "$wheel") into a fresh venv, run pytest"
 "$python" -m venv "$work/test-venv"
-"$work/test-venv/bin/pip" install --quiet --disable-pip-version-check "$wheel" numpy pytest mypy
+"$work/test-venv/bin/pip" install --quiet --disable-pip-version-check "$wheel" numpy pytest mypy \
+  "dask[distributed]"
+# pycolmap: a comparison only (test_covariance.py), not a dependency; 4 s from PyPI here.
+"$work/test-venv/bin/pip" install --quiet --disable-pip-version-check pycolmap ||
+  echo "pycolmap did not install: the covariance comparison with it is skipped"
 # From the repository root, not python/: `import eopnp` must be the installed wheel.
 "$work/test-venv/bin/python" -c 'import eopnp, sys; print("eopnp", eopnp.__version__, "from", eopnp.__file__); sys.exit("eopnp imported from the source tree" if "site-packages" not in eopnp.__file__ else 0)'
 "$work/test-venv/bin/pytest" -q -p no:cacheprovider python/tests
