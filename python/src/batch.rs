@@ -14,6 +14,7 @@ use eopnp::batch::{problem_seed as seed_of, Problem};
 use eopnp::camera::Camera;
 use eopnp::PnpError;
 use nalgebra::{Point2, Point3};
+use numpy::{PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
 use rayon::ThreadPool;
@@ -95,6 +96,29 @@ fn cameras<'py>(
     Ok((cams, (0..n).map(Some).collect()))
 }
 
+/// The rows of a C-contiguous `float64` array of shape `(N, C)`, copied; `None` for anything
+/// else (then `convert`'s general path, with its checks and messages, reads it). The common
+/// case of a batch, without the general path's per-array overhead (the serial part of a
+/// batch call).
+fn fast_rows<const C: usize, T>(
+    obj: &Bound<'_, PyAny>,
+    f: impl Fn(&[f64; C]) -> T,
+) -> Option<Vec<T>> {
+    let a = obj.cast::<PyArray2<f64>>().ok()?;
+    if a.shape()[1] != C || !a.is_c_contiguous() {
+        return None;
+    }
+    // SAFETY: the GIL is held and the data is copied before it is released, so nothing
+    // mutates the array meanwhile (the same guarantee as a readonly borrow, without
+    // registering one).
+    let data = unsafe { a.as_slice() }.ok()?;
+    Some(
+        data.chunks_exact(C)
+            .map(|r| f(r.try_into().expect("chunks of C")))
+            .collect(),
+    )
+}
+
 /// Converts every problem (`(world, image)` or `(world, image, weights)`), raising on the first
 /// malformed one with its index in the message.
 fn convert<'py>(
@@ -133,8 +157,14 @@ fn convert<'py>(
                 ),
             ));
         }
-        let world = points3(&parts[0], &format!("problems[{i}] world"))?;
-        let image = points2(&parts[1], &format!("problems[{i}] image"))?;
+        let world = match fast_rows(&parts[0], |r: &[f64; 3]| Point3::new(r[0], r[1], r[2])) {
+            Some(w) => w,
+            None => points3(&parts[0], &format!("problems[{i}] world"))?,
+        };
+        let image = match fast_rows(&parts[1], |r: &[f64; 2]| Point2::new(r[0], r[1])) {
+            Some(m) => m,
+            None => points2(&parts[1], &format!("problems[{i}] image"))?,
+        };
         let weights = match parts.get(2).filter(|w| !w.is_none()) {
             Some(w) => Some(vector(w, &format!("problems[{i}] weights"), false)?),
             None => None,

@@ -145,3 +145,22 @@ def test_batch_releases_gil(rng):
     during = [t for t in ticks if start < t < end]
     # The other thread ran throughout the batch (it would not while the GIL was held).
     assert len(during) >= 0.2 * (end - start) / 0.001 or end - start < 0.02
+
+
+def test_batch_array_layouts(rng):
+    """Any dtype, byte order and layout gives the same result as solve (the batch's fast
+    path takes C-contiguous float64 only)."""
+    world, image = problem(rng, 15, sigma_px=1.0)[:2]
+    want = eopnp.solve(world, image)
+    variants = [
+        (world, image),
+        (world.astype(">f8"), image.astype(">f8")),
+        (np.asfortranarray(world), np.asfortranarray(image)),
+        (np.repeat(world, 2, axis=0)[::2], np.repeat(image, 2, axis=0)[::2]),
+        (world.astype(np.float32).astype(float), image),
+        (world.tolist(), image.tolist()),
+    ]
+    got = eopnp.solve_batch(variants, threads=2)
+    for k, (v, g) in enumerate(zip(variants, got)):
+        assert g == eopnp.solve(*v), k
+    assert got[1] == got[2] == got[3] == got[5] == want
