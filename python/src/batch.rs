@@ -54,12 +54,15 @@ fn problems_error(py: Python<'_>, message: String) -> PyErr {
     )
 }
 
+/// The batch's cameras, and each problem's index into them.
+type Cameras<'py> = (Vec<Bound<'py, PyCamera>>, Vec<Option<usize>>);
+
 /// `camera=`: None, one `Camera` for every problem, or a sequence of one per problem.
 fn cameras<'py>(
     py: Python<'py>,
     camera: Option<&Bound<'py, PyAny>>,
     n: usize,
-) -> PyResult<(Vec<Bound<'py, PyCamera>>, Vec<Option<usize>>)> {
+) -> PyResult<Cameras<'py>> {
     let Some(c) = camera.filter(|c| !c.is_none()) else {
         return Ok((vec![], vec![None; n]));
     };
