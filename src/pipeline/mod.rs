@@ -185,9 +185,9 @@ pub(crate) fn run(
     out.finish(&minima[pick], opts.refinement, reproj)
 }
 
-/// `Solver::refine`: S1 and S2 (validation, the working frame, `M` for the diagnostics), then
-/// S9 from the caller's world pose `(r, t)` and S8: the minimum of the reprojection error in
-/// the basin of that pose. No search (S3-S7).
+/// `Solver::refine`: S1 and S2 (validation, the working frame, `M`), S6 from the caller's
+/// rotation `r`, then S9 and S8: the minimum of the reprojection error in the basin of the
+/// pose. No search (S3-S5, S7).
 pub(crate) fn refine(
     opts: &Options,
     world: &[Point3<f64>],
@@ -216,15 +216,21 @@ pub(crate) fn refine(
     // The world pose in the working frame (the inverse of `WorkingFrame::to_world`).
     let r_work = r * fr.rw.transpose();
     let t_work = (t + r * fr.c) / fr.d;
-    let m = Minimum {
-        r: r_work,
-        t: t_work,
-        f: newton::cost_at(&m45, &r_work),
-        source: CandidateSource::Initial,
-        planar: false,
-        iterations: 0,
-        cheirality: None,
-    };
+    // S6 from the prior's rotation: damped Newton on the algebraic cost, O(1) per iteration
+    // (M is already accumulated), to the algebraic minimum of the prior's basin, whose
+    // translation follows from its rotation; S9 then needs the few passes it needs after a
+    // full search. If Newton fails, S9 starts at the prior itself.
+    let m = Search::new(opts, &sys, &m45, scale)
+        .refine(&r_work, CandidateSource::Initial)
+        .unwrap_or(Minimum {
+            r: r_work,
+            t: t_work,
+            f: newton::cost_at(&m45, &r_work),
+            source: CandidateSource::Initial,
+            planar: false,
+            iterations: 0,
+            cheirality: None,
+        });
     out.finish(&m, Refinement::Reprojection, reproj)
 }
 
