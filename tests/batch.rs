@@ -18,7 +18,7 @@ fn owned(k: u64) -> Owned {
     let mut p = Synth::generate(&ProblemOptions {
         n: 10 + (k % 40) as usize,
         sigma_px: 1.0,
-        scene: if k % 5 == 0 {
+        scene: if k.is_multiple_of(5) {
             Scene::Planar
         } else {
             Scene::General

@@ -104,10 +104,13 @@ fn colmap_images_with_wrong_correspondences() {
         let image = model.images.get_mut(&id).unwrap();
         let observed: Vec<u64> = image.points2d.iter().filter_map(|o| o.1).collect();
         let shift = observed.len() / 2;
-        let mut k = 0;
-        for obs in image.points2d.iter_mut().filter(|o| o.1.is_some()) {
+        for (k, obs) in image
+            .points2d
+            .iter_mut()
+            .filter(|o| o.1.is_some())
+            .enumerate()
+        {
             obs.1 = Some(observed[(k + shift) % observed.len()]);
-            k += 1;
         }
     }
     for &id in &ids {

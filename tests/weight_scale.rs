@@ -56,7 +56,7 @@ fn power_of_two_scale_gives_the_same_pose() {
                 let wc: Vec<f64> = w.iter().map(|x| x * c).collect();
                 let exact = wc.iter().zip(&w).all(|(a, b)| a / c == *b);
                 let reference = if exact {
-                    base.clone()
+                    base
                 } else {
                     // Bring the rounded weights back to the normal range exactly.
                     let back: Vec<f64> = wc.iter().map(|x| x * pow2(530) * pow2(530)).collect();

@@ -57,7 +57,10 @@ fn assert_true_pose(res: &Result<crate::Solution, PnpError>, r_true: &Matrix3<f6
 
 /// The problems the solver runs on under a lowered bound: N = 4, 5, 6, 10, 50 in 3D and
 /// N = 10 planar, seeds 0..10.
-fn problems() -> impl Iterator<Item = (String, Vec<Point3<f64>>, Vec<Point2<f64>>, Matrix3<f64>)> {
+/// A named problem: world points, image points, true rotation.
+type Named = (String, Vec<Point3<f64>>, Vec<Point2<f64>>, Matrix3<f64>);
+
+fn problems() -> impl Iterator<Item = Named> {
     [
         (4, false),
         (5, false),
