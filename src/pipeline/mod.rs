@@ -80,13 +80,15 @@ pub(crate) fn run(
     all: Option<&mut Solutions>,
 ) -> Result<Solution, PnpError> {
     // S1 + S2: the working frame, with the moment sums in it; M and G.
-    let fr = frame::working_frame(world, image, weights, opts.align_world_axes)?;
-    let sys = fr.sums.system(false).ok_or(PnpError::NoSolution)?;
-    let scale = sys.trace;
-    if !(scale > 0.0 && scale.is_finite()) {
-        return Err(PnpError::NoSolution);
-    }
-    let m45 = moments::m_upper(&sys.m);
+    let prep = prepare(opts, world, image, weights)?;
+    let Prepared {
+        fr,
+        sys,
+        m45,
+        scale,
+        probe,
+    } = &prep;
+    let scale = *scale;
     // S3: the branches.
     let (nonplanar, planar) = match opts.planar {
         PlanarDetection::Auto => (fr.ratio >= NONPLANAR_MIN_RATIO, fr.ratio < PLANAR_MAX_RATIO),
@@ -94,17 +96,8 @@ pub(crate) fn run(
         PlanarDetection::NonPlanar => (true, false),
     };
     let planar_sys = if planar { fr.sums.system(true) } else { None };
-    let probe = nullspace::probe(&sys.m, scale);
-    let out = Output {
-        world,
-        image,
-        weights,
-        fr: &fr,
-        m45: &m45,
-        degenerate: probe.degenerate || fr.small_image,
-        scale,
-    };
-    let mut search = Search::new(opts, &sys, &m45, scale);
+    let out = prep.output(world, image, weights);
+    let mut search = Search::new(opts, sys, m45, scale);
     let is_certified = |r: &Matrix3<f64>| {
         certificate::global_minimum(&sys.m, r, scale)
             || planar_sys
@@ -119,10 +112,10 @@ pub(crate) fn run(
     let early_exit = !opts.exhaustive && all.is_none();
     if early_exit {
         let start = if nonplanar && !planar {
-            nullspace::first_start(&sys.m, &probe, scale).map(|r| (r, CandidateSource::Case1))
+            nullspace::first_start(&sys.m, probe, scale).map(|r| (r, CandidateSource::Case1))
         } else if planar && !nonplanar {
             planar_sys.as_ref().and_then(|sp| {
-                planar::first_start(sp, world, weights, &fr, scale)
+                planar::first_start(sp, world, weights, fr, scale)
                     .map(|r| (r, CandidateSource::Planar1))
             })
         } else {
@@ -130,7 +123,7 @@ pub(crate) fn run(
         };
         if let Some((r0, source)) = start {
             if let Some(mut m) = search.refine(&r0, source) {
-                if is_certified(&m.r) && select::in_front(world, weights, &fr, &m.r, &m.t) {
+                if is_certified(&m.r) && select::in_front(world, weights, fr, &m.r, &m.t) {
                     m.cheirality = Some(true);
                     return out.finish(&m, opts.refinement, reproj);
                 }
@@ -145,7 +138,7 @@ pub(crate) fn run(
         nullspace::candidates(&sys.m, &mut cands)?;
     }
     if let Some(sp) = &planar_sys {
-        planar::candidates(sp, world, weights, &fr, scale, &mut cands);
+        planar::candidates(sp, world, weights, fr, scale, &mut cands);
     }
     nullspace::extra_starts(&mut cands);
 
@@ -153,7 +146,7 @@ pub(crate) fn run(
     let mut init: ArrayVec<(f64, usize), MAX_CANDIDATES> = cands
         .iter()
         .enumerate()
-        .map(|(i, c)| (newton::cost_at(&m45, &c.r), i))
+        .map(|(i, c)| (newton::cost_at(m45, &c.r), i))
         .collect();
     init.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     for &(_, i) in &init {
@@ -164,7 +157,7 @@ pub(crate) fn run(
         }
         if let Some(mut m) = search.refine(&c.r, c.source) {
             // A certified global minimum with most points in front is S7's pick.
-            if early_exit && is_certified(&m.r) && select::in_front(world, weights, &fr, &m.r, &m.t)
+            if early_exit && is_certified(&m.r) && select::in_front(world, weights, fr, &m.r, &m.t)
             {
                 m.cheirality = Some(true);
                 return out.finish(&m, opts.refinement, reproj);
@@ -177,12 +170,66 @@ pub(crate) fn run(
         return Err(PnpError::NoSolution);
     }
     if let Some(all) = all {
-        select::count_all(minima, world, weights, &fr);
+        select::count_all(minima, world, weights, fr);
         return output::rank_all(&out, minima, opts.refinement, reproj, all);
     }
     // S7, then S9 and S8.
-    let pick = select::pick(minima, world, weights, &fr);
+    let pick = select::pick(minima, world, weights, fr);
     out.finish(&minima[pick], opts.refinement, reproj)
+}
+
+/// What every driver needs from S1 and S2: the working frame, `M` and `G`, the upper triangle
+/// of `M`, its scale `trace(M)` and the degeneracy probe.
+struct Prepared {
+    fr: frame::WorkingFrame,
+    sys: System,
+    m45: [f64; 45],
+    scale: f64,
+    probe: nullspace::Probe,
+}
+
+/// S1 + S2: the working frame, with the moment sums in it; `M` and `G`.
+fn prepare(
+    opts: &Options,
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+) -> Result<Prepared, PnpError> {
+    let fr = frame::working_frame(world, image, weights, opts.align_world_axes)?;
+    let sys = fr.sums.system(false).ok_or(PnpError::NoSolution)?;
+    let scale = sys.trace;
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(PnpError::NoSolution);
+    }
+    let m45 = moments::m_upper(&sys.m);
+    let probe = nullspace::probe(&sys.m, scale);
+    Ok(Prepared {
+        fr,
+        sys,
+        m45,
+        scale,
+        probe,
+    })
+}
+
+impl Prepared {
+    /// What S8 and S9 need of the problem.
+    fn output<'a>(
+        &'a self,
+        world: &'a [Point3<f64>],
+        image: &'a [Point2<f64>],
+        weights: Option<&'a [f64]>,
+    ) -> Output<'a> {
+        Output {
+            world,
+            image,
+            weights,
+            fr: &self.fr,
+            m45: &self.m45,
+            degenerate: self.probe.degenerate || self.fr.small_image,
+            scale: self.scale,
+        }
+    }
 }
 
 /// `Solver::refine`: S1 and S2 (validation, the working frame, `M`), S6 from the caller's
@@ -196,23 +243,9 @@ pub(crate) fn refine(
     reproj: &ReprojOptions,
     (r, t): (&Matrix3<f64>, &nalgebra::Vector3<f64>),
 ) -> Result<Solution, PnpError> {
-    let fr = frame::working_frame(world, image, weights, opts.align_world_axes)?;
-    let sys = fr.sums.system(false).ok_or(PnpError::NoSolution)?;
-    let scale = sys.trace;
-    if !(scale > 0.0 && scale.is_finite()) {
-        return Err(PnpError::NoSolution);
-    }
-    let m45 = moments::m_upper(&sys.m);
-    let probe = nullspace::probe(&sys.m, scale);
-    let out = Output {
-        world,
-        image,
-        weights,
-        fr: &fr,
-        m45: &m45,
-        degenerate: probe.degenerate || fr.small_image,
-        scale,
-    };
+    let prep = prepare(opts, world, image, weights)?;
+    let (fr, m45) = (&prep.fr, &prep.m45);
+    let out = prep.output(world, image, weights);
     // The world pose in the working frame (the inverse of `WorkingFrame::to_world`).
     let r_work = r * fr.rw.transpose();
     let t_work = (t + r * fr.c) / fr.d;
@@ -220,12 +253,12 @@ pub(crate) fn refine(
     // (M is already accumulated), to the algebraic minimum of the prior's basin, whose
     // translation follows from its rotation; S9 then needs the few passes it needs after a
     // full search. If Newton fails, S9 starts at the prior itself.
-    let m = Search::new(opts, &sys, &m45, scale)
+    let m = Search::new(opts, &prep.sys, m45, prep.scale)
         .refine(&r_work, CandidateSource::Initial)
         .unwrap_or(Minimum {
             r: r_work,
             t: t_work,
-            f: newton::cost_at(&m45, &r_work),
+            f: newton::cost_at(m45, &r_work),
             source: CandidateSource::Initial,
             planar: false,
             iterations: 0,
