@@ -295,6 +295,16 @@ fn infinite_rmse_point_in_focal_plane() {
     ));
 }
 
+/// Found after the weights became scale-free: weights near the top of the f64 range on a
+/// pose with large residuals, so the cost in S1's weight unit was finite but the caller's
+/// cost (times the unit) overflowed to +inf. Fixed: the cost saturates at `f64::MAX`.
+#[test]
+fn infinite_cost_huge_weights() {
+    harness::solve(include_bytes!(
+        "../fuzz/regressions/solve/infinite-cost-huge-weights"
+    ));
+}
+
 /// A binary COLMAP model with a pixel at 4.4e142 and a point at depth 1.8e-307: registration
 /// reported an infinite cost (seen while the S9 rewrite was in progress; kept as a
 /// regression input for the registration path).

@@ -28,7 +28,8 @@ pub struct Solution {
     /// quaternion round trip).
     pub rotation: Matrix3<f64>,
     /// The minimised cost: the (weighted) sum of squared normalised reprojection residuals in
-    /// [`Refinement::Reprojection`] mode, `f / trace(M)` in [`Refinement::Algebraic`] mode.
+    /// [`Refinement::Reprojection`] mode (saturated at `f64::MAX` when weights near the top of
+    /// the f64 range make it overflow), `f / trace(M)` in [`Refinement::Algebraic`] mode.
     pub cost: f64,
     /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (docs/algorithm.md S7).
     pub algebraic_cost: f64,
@@ -199,7 +200,9 @@ impl Output<'_> {
             cost: if mode == Refinement::Algebraic {
                 f / self.scale
             } else {
-                e * self.fr.weight_unit
+                // The caller's cost; weights near the top of the f64 range can make it
+                // overflow while the pose is exact: it saturates at f64::MAX.
+                (e * self.fr.weight_unit).min(f64::MAX)
             },
             algebraic_cost: f / self.scale,
             // Infinite (not NaN) when a point lies in the focal plane (depth 0) of the pose,
