@@ -283,59 +283,31 @@ impl Camera {
         d
     }
 
+    /// The camera's projection with its parameters unpacked once, for per-point loops.
+    pub(crate) fn projector(&self) -> Projector {
+        Projector {
+            focal: self.intrinsics_scale(),
+            centre: self.principal_point(),
+            fisheye: self.model.is_fisheye(),
+            distortion: self.distortion(),
+        }
+    }
+
     /// The pixel of a normalised image point `(x/z, y/z)` (COLMAP's `ImgFromCam` with
     /// `w = 1`). Non-finite input gives non-finite output.
     #[must_use]
     pub fn project(&self, normalised: Point2<f64>) -> Point2<f64> {
-        let (mut u, mut v) = (normalised.x, normalised.y);
-        if self.model.is_fisheye() {
-            let r = u.hypot(v);
-            if r > f64::EPSILON {
-                let s = r.atan() / r;
-                u *= s;
-                v *= s;
-            }
-        }
-        let ((xd, yd), _) = self.distortion().apply(u, v);
-        let (fx, fy) = self.intrinsics_scale();
-        let (cx, cy) = self.principal_point();
-        Point2::new(fx * xd + cx, fy * yd + cy)
+        let (px, py) = self.projector().project(normalised.x, normalised.y);
+        Point2::new(px, py)
     }
 
     /// The Jacobian `d pixel / d normalised` of [`Camera::project`] at a normalised point,
     /// row-major `[[dpx/dx, dpx/dy], [dpy/dx, dpy/dy]]`, for weighting residuals in pixels.
     #[must_use]
     pub fn project_jacobian(&self, normalised: Point2<f64>) -> [f64; 4] {
-        let (fx, fy) = self.intrinsics_scale();
-        let (x, y) = (normalised.x, normalised.y);
-        // Fisheye models: chain rule through (u, v) = s(r) (x, y), s = atan(r) / r.
-        let (u, v, jf) = if self.model.is_fisheye() {
-            let r2 = x * x + y * y;
-            let r = r2.sqrt();
-            if r > 1e-8 {
-                let s = r.atan() / r;
-                // ds/dr = (r / (1 + r^2) - atan r) / r^2; d(s x)/dx = s + x^2 s'(r) / r.
-                let ds = (r / (1.0 + r2) - r.atan()) / r2;
-                let q = ds / r;
-                (
-                    s * x,
-                    s * y,
-                    [s + q * x * x, q * x * y, q * x * y, s + q * y * y],
-                )
-            } else {
-                (x, y, [1.0, 0.0, 0.0, 1.0])
-            }
-        } else {
-            (x, y, [1.0, 0.0, 0.0, 1.0])
-        };
-        let (_, jd) = self.distortion().apply(u, v);
-        let m = [
-            jd[0] * jf[0] + jd[1] * jf[2],
-            jd[0] * jf[1] + jd[1] * jf[3],
-            jd[2] * jf[0] + jd[3] * jf[2],
-            jd[2] * jf[1] + jd[3] * jf[3],
-        ];
-        [fx * m[0], fx * m[1], fy * m[2], fy * m[3]]
+        self.projector()
+            .project_with_jacobian(normalised.x, normalised.y)
+            .1
     }
 
     /// The normalised image point `(x/z, y/z)` of a pixel: inverts [`Camera::project`].
@@ -411,6 +383,75 @@ impl Camera {
                 pixel: (pixel.x, pixel.y),
             })
         }
+    }
+}
+
+/// A camera's projection, normalised point to pixel, with the parameters unpacked once
+/// ([`Camera::projector`]): what the per-point loops of the pixel-space refinement call.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Projector {
+    focal: (f64, f64),
+    centre: (f64, f64),
+    fisheye: bool,
+    distortion: Distortion,
+}
+
+impl Projector {
+    /// The pixel of the normalised point `(x, y)`.
+    #[inline]
+    pub(crate) fn project(&self, x: f64, y: f64) -> (f64, f64) {
+        let (mut u, mut v) = (x, y);
+        if self.fisheye {
+            let r = (x * x + y * y).sqrt();
+            if r > f64::EPSILON {
+                let s = r.atan() / r;
+                u *= s;
+                v *= s;
+            }
+        }
+        let ((xd, yd), _) = self.distortion.apply(u, v);
+        (
+            self.focal.0 * xd + self.centre.0,
+            self.focal.1 * yd + self.centre.1,
+        )
+    }
+
+    /// The pixel of the normalised point `(x, y)` and the Jacobian `d pixel / d (x, y)`,
+    /// row-major.
+    #[inline]
+    pub(crate) fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
+        let (fx, fy) = self.focal;
+        // Fisheye models: chain rule through (u, v) = s(r) (x, y), s = atan(r) / r.
+        let (u, v, jf) = if self.fisheye {
+            let r2 = x * x + y * y;
+            let r = r2.sqrt();
+            if r > 1e-8 {
+                let at = r.atan();
+                let s = at / r;
+                // ds/dr = (r / (1 + r^2) - atan r) / r^2; d(s x)/dx = s + x^2 s'(r) / r.
+                let q = (r / (1.0 + r2) - at) / (r2 * r);
+                (
+                    s * x,
+                    s * y,
+                    [s + q * x * x, q * x * y, q * x * y, s + q * y * y],
+                )
+            } else {
+                (x, y, [1.0, 0.0, 0.0, 1.0])
+            }
+        } else {
+            (x, y, [1.0, 0.0, 0.0, 1.0])
+        };
+        let ((xd, yd), jd) = self.distortion.apply(u, v);
+        let m = [
+            jd[0] * jf[0] + jd[1] * jf[2],
+            jd[0] * jf[1] + jd[1] * jf[3],
+            jd[2] * jf[0] + jd[3] * jf[2],
+            jd[2] * jf[1] + jd[3] * jf[3],
+        ];
+        (
+            (fx * xd + self.centre.0, fy * yd + self.centre.1),
+            [fx * m[0], fx * m[1], fy * m[2], fy * m[3]],
+        )
     }
 }
 
