@@ -76,7 +76,7 @@ pub use numeric::roots;
 #[cfg(eopnp_bench)]
 #[doc(hidden)]
 pub use pipeline::bench_hooks;
-pub use pipeline::{CandidateSource, PlanarDetection, Refinement, Solution, Solutions};
+pub use pipeline::{CandidateSource, Loss, PlanarDetection, Refinement, Solution, Solutions};
 pub use robust::{p3p, ransac};
 pub use solver::{solve, Solver};
 

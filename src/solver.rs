@@ -3,11 +3,12 @@
 
 use nalgebra::{Isometry3, Matrix3, Point2, Point3};
 
-use crate::camera::Camera;
+use crate::camera::{Camera, Projector};
 use crate::covariance::{pose_covariance, Metric, NoiseModel};
 use crate::error::{InputKind, PnpError};
 use crate::pipeline::{
-    self, Options, PlanarDetection, Refinement, ReprojOptions, Solution, Solutions,
+    self, Loss, Options, PixelInputs, PlanarDetection, Refinement, ReprojOptions, Solution,
+    Solutions,
 };
 
 /// Solver options, as a builder. `Solver::default()` is the recommended configuration: EOPnP
@@ -125,6 +126,41 @@ impl Solver {
         self
     }
 
+    /// The loss of the final refinement ([`Loss`]; default [`Loss::Squared`], the
+    /// maximum-likelihood pose for Gaussian noise). A robust loss ([`Loss::Huber`],
+    /// [`Loss::Cauchy`]) is applied by S10 to the pixel residuals through the camera (pixel
+    /// input: [`Solver::solve_pixels`], [`Solver::refine_pixels`], RANSAC's fits) or to the
+    /// normalised residuals (normalised input), after S9. An unusable scale (not positive,
+    /// or with a square outside the normal f64 range) is [`PnpError::InvalidOption`]
+    /// (`"loss"`) at solve time.
+    ///
+    /// ```
+    /// use eopnp::{Loss, Solver};
+    /// # use nalgebra::{Point2, Point3, Vector3};
+    /// # let t = Vector3::new(0.1, -0.2, 6.0);
+    /// # let mut world = vec![
+    /// #     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    /// #     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// #     Point3::new(0.5, -0.7, 0.3), Point3::new(-0.8, 0.1, 0.6),
+    /// # ];
+    /// # let mut image: Vec<Point2<f64>> = world
+    /// #     .iter()
+    /// #     .map(|x| { let p = x.coords + t; Point2::new(p.x / p.z, p.y / p.z) })
+    /// #     .collect();
+    /// // One gross outlier (0.05 normalised units, 40 px at f = 800).
+    /// image[7].x += 0.05;
+    /// let plain = Solver::default().solve(&world, &image)?;
+    /// let robust = Solver::default().loss(Loss::Cauchy(1e-3)).solve(&world, &image)?;
+    /// let err = |s: &eopnp::Solution| (s.pose.translation.vector - t).norm();
+    /// assert!(err(&robust) < 0.1 * err(&plain));
+    /// # Ok::<(), eopnp::PnpError>(())
+    /// ```
+    #[must_use]
+    pub fn loss(mut self, loss: Loss) -> Self {
+        self.opts.loss = loss;
+        self
+    }
+
     /// The pose from `world` points and their normalised image points `(x/z, y/z)`.
     ///
     /// ```
@@ -155,7 +191,8 @@ impl Solver {
         world: &[Point3<f64>],
         image: &[Point2<f64>],
     ) -> Result<Solution, PnpError> {
-        let sol = self.run(world, image, None, &self.opts.reproj, None)?;
+        let px = self.normalised_loss(image, None);
+        let sol = self.run(world, image, None, &self.opts.reproj, px.as_ref(), None)?;
         Ok(self.with_covariance(sol, world, image, &|_| 1.0, Metric::Identity))
     }
 
@@ -197,7 +234,15 @@ impl Solver {
         image: &[Point2<f64>],
         weights: &[f64],
     ) -> Result<Solution, PnpError> {
-        let sol = self.run(world, image, Some(weights), &self.opts.reproj, None)?;
+        let px = self.normalised_loss(image, Some(weights));
+        let sol = self.run(
+            world,
+            image,
+            Some(weights),
+            &self.opts.reproj,
+            px.as_ref(),
+            None,
+        )?;
         Ok(self.with_covariance(sol, world, image, &|i| weights[i], Metric::Identity))
     }
 
@@ -234,7 +279,15 @@ impl Solver {
         image: &[Point2<f64>],
     ) -> Result<Solutions, PnpError> {
         let mut all = Solutions::new();
-        self.run(world, image, None, &self.opts.reproj, Some(&mut all))?;
+        let px = self.normalised_loss(image, None);
+        self.run(
+            world,
+            image,
+            None,
+            &self.opts.reproj,
+            px.as_ref(),
+            Some(&mut all),
+        )?;
         for sol in &mut all {
             *sol = self.with_covariance(*sol, world, image, &|_| 1.0, Metric::Identity);
         }
@@ -283,7 +336,17 @@ impl Solver {
     ) -> Result<Solution, PnpError> {
         let r = check_initial(initial)?;
         let t = initial.translation.vector;
-        let sol = pipeline::refine(&self.opts, world, image, None, &self.opts.reproj, (&r, &t))?;
+        self.check_loss()?;
+        let px = self.normalised_loss(image, None);
+        let sol = pipeline::refine(
+            &self.opts,
+            world,
+            image,
+            None,
+            &self.opts.reproj,
+            px.as_ref(),
+            (&r, &t),
+        )?;
         Ok(self.with_covariance(sol, world, image, &|_| 1.0, Metric::Identity))
     }
 
@@ -300,15 +363,18 @@ impl Solver {
     ) -> Result<Solution, PnpError> {
         let r = check_initial(initial)?;
         let t = initial.translation.vector;
+        self.check_loss()?;
         let u = undistort_all(world, pixels, camera, None)?;
         let mut reproj = self.opts.reproj;
         reproj.row_weights = u.rows;
+        let px = self.camera_loss(&u, camera);
         let mut sol = pipeline::refine(
             &self.opts,
             &u.world,
             &u.image,
             Some(&u.weights),
             &reproj,
+            Some(&px),
             (&r, &t),
         )?;
         sol.skipped = world.len() - u.used.len();
@@ -325,13 +391,53 @@ impl Solver {
         image: &[Point2<f64>],
         weights: Option<&[f64]>,
         row_weights: (f64, f64),
+        pixel: Option<&PixelInputs<'_>>,
     ) -> Result<Solution, PnpError> {
         let mut opts = self.opts.reproj;
         let ok = |w: f64| w.is_finite() && w > 0.0;
         if ok(row_weights.0) && ok(row_weights.1) {
             opts.row_weights = row_weights;
         }
-        self.run(world, image, weights, &opts, None)
+        self.run(world, image, weights, &opts, pixel, None)
+    }
+
+    /// S10's inputs for normalised input: only with a robust loss (the identity camera,
+    /// residuals in normalised units); S9 alone minimises the squared loss.
+    pub(crate) fn normalised_loss<'a>(
+        &self,
+        image: &'a [Point2<f64>],
+        weights: Option<&'a [f64]>,
+    ) -> Option<PixelInputs<'a>> {
+        (self.opts.loss != Loss::Squared).then(|| PixelInputs {
+            pixels: image,
+            weights,
+            projector: Projector::identity(),
+            loss: self.opts.loss,
+            refine: true,
+            scale: 1.0,
+        })
+    }
+
+    /// S10's inputs for pixel input through `camera` (the used correspondences of `u`): it
+    /// runs for a camera with distortion or a robust loss.
+    pub(crate) fn camera_loss<'a>(&self, u: &'a Undistorted, camera: &Camera) -> PixelInputs<'a> {
+        PixelInputs {
+            pixels: &u.pixels,
+            weights: u.user_weights.as_deref(),
+            projector: camera.projector(),
+            loss: self.opts.loss,
+            refine: camera.has_distortion() || self.opts.loss != Loss::Squared,
+            scale: u.focal.0.max(u.focal.1),
+        }
+    }
+
+    /// [`PnpError::InvalidOption`] (`"loss"`) for a loss whose scale is not usable.
+    pub(crate) fn check_loss(&self) -> Result<(), PnpError> {
+        if self.opts.loss.is_valid() {
+            Ok(())
+        } else {
+            Err(PnpError::InvalidOption { option: "loss" })
+        }
     }
 
     /// The pose from observed (distorted) pixels and a camera model ([`Camera`]: any of the
@@ -428,8 +534,11 @@ impl Solver {
         camera: &Camera,
         user_weights: Option<&[f64]>,
     ) -> Result<Solution, PnpError> {
+        self.check_loss()?;
         let u = undistort_all(world, pixels, camera, user_weights)?;
-        let mut sol = self.solve_with_row_weights(&u.world, &u.image, Some(&u.weights), u.rows)?;
+        let px = self.camera_loss(&u, camera);
+        let mut sol =
+            self.solve_with_row_weights(&u.world, &u.image, Some(&u.weights), u.rows, Some(&px))?;
         sol.skipped = world.len() - u.used.len();
         // The covariance through the camera: the caller's weights, not the first-order
         // distortion weights of the solve.
@@ -459,9 +568,11 @@ impl Solver {
         image: &[Point2<f64>],
         weights: Option<&[f64]>,
         reproj: &ReprojOptions,
+        pixel: Option<&PixelInputs<'_>>,
         all: Option<&mut Solutions>,
     ) -> Result<Solution, PnpError> {
-        pipeline::run(&self.opts, world, image, weights, reproj, all)
+        self.check_loss()?;
+        pipeline::run(&self.opts, world, image, weights, reproj, pixel, all)
     }
 }
 
@@ -501,6 +612,10 @@ pub(crate) struct Undistorted {
     pub weights: Vec<f64>,
     /// Their indices in the caller's slices.
     pub used: Vec<usize>,
+    /// Their pixels.
+    pub pixels: Vec<Point2<f64>>,
+    /// Their weights given by the caller (`None`: all 1).
+    pub user_weights: Option<Vec<f64>>,
     /// The residual row weights `(fx^2, fy^2) / max(fx, fy)^2`.
     pub rows: (f64, f64),
     /// The camera's focal lengths `(fx, fy)`, pixels.
@@ -548,6 +663,8 @@ pub(crate) fn undistort_all(
         image: Vec::with_capacity(n),
         weights: Vec::with_capacity(n),
         used: Vec::with_capacity(n),
+        pixels: Vec::with_capacity(n),
+        user_weights: user_weights.map(|_| Vec::with_capacity(n)),
         rows: (1.0, 1.0),
         focal: camera.intrinsics_scale(),
     };
@@ -569,6 +686,10 @@ pub(crate) fn undistort_all(
         out.world.push(*x);
         out.image.push(m);
         out.used.push(i);
+        out.pixels.push(*px);
+        if let (Some(uw), Some(keep)) = (user_weights, out.user_weights.as_mut()) {
+            keep.push(uw[i]);
+        }
     }
     Ok(out)
 }

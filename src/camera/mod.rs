@@ -397,6 +397,17 @@ pub(crate) struct Projector {
 }
 
 impl Projector {
+    /// The identity: a pinhole camera with unit focal lengths at the origin (normalised
+    /// coordinates are its pixels).
+    pub(crate) fn identity() -> Projector {
+        Projector {
+            focal: (1.0, 1.0),
+            centre: (0.0, 0.0),
+            fisheye: false,
+            distortion: Distortion::default(),
+        }
+    }
+
     /// The pixel of the normalised point `(x, y)`.
     #[inline]
     pub(crate) fn project(&self, x: f64, y: f64) -> (f64, f64) {

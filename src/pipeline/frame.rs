@@ -59,7 +59,7 @@ const SCATTER_MIN: f64 = 1e-4;
 /// scaled units.
 const RAW_RANGE: i32 = 480;
 /// Smallest power-of-two unit (2^-1000): its reciprocal is finite.
-const MIN_UNIT: f64 = 9.332636185032189e-302;
+pub(crate) const MIN_UNIT: f64 = 9.332636185032189e-302;
 
 /// Minimum number of correspondences (with a weight > 0).
 pub(crate) const MIN_POINTS: usize = 4;

@@ -10,11 +10,12 @@
 //! | S6 | [`newton`] | damped Newton on SO(3) from every start, to local minima of `f(R)` | no |
 //! | cert. | [`certificate`] | a Lagrangian dual certificate that a minimum is global (early exit) | no |
 //! | S7 | [`select`] | the minimum with the smallest `f` among those with most points in front | yes (depth signs) |
-//! | S9, S8 | [`reprojection`], [`output`] | LM on the reprojection error; back to the world frame | yes |
+//! | S9, S10, S8 | [`reprojection`], [`pixel`], [`output`] | LM on the reprojection error; with a camera (or a robust loss) LM on the pixel error through it; back to the world frame | yes |
 //!
 //! [`run`] is the only place that calls the stages. It tries a certified fast path first (the
 //! case-1 start through S6, the certificate and S7's depth test) and, when that does not settle
-//! the solve, the full search (S4, S4', S6 from every start, S7); either ends in S9 and S8.
+//! the solve, the full search (S4, S4', S6 from every start, S7); either ends in S9, S10 (pixel
+//! input through a camera with distortion, or a robust [`Loss`]) and S8.
 
 /// The stages one at a time, for `benches/stages.rs` only: compiled only with
 /// `RUSTFLAGS="--cfg eopnp_bench"`, never part of the library's API.
@@ -28,6 +29,7 @@ pub(crate) mod newton;
 pub(crate) mod nullspace;
 pub(crate) mod options;
 pub(crate) mod output;
+pub(crate) mod pixel;
 pub(crate) mod planar;
 pub(crate) mod reprojection;
 pub(crate) mod select;
@@ -35,10 +37,11 @@ pub(crate) mod select;
 pub use nullspace::CandidateSource;
 pub(crate) use nullspace::MAX_CANDIDATES;
 pub(crate) use options::Options;
-pub use options::{PlanarDetection, Refinement};
+pub use options::{Loss, PlanarDetection, Refinement};
 pub use output::{Solution, Solutions};
 
 pub(crate) use frame::check_lengths;
+pub(crate) use pixel::PixelInputs;
 pub(crate) use reprojection::ReprojOptions;
 
 use arrayvec::ArrayVec;
@@ -69,14 +72,15 @@ const SAME_MINIMUM: f64 = 1e-8;
 const IN_BASIN: f64 = 0.05;
 
 /// One solve: `image` are normalised image points, `weights` optional per-point weights,
-/// `reproj` the S9 options (row weights of pixel input), `all` collects every distinct minimum
-/// (`solve_all`).
+/// `reproj` the S9 options (row weights of pixel input), `pixel` the observations of S10 (pixel
+/// input, or a robust loss), `all` collects every distinct minimum (`solve_all`).
 pub(crate) fn run(
     opts: &Options,
     world: &[Point3<f64>],
     image: &[Point2<f64>],
     weights: Option<&[f64]>,
     reproj: &ReprojOptions,
+    pixel: Option<&PixelInputs<'_>>,
     all: Option<&mut Solutions>,
 ) -> Result<Solution, PnpError> {
     // S1 + S2: the working frame, with the moment sums in it; M and G.
@@ -96,7 +100,7 @@ pub(crate) fn run(
         PlanarDetection::NonPlanar => (true, false),
     };
     let planar_sys = if planar { fr.sums.system(true) } else { None };
-    let out = prep.output(world, image, weights);
+    let out = prep.output(world, image, weights, pixel);
     let mut search = Search::new(opts, sys, m45, scale);
     let is_certified = |r: &Matrix3<f64>| {
         certificate::global_minimum(&sys.m, r, scale)
@@ -219,11 +223,13 @@ impl Prepared {
         world: &'a [Point3<f64>],
         image: &'a [Point2<f64>],
         weights: Option<&'a [f64]>,
+        pixel: Option<&'a PixelInputs<'a>>,
     ) -> Output<'a> {
         Output {
             world,
             image,
             weights,
+            pixel,
             fr: &self.fr,
             m45: &self.m45,
             degenerate: self.probe.degenerate || self.fr.small_image,
@@ -233,7 +239,7 @@ impl Prepared {
 }
 
 /// `Solver::refine`: S1 and S2 (validation, the working frame, `M`), S6 from the caller's
-/// rotation `r`, then S9 and S8: the minimum of the reprojection error in the basin of the
+/// rotation `r`, then S9, S10 and S8: the minimum of the reprojection error in the basin of the
 /// pose. No search (S3-S5, S7).
 pub(crate) fn refine(
     opts: &Options,
@@ -241,11 +247,12 @@ pub(crate) fn refine(
     image: &[Point2<f64>],
     weights: Option<&[f64]>,
     reproj: &ReprojOptions,
+    pixel: Option<&PixelInputs<'_>>,
     (r, t): (&Matrix3<f64>, &nalgebra::Vector3<f64>),
 ) -> Result<Solution, PnpError> {
     let prep = prepare(opts, world, image, weights)?;
     let (fr, m45) = (&prep.fr, &prep.m45);
-    let out = prep.output(world, image, weights);
+    let out = prep.output(world, image, weights, pixel);
     // The world pose in the working frame (the inverse of `WorkingFrame::to_world`).
     let r_work = r * fr.rw.transpose();
     let t_work = (t + r * fr.c) / fr.d;

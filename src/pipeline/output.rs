@@ -11,6 +11,7 @@ use super::frame::WorkingFrame;
 use super::newton;
 use super::nullspace::{CandidateSource, MAX_CANDIDATES};
 use super::options::Refinement;
+use super::pixel::{self, PixelInputs};
 use super::reprojection::{self, ReprojOptions};
 use super::select::{in_front, Minimum};
 use crate::covariance::PoseCovariance;
@@ -116,6 +117,8 @@ pub(crate) struct Output<'a> {
     pub world: &'a [Point3<f64>],
     pub image: &'a [Point2<f64>],
     pub weights: Option<&'a [f64]>,
+    /// S10's observations (pixel input, or a robust loss).
+    pub pixel: Option<&'a PixelInputs<'a>>,
     pub fr: &'a WorkingFrame,
     /// Upper triangle of M (`moments::m_upper`).
     pub m45: &'a [f64; 45],
@@ -171,6 +174,37 @@ impl Output<'_> {
                     | reprojection::ReprojStop::Damping
             );
         }
+        // S10: the pixel error through the camera (or a robust loss), from S9's pose. Its cost
+        // and RMS residual replace S9's; it keeps the depth signs as S9 does.
+        let mut s10 = None;
+        if mode == Refinement::Reprojection {
+            if let Some(px) = self.pixel.filter(|px| px.refine) {
+                let po = pixel::refine_pixels(self.world, px, self.fr, &r, &t, opts);
+                let out = &po.out;
+                let finite = out.r.iter().all(|x| x.is_finite())
+                    && out.t.iter().all(|x| x.is_finite())
+                    && out.e.is_finite();
+                if finite && out.stop != reprojection::ReprojStop::SkippedZeroDepth {
+                    r = out.r;
+                    t = out.t;
+                    iters += out.iterations;
+                    converged = matches!(
+                        out.stop,
+                        reprojection::ReprojStop::Gradient
+                            | reprojection::ReprojStop::Step
+                            | reprojection::ReprojStop::FinalStep
+                            | reprojection::ReprojStop::Damping
+                    );
+                    let rmse = if po.weight_sum > 0.0 {
+                        (po.squared / po.weight_sum).sqrt() / px.scale
+                    } else {
+                        f64::INFINITY
+                    };
+                    s10 = Some(((out.e * po.unit).min(f64::MAX), rmse));
+                    depth_signs_kept = true;
+                }
+            }
+        }
         // M is positive semi-definite, so f >= 0 in exact arithmetic. With wildly scaled input
         // (found by fuzzing: an image coordinate of 3e9) the accumulated M is not PSD to
         // working precision and r^T M r comes out negative; the nearest admissible value is 0.
@@ -181,9 +215,10 @@ impl Output<'_> {
         };
         let (rw, tw) = self.fr.to_world(&r, &t);
         // In S1's weight unit (exact powers of two): `e * weight_unit` is the caller's cost.
-        let e = match s9_error {
-            Some(e) => e,
-            None => reprojection_error(
+        let e = match (s9_error, s10) {
+            (Some(e), None) => e,
+            (_, Some(_)) => 0.0, // S10's cost and RMS residual are reported instead
+            (None, None) => reprojection_error(
                 self.world,
                 self.image,
                 self.weights,
@@ -199,18 +234,22 @@ impl Output<'_> {
             rotation: rw,
             cost: if mode == Refinement::Algebraic {
                 f / self.scale
+            } else if let Some((cost, _)) = s10 {
+                cost
             } else {
-                // The caller's cost; weights near the top of the f64 range can make it
-                // overflow while the pose is exact: it saturates at f64::MAX.
-                (e * self.fr.weight_unit).min(f64::MAX)
+                // The caller's cost (with pixel input in pixels: S9's residuals times the
+                // camera's scale); weights near the top of the f64 range can make it overflow
+                // while the pose is exact: it saturates at f64::MAX.
+                let to_pixels = self.pixel.map_or(1.0, |px| px.scale * px.scale);
+                (e * self.fr.weight_unit * to_pixels).min(f64::MAX)
             },
             algebraic_cost: f / self.scale,
             // Infinite (not NaN) when a point lies in the focal plane (depth 0) of the pose,
             // which only an algebraic-mode pose can do (see below).
-            reprojection_rmse: if e.is_finite() && wsum > 0.0 {
-                (e / wsum).sqrt()
-            } else {
-                f64::INFINITY
+            reprojection_rmse: match s10 {
+                Some((_, rmse)) => rmse,
+                None if e.is_finite() && wsum > 0.0 => (e / wsum).sqrt(),
+                None => f64::INFINITY,
             },
             cheirality_ok: cheirality,
             degenerate: self.degenerate,

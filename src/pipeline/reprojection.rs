@@ -137,13 +137,13 @@ const FINAL_STEP_REL: f64 = 1e-7;
 
 /// A pose with the working frame composed in: `p_i = a (X_i - c) + t`.
 #[derive(Clone, Copy)]
-struct Composed {
-    a: Matrix3<f64>,
-    t: Vector3<f64>,
+pub(super) struct Composed {
+    pub(super) a: Matrix3<f64>,
+    pub(super) t: Vector3<f64>,
 }
 
 impl Composed {
-    fn new(r: &Matrix3<f64>, rw: &Matrix3<f64>, d: f64, t: &Vector3<f64>) -> Self {
+    pub(super) fn new(r: &Matrix3<f64>, rw: &Matrix3<f64>, d: f64, t: &Vector3<f64>) -> Self {
         Self {
             a: (r * rw) / d,
             t: *t,
@@ -153,15 +153,35 @@ impl Composed {
 
 /// Normal equations at one pose: `h = J^T W J` (upper triangle filled, then mirrored),
 /// `g = J^T W e`, `e = E`, the extreme absolute depths and the largest lever arm `|q_i|`.
-struct Normal {
-    h: [[f64; 6]; 6],
-    g: [f64; 6],
-    e: f64,
-    min_abs_z: f64,
-    max_abs_z: f64,
+pub(super) struct Normal {
+    pub(super) h: [[f64; 6]; 6],
+    pub(super) g: [f64; 6],
+    pub(super) e: f64,
+    pub(super) min_abs_z: f64,
+    pub(super) max_abs_z: f64,
     /// `max_i |q_i|` over the active points. Only the pass without reference pose computes it
     /// (NaN otherwise): `|q_i| = |X_i - c| / d` does not depend on the pose.
-    max_abs_q: f64,
+    pub(super) max_abs_q: f64,
+}
+
+/// The residuals one Levenberg-Marquardt run minimises ([`levenberg_marquardt`]): S9's
+/// normalised residuals ([`Problem`]) or S10's pixel residuals through the camera
+/// ([`super::pixel`]).
+pub(super) trait Residuals {
+    /// One O(N) pass at `pose`: cost, `J^T W J`, gradient and depth range (and, without
+    /// `reference`, `max_abs_q`). With `reference`, `None` as soon as a depth differs in sign
+    /// from its depth under `reference`.
+    fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal>;
+
+    /// As [`Residuals::accumulate`] with a reference pose, without `J^T W J`: the returned
+    /// `h` is `h_prev`, the caller's `J^T W J` from a nearby pose (see
+    /// [`HESSIAN_REUSE_REL`]).
+    fn accumulate_gradient(
+        &self,
+        pose: &Composed,
+        reference: &Composed,
+        h_prev: &[[f64; 6]; 6],
+    ) -> Option<Normal>;
 }
 
 impl Normal {
@@ -187,7 +207,7 @@ struct Problem<'a> {
     row_weights: (f64, f64),
 }
 
-impl Problem<'_> {
+impl Residuals for Problem<'_> {
     /// One O(N) pass at `pose`: cost, normal equations and depth range. With `reference`,
     /// returns `None` as soon as a depth differs in sign from its depth under `reference`.
     /// Points of weight 0 are skipped entirely (bit-identical to dropping them).
@@ -218,9 +238,7 @@ impl Problem<'_> {
         }
     }
 
-    /// As [`Problem::accumulate`] with a reference pose, but without `J^T W J`: cost, gradient
-    /// and depth range only (7 sums per point instead of 27). The returned `h` is `h_prev`,
-    /// the caller's `J^T W J` from a nearby pose (see [`HESSIAN_REUSE_REL`]).
+    /// Cost, gradient and depth range only (7 sums per point instead of 27).
     fn accumulate_gradient(
         &self,
         pose: &Composed,
@@ -273,7 +291,19 @@ pub(crate) fn refine_reprojection(
         n,
         row_weights: opts.row_weights,
     };
+    levenberg_marquardt(&prob, fr, r_work, t_work, opts)
+}
 
+/// The Levenberg-Marquardt iteration of S9 (and S10) on the residuals of `prob`, from the
+/// working-frame pose `(r_work, t_work)`: the damping rule, the depth-sign guard, the reuse of
+/// `J^T W J` and the unverified final step of the module docs.
+pub(super) fn levenberg_marquardt<P: Residuals>(
+    prob: &P,
+    fr: &WorkingFrame,
+    r_work: &Matrix3<f64>,
+    t_work: &Vector3<f64>,
+    opts: &ReprojOptions,
+) -> ReprojOutcome {
     let mut r = *r_work;
     let mut t = *t_work;
     let mut cur = Composed::new(&r, &fr.rw, fr.d, &t);

@@ -69,6 +69,7 @@ use rand_pcg::Pcg64;
 use super::p3p::p3p;
 use crate::camera::Camera;
 use crate::error::{InputKind, PnpError};
+use crate::pipeline::PixelInputs;
 use crate::solver::undistort_all;
 use crate::{Solution, Solver};
 
@@ -286,8 +287,23 @@ impl Ransac {
         focal: (f64, f64),
         weights: Option<&[f64]>,
     ) -> Result<RansacSolution, PnpError> {
+        let pixel = solver.normalised_loss(image, weights);
+        self.estimate_with(solver, world, image, focal, weights, pixel)
+    }
+
+    /// [`Ransac::estimate`] with S10's observations of every point (`pixel`) for the fits.
+    fn estimate_with(
+        &self,
+        solver: &Solver,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        focal: (f64, f64),
+        weights: Option<&[f64]>,
+        pixel: Option<PixelInputs<'_>>,
+    ) -> Result<RansacSolution, PnpError> {
         let start = Instant::now();
         self.check()?;
+        solver.check_loss()?;
         let n = world.len();
         crate::pipeline::check_lengths(n, image.len(), weights)?;
         let (fx, fy) = focal;
@@ -333,6 +349,7 @@ impl Ransac {
             fx2: fx * fx,
             fy2: fy * fy,
             rows: ((fx / fmax).powi(2), (fy / fmax).powi(2)),
+            pixel,
         };
         let th = self.threshold_px;
         let th2 = th * th;
@@ -511,8 +528,17 @@ impl Ransac {
     ) -> Result<RansacSolution, PnpError> {
         let start = Instant::now();
         self.check()?;
+        solver.check_loss()?;
         let u = undistort_all(world, pixels, camera, weights)?;
-        let mut sol = self.estimate(solver, &u.world, &u.image, u.focal, Some(&u.weights))?;
+        let px = solver.camera_loss(&u, camera);
+        let mut sol = self.estimate_with(
+            solver,
+            &u.world,
+            &u.image,
+            u.focal,
+            Some(&u.weights),
+            Some(px),
+        )?;
         if u.used.len() != world.len() {
             let mut full = vec![false; world.len()];
             for (k, &i) in u.used.iter().enumerate() {

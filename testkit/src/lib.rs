@@ -503,6 +503,64 @@ pub fn lm_refine(
     t0: &Vector3<f64>,
     cam: Camera,
 ) -> LmResult {
+    lm_core(r0, t0, &|r, t, jac| {
+        residuals_and_jacobian(world, obs, r, t, cam, jac)
+    })
+}
+
+/// [`lm_refine`] through any camera projection `project` (normalised point to pixel, lens
+/// distortion included): the residuals `project(pi(R X + t)) - obs`, their Jacobian through
+/// the camera by central differences of `project` (step `1e-6 max(1, |x|)`), independent of the
+/// library's analytic camera Jacobians. (An approximate Jacobian moves the stationary point by
+/// O(eps^2) in the cost, eps ~ 1e-9 here.)
+pub fn lm_refine_projection(
+    world: &[Point3<f64>],
+    obs: &[Point2<f64>],
+    r0: &Matrix3<f64>,
+    t0: &Vector3<f64>,
+    project: &dyn Fn(Point2<f64>) -> Point2<f64>,
+) -> LmResult {
+    lm_core(r0, t0, &|r, t, with_jacobian| {
+        let n = world.len();
+        let mut res = DVector::zeros(2 * n);
+        let mut jac = DMatrix::zeros(if with_jacobian { 2 * n } else { 0 }, 6);
+        for (i, (x, m)) in world.iter().zip(obs).enumerate() {
+            let q = r * x.coords;
+            let p = q + t;
+            let nrm = Point2::new(p.x / p.z, p.y / p.z);
+            let u = project(nrm);
+            res[2 * i] = u.x - m.x;
+            res[2 * i + 1] = u.y - m.y;
+            if with_jacobian {
+                let h = 1e-6 * nrm.coords.norm().max(1.0);
+                let dx = (project(nrm + nalgebra::Vector2::new(h, 0.0))
+                    - project(nrm - nalgebra::Vector2::new(h, 0.0)))
+                    / (2.0 * h);
+                let dy = (project(nrm + nalgebra::Vector2::new(0.0, h))
+                    - project(nrm - nalgebra::Vector2::new(0.0, h)))
+                    / (2.0 * h);
+                let jc = nalgebra::Matrix2::new(dx.x, dy.x, dx.y, dy.y);
+                let dn = nalgebra::Matrix2x3::new(1.0, 0.0, -nrm.x, 0.0, 1.0, -nrm.y) / p.z;
+                let dp = jc * dn;
+                let dw = -(dp * q.cross_matrix());
+                for k in 0..3 {
+                    jac[(2 * i, k)] = dw[(0, k)];
+                    jac[(2 * i + 1, k)] = dw[(1, k)];
+                    jac[(2 * i, 3 + k)] = dp[(0, k)];
+                    jac[(2 * i + 1, 3 + k)] = dp[(1, k)];
+                }
+            }
+        }
+        (res, jac)
+    })
+}
+
+/// Residuals and (optionally) their Jacobian at a pose.
+type ResidualFn<'a> =
+    dyn Fn(&Matrix3<f64>, &Vector3<f64>, bool) -> (DVector<f64>, DMatrix<f64>) + 'a;
+
+/// The iteration of [`lm_refine`] on any residual function.
+fn lm_core(r0: &Matrix3<f64>, t0: &Vector3<f64>, resjac: &ResidualFn<'_>) -> LmResult {
     const FTOL: f64 = 1e-14;
     const XTOL: f64 = 1e-14;
     const GTOL: f64 = 1e-14;
@@ -511,7 +569,7 @@ pub fn lm_refine(
     let mut t = *t0;
     // Accumulated rotation vector (for the xtol test's parameter norm, as scipy's x[:3]).
     let mut w_total = Vector3::<f64>::zeros();
-    let (mut res, mut jac) = residuals_and_jacobian(world, obs, &r, &t, cam, true);
+    let (mut res, mut jac) = resjac(&r, &t, true);
     let mut cost = res.norm_squared();
     let mut diag = DVector::<f64>::zeros(6);
     let mut lam = -1.0;
@@ -565,7 +623,7 @@ pub fn lm_refine(
             let dw = Vector3::new(delta[0], delta[1], delta[2]);
             let r_new = exp_so3(&dw) * r;
             let t_new = t + Vector3::new(delta[3], delta[4], delta[5]);
-            let (res_new, _) = residuals_and_jacobian(world, obs, &r_new, &t_new, cam, false);
+            let (res_new, _) = resjac(&r_new, &t_new, false);
             let cost_new = res_new.norm_squared();
             let lin = &res + &jac * &delta;
             let pred = (cost - lin.norm_squared()) / cost;
@@ -587,7 +645,7 @@ pub fn lm_refine(
                 r = r_new;
                 t = t_new;
                 w_total += dw;
-                let (rs, jc) = residuals_and_jacobian(world, obs, &r, &t, cam, true);
+                let (rs, jc) = resjac(&r, &t, true);
                 res = rs;
                 jac = jc;
                 cost = cost_new;

@@ -6,6 +6,7 @@ use rand_core::RngCore;
 use rand_pcg::Pcg64;
 
 use super::{MIN_FIT_POINTS, SAMPLE_ATTEMPTS, SPRT_A};
+use crate::pipeline::PixelInputs;
 use crate::{Solution, Solver};
 
 /// A hypothesis with its MSAC cost.
@@ -25,6 +26,9 @@ pub(super) struct Problem<'a> {
     pub(super) fx2: f64,
     pub(super) fy2: f64,
     pub(super) rows: (f64, f64),
+    /// S10's observations of every point (pixel input, or a robust loss), gathered with the
+    /// inliers of each fit.
+    pub(super) pixel: Option<PixelInputs<'a>>,
 }
 
 impl Problem<'_> {
@@ -136,6 +140,10 @@ impl Problem<'_> {
                 buf.world.push(self.world[i]);
                 buf.image.push(self.image[i]);
                 buf.weights.push(self.weights[i]);
+                if let Some(px) = &self.pixel {
+                    buf.pixels.push(px.pixels[i]);
+                    buf.user_weights.push(px.weights.map_or(1.0, |w| w[i]));
+                }
             }
         }
         // At least MIN_FIT_POINTS inliers, or every point of a smaller problem (EOPnP needs 4;
@@ -143,8 +151,19 @@ impl Problem<'_> {
         if buf.world.len() < MIN_FIT_POINTS.min(self.world.len()) {
             return None;
         }
+        let px = self.pixel.map(|px| PixelInputs {
+            pixels: &buf.pixels,
+            weights: px.weights.map(|_| &buf.user_weights[..]),
+            ..px
+        });
         solver
-            .solve_with_row_weights(&buf.world, &buf.image, Some(&buf.weights), self.rows)
+            .solve_with_row_weights(
+                &buf.world,
+                &buf.image,
+                Some(&buf.weights),
+                self.rows,
+                px.as_ref(),
+            )
             .ok()
     }
 }
@@ -155,6 +174,8 @@ pub(super) struct FitBuffers {
     pub(super) world: Vec<Point3<f64>>,
     pub(super) image: Vec<Point2<f64>>,
     pub(super) weights: Vec<f64>,
+    pub(super) pixels: Vec<Point2<f64>>,
+    pub(super) user_weights: Vec<f64>,
 }
 
 impl FitBuffers {
@@ -162,6 +183,8 @@ impl FitBuffers {
         self.world.clear();
         self.image.clear();
         self.weights.clear();
+        self.pixels.clear();
+        self.user_weights.clear();
     }
 }
 

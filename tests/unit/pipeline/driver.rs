@@ -111,7 +111,7 @@ fn near_180_degrees_in_the_users_axes() {
                 Point2::new(p.x / p.z, p.y / p.z)
             })
             .collect();
-        let sol = run(&opts, &world, &image, None, &opts.reproj, None).unwrap();
+        let sol = run(&opts, &world, &image, None, &opts.reproj, None, None).unwrap();
         let er = crate::metrics::rotation_error_deg(&sol.rotation, &r);
         let et = (sol.pose.translation.vector - t).norm() / t.norm();
         worst = (worst.0.max(er), worst.1.max(et));

@@ -1,0 +1,394 @@
+//! The maximum-likelihood pose through every camera model with distortion (S10): on synthetic
+//! problems with strong distortion, the pixel cost of the default pose is never above that of
+//! Levenberg-Marquardt started at the ground truth (relative 1e-9), for plain, weighted and
+//! RANSAC solves. The reference LM (`eopnp_testkit::lm_refine_projection`) differentiates the
+//! camera by central differences: independent of the library's analytic Jacobians.
+
+use eopnp::camera::Camera;
+use eopnp::ransac::Ransac;
+use eopnp::{Loss, Solver};
+use eopnp_testkit::{haar_rotation, lm_refine_projection, rng_from_seed, rot_err_deg, trial_seed};
+use nalgebra::{Matrix3, Point2, Point3, Vector3};
+use rand::Rng;
+
+/// Problems per model.
+const TRIALS: u64 = 200;
+const N: usize = 30;
+const SIGMA_PX: f64 = 1.0;
+/// The target: the default pose's pixel cost is at most LM-from-GT's times `1 + REL`.
+const REL: f64 = 1e-9;
+
+/// A camera with strong distortion and the largest normalised radius its points reach.
+struct Case {
+    camera: Camera,
+    /// Largest off-axis angle of a point, degrees.
+    max_angle_deg: f64,
+}
+
+fn cases() -> Vec<Case> {
+    let cam = |name: &str, params: Vec<f64>| Camera::from_colmap(name, 1280, 960, params).unwrap();
+    // Perspective models: k1 around -0.3, points up to 38.7 degrees off axis (normalised
+    // radius 0.8, where the radial map is still monotonic). Fisheye: a field of view of 150
+    // degrees (75 degrees off axis).
+    let persp = 0.8f64.atan().to_degrees();
+    vec![
+        Case {
+            camera: cam("SIMPLE_RADIAL", vec![800.0, 640.0, 480.0, -0.3]),
+            max_angle_deg: persp,
+        },
+        Case {
+            camera: cam("RADIAL", vec![800.0, 640.0, 480.0, -0.3, 0.08]),
+            max_angle_deg: persp,
+        },
+        Case {
+            camera: cam(
+                "OPENCV",
+                vec![800.0, 790.0, 640.0, 480.0, -0.3, 0.08, 1e-3, -8e-4],
+            ),
+            max_angle_deg: persp,
+        },
+        Case {
+            camera: cam(
+                "FULL_OPENCV",
+                vec![
+                    800.0, 790.0, 640.0, 480.0, -0.3, 0.08, 1e-3, -8e-4, -0.01, 0.05, 0.01, 0.002,
+                ],
+            ),
+            max_angle_deg: persp,
+        },
+        Case {
+            camera: Camera::new(
+                "OPENCV_THIN_PRISM_TILTED".parse().unwrap(),
+                1280,
+                960,
+                vec![
+                    800.0, 790.0, 640.0, 480.0, -0.3, 0.08, 1e-3, -8e-4, -0.01, 0.05, 0.01, 0.002,
+                    1e-3, -5e-4, 8e-4, 2e-4, 0.01, -0.02,
+                ],
+            )
+            .unwrap(),
+            max_angle_deg: persp,
+        },
+        Case {
+            camera: cam(
+                "OPENCV_FISHEYE",
+                vec![400.0, 400.0, 640.0, 480.0, -0.02, 0.01, -0.005, 0.001],
+            ),
+            max_angle_deg: 75.0,
+        },
+        Case {
+            camera: cam("SIMPLE_RADIAL_FISHEYE", vec![400.0, 640.0, 480.0, -0.05]),
+            max_angle_deg: 75.0,
+        },
+        Case {
+            camera: cam("RADIAL_FISHEYE", vec![400.0, 640.0, 480.0, -0.05, 0.01]),
+            max_angle_deg: 75.0,
+        },
+    ]
+}
+
+struct Problem {
+    world: Vec<Point3<f64>>,
+    pixels: Vec<Point2<f64>>,
+    r: Matrix3<f64>,
+    t: Vector3<f64>,
+}
+
+/// Points spread over the field of view (uniform over the image disk of the off-axis angle),
+/// at depths 4-8 along their rays, a Haar rotation, pixel noise of `SIGMA_PX`.
+fn problem(case: &Case, seed: u64) -> Problem {
+    let mut rng = rng_from_seed(seed);
+    let r = haar_rotation(&mut rng);
+    let max_theta = case.max_angle_deg.to_radians();
+    let cam: Vec<Vector3<f64>> = (0..N)
+        .map(|_| {
+            let theta = max_theta * rng.random_range(0.0f64..1.0).sqrt();
+            let phi = rng.random_range(0.0..std::f64::consts::TAU);
+            let range = rng.random_range(4.0..8.0);
+            let dir = Vector3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            dir * range
+        })
+        .collect();
+    let t = cam.iter().sum::<Vector3<f64>>() / N as f64;
+    let world = cam
+        .iter()
+        .map(|p| Point3::from(r.transpose() * (p - t)))
+        .collect();
+    let pixels = cam
+        .iter()
+        .map(|p| {
+            let px = case.camera.project(Point2::new(p.x / p.z, p.y / p.z));
+            let noise = Vector3::new(gauss(&mut rng) * SIGMA_PX, gauss(&mut rng) * SIGMA_PX, 0.0);
+            Point2::new(px.x + noise.x, px.y + noise.y)
+        })
+        .collect();
+    Problem {
+        world,
+        pixels,
+        r,
+        t,
+    }
+}
+
+fn gauss(rng: &mut impl Rng) -> f64 {
+    // Box-Muller.
+    let u1: f64 = rng.random_range(f64::EPSILON..1.0);
+    let u2: f64 = rng.random_range(0.0..1.0);
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// Weighted sum of squared pixel residuals through the camera.
+fn pixel_cost(
+    cam: &Camera,
+    world: &[Point3<f64>],
+    pixels: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> f64 {
+    world
+        .iter()
+        .zip(pixels)
+        .enumerate()
+        .map(|(i, (x, u))| {
+            let p = r * x.coords + t;
+            let e = cam.project(Point2::new(p.x / p.z, p.y / p.z)) - u;
+            weights.map_or(1.0, |w| w[i]) * e.norm_squared()
+        })
+        .sum()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+#[test]
+fn default_pose_is_the_pixel_ml_pose_for_every_distortion_model() {
+    for case in cases() {
+        let cam = &case.camera;
+        let name = cam.model().name();
+        let (mut above, mut rot_to_ml) = (Vec::new(), Vec::new());
+        let mut first_order_above = Vec::new();
+        for trial in 0..TRIALS {
+            let p = problem(&case, trial_seed(name, trial));
+            let sol = Solver::default()
+                .solve_pixels(&p.world, &p.pixels, cam)
+                .unwrap_or_else(|e| panic!("{name} trial {trial}: {e}"));
+            let r = sol.rotation;
+            let t = sol.pose.translation.vector;
+            let ml = lm_refine_projection(&p.world, &p.pixels, &p.r, &p.t, &|n| cam.project(n));
+            assert!(
+                ml.converged,
+                "{name} trial {trial}: reference LM did not converge"
+            );
+            let cost = pixel_cost(cam, &p.world, &p.pixels, None, &r, &t);
+            let ml_cost = pixel_cost(cam, &p.world, &p.pixels, None, &ml.r, &ml.t);
+            assert!(
+                cost <= ml_cost * (1.0 + REL),
+                "{name} trial {trial}: pixel cost {cost} above LM from the ground truth \
+                 {ml_cost} (relative {:e})",
+                cost / ml_cost - 1.0
+            );
+            // The reported cost is this pixel cost.
+            assert!(
+                (sol.cost - cost).abs() <= 1e-9 * cost,
+                "{name} trial {trial}: reported cost {} vs {cost}",
+                sol.cost
+            );
+            assert!(sol.converged, "{name} trial {trial}");
+            above.push(cost / ml_cost - 1.0);
+            rot_to_ml.push(rot_err_deg(&r, &ml.r));
+            // The first-order pose (S9 on undistorted points weighted by |det J|, as before
+            // S10), for the record.
+            let (world, image, weights): (Vec<_>, Vec<_>, Vec<_>) = {
+                let mut w = Vec::new();
+                let mut m = Vec::new();
+                let mut k = Vec::new();
+                for (x, u) in p.world.iter().zip(&p.pixels) {
+                    let (n, weight) = cam.undistort_weighted(*u).unwrap();
+                    w.push(*x);
+                    m.push(n);
+                    k.push(weight);
+                }
+                (w, m, k)
+            };
+            let first = Solver::default()
+                .solve_weighted(&world, &image, &weights)
+                .unwrap();
+            let first_cost = pixel_cost(
+                cam,
+                &p.world,
+                &p.pixels,
+                None,
+                &first.rotation,
+                &first.pose.translation.vector,
+            );
+            first_order_above.push(first_cost / ml_cost - 1.0);
+        }
+        println!(
+            "{name}: default pose vs LM from GT over {TRIALS} problems: relative cost \
+             difference median {:.1e}, max {:.1e}; rotation to the ML pose median {:.1e} deg, \
+             max {:.1e} deg; first-order pose (before S10) above ML: median {:.2e}, max {:.2e}",
+            median(above.clone()),
+            above.iter().copied().fold(f64::MIN, f64::max),
+            median(rot_to_ml.clone()),
+            rot_to_ml.iter().copied().fold(0.0, f64::max),
+            median(first_order_above.clone()),
+            first_order_above.iter().copied().fold(f64::MIN, f64::max),
+        );
+    }
+}
+
+/// Integer weights are duplicated points: the weighted S10 minimises the same pixel cost.
+#[test]
+fn weighted_pixel_refinement_equals_duplicated_points() {
+    for case in cases() {
+        let cam = &case.camera;
+        let name = cam.model().name();
+        for trial in 0..20 {
+            let p = problem(&case, trial_seed(&format!("{name}-weighted"), trial));
+            let weights: Vec<f64> = (0..N).map(|i| (1 + i % 3) as f64).collect();
+            let (mut world, mut pixels) = (Vec::new(), Vec::new());
+            for (i, (x, u)) in p.world.iter().zip(&p.pixels).enumerate() {
+                for _ in 0..(1 + i % 3) {
+                    world.push(*x);
+                    pixels.push(*u);
+                }
+            }
+            let a = Solver::default()
+                .solve_pixels_weighted(&p.world, &p.pixels, cam, &weights)
+                .unwrap();
+            let b = Solver::default()
+                .solve_pixels(&world, &pixels, cam)
+                .unwrap();
+            let ca = pixel_cost(
+                cam,
+                &p.world,
+                &p.pixels,
+                Some(&weights),
+                &a.rotation,
+                &a.pose.translation.vector,
+            );
+            let cb = pixel_cost(
+                cam,
+                &p.world,
+                &p.pixels,
+                Some(&weights),
+                &b.rotation,
+                &b.pose.translation.vector,
+            );
+            assert!(
+                (ca - cb).abs() <= 1e-9 * cb,
+                "{name} trial {trial}: weighted {ca} vs duplicated {cb}"
+            );
+            assert!(
+                rot_err_deg(&a.rotation, &b.rotation) < 1e-6,
+                "{name} trial {trial}"
+            );
+        }
+    }
+}
+
+/// RANSAC's final fit is the same refinement: with 20 % gross outliers, the returned pose's
+/// pixel cost on the true inliers is never above LM from the ground truth on them (when the
+/// final mask is exactly the true inliers).
+#[test]
+fn ransac_final_fit_is_the_pixel_ml_pose_of_its_inliers() {
+    for case in cases() {
+        let cam = &case.camera;
+        let name = cam.model().name();
+        let mut exact_masks = 0;
+        for trial in 0..40 {
+            let mut p = problem(&case, trial_seed(&format!("{name}-ransac"), trial));
+            let mut rng = rng_from_seed(trial_seed(&format!("{name}-outliers"), trial));
+            let outlier: Vec<bool> = (0..N).map(|i| i % 5 == 0).collect();
+            for (u, &o) in p.pixels.iter_mut().zip(&outlier) {
+                if o {
+                    u.x += rng.random_range(60.0..200.0)
+                        * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                    u.y += rng.random_range(60.0..200.0)
+                        * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                }
+            }
+            let rs = Ransac::default()
+                .threshold_px(4.0)
+                .seed(trial)
+                .estimate_pixels(&Solver::default(), cam, &p.world, &p.pixels)
+                .unwrap_or_else(|e| panic!("{name} trial {trial}: {e}"));
+            let truth: Vec<bool> = outlier.iter().map(|o| !o).collect();
+            if rs.inliers != truth {
+                continue;
+            }
+            exact_masks += 1;
+            let world: Vec<_> = (0..N).filter(|&i| truth[i]).map(|i| p.world[i]).collect();
+            let pixels: Vec<_> = (0..N).filter(|&i| truth[i]).map(|i| p.pixels[i]).collect();
+            let ml = lm_refine_projection(&world, &pixels, &p.r, &p.t, &|n| cam.project(n));
+            let s = &rs.solution;
+            let cost = pixel_cost(
+                cam,
+                &world,
+                &pixels,
+                None,
+                &s.rotation,
+                &s.pose.translation.vector,
+            );
+            let ml_cost = pixel_cost(cam, &world, &pixels, None, &ml.r, &ml.t);
+            assert!(
+                cost <= ml_cost * (1.0 + REL),
+                "{name} trial {trial}: RANSAC pose's pixel cost {cost} above LM from GT {ml_cost}"
+            );
+        }
+        assert!(
+            exact_masks >= 30,
+            "{name}: only {exact_masks} of 40 exact masks"
+        );
+    }
+}
+
+/// A robust loss with pixel input: with gross outliers and no RANSAC, Cauchy's pose is far
+/// closer to the truth than the squared loss's, and its cost is the Cauchy cost in pixels.
+#[test]
+fn cauchy_loss_resists_outliers_through_the_camera() {
+    let case = &cases()[5]; // OPENCV_FISHEYE
+    let cam = &case.camera;
+    let mut wins = 0;
+    for trial in 0..20 {
+        let mut p = problem(case, trial_seed("cauchy", trial));
+        for u in p.pixels.iter_mut().step_by(10) {
+            u.x += 80.0;
+        }
+        let plain = Solver::default()
+            .solve_pixels(&p.world, &p.pixels, cam)
+            .unwrap();
+        let robust = Solver::default()
+            .loss(Loss::Cauchy(2.0))
+            .solve_pixels(&p.world, &p.pixels, cam)
+            .unwrap();
+        let err = |s: &eopnp::Solution| rot_err_deg(&s.rotation, &p.r);
+        if err(&robust) < 0.5 * err(&plain) {
+            wins += 1;
+        }
+        // The reported cost is sum 4 ln(1 + r2 / 4) at the pose.
+        let c: f64 = p
+            .world
+            .iter()
+            .zip(&p.pixels)
+            .map(|(x, u)| {
+                let q = robust.rotation * x.coords + robust.pose.translation.vector;
+                let r2 = (cam.project(Point2::new(q.x / q.z, q.y / q.z)) - u).norm_squared();
+                4.0 * (r2 / 4.0).ln_1p()
+            })
+            .sum();
+        assert!(
+            (robust.cost - c).abs() <= 1e-9 * c,
+            "trial {trial}: {} vs {c}",
+            robust.cost
+        );
+    }
+    assert!(wins >= 18, "Cauchy beat squared by 2x in only {wins} of 20");
+}
