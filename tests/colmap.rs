@@ -69,11 +69,19 @@ fn default_mode_reproduces_colmap_poses() {
             r.translation_error_pct
         );
         assert!(r.solution.cheirality_ok);
-        // Both poses minimise the same pixel error: the RMS reprojection errors agree to
-        // 0.1 % (measured: 3e-7 relative).
+        // With COLMAP's 3D points fixed, the default pose minimises the pixel error through
+        // the camera (S10), so its RMS reprojection error is never above that of COLMAP's
+        // pose (to rounding).
+        println!(
+            "image {id}: rmse {:.9} px vs COLMAP's {:.9} px (relative {:+.2e}), rotation {:.2e} deg",
+            r.rmse_px,
+            r.model_rmse_px,
+            r.rmse_px / r.model_rmse_px - 1.0,
+            r.rotation_error_deg
+        );
         assert!(
-            (r.rmse_px - r.model_rmse_px).abs() <= 1e-3 * r.model_rmse_px,
-            "image {id}: rmse {} px vs COLMAP's {} px",
+            r.rmse_px <= r.model_rmse_px * (1.0 + 1e-12),
+            "image {id}: rmse {} px above COLMAP's {} px",
             r.rmse_px,
             r.model_rmse_px
         );
