@@ -443,13 +443,21 @@ impl Solver {
     /// The pose from observed (distorted) pixels and a camera model ([`Camera`]: any of the
     /// supported models, pinhole included, e.g. [`Camera::pinhole`]).
     ///
-    /// The pixels are undistorted to normalised coordinates ([`Camera::undistort`]); a pixel
-    /// that cannot be undistorted is left out and counted in [`Solution::skipped`]. In the
-    /// default (reprojection) mode the residual of point `i` is weighted by `|det J_i| / (fx fy)`,
-    /// `J_i` the Jacobian of [`Camera::project`] at the point ([`Camera::project_jacobian`]),
-    /// and the x and y rows by `fx^2` and `fy^2` (normalised): to first order the minimised error
-    /// is the pixel reprojection error through the lens distortion (exactly, for models without
-    /// distortion; isotropically approximated per point otherwise).
+    /// In the default (reprojection) mode the returned pose minimises the sum of squared pixel
+    /// residuals through the camera's projection, distortion included: the maximum-likelihood
+    /// pose for isotropic Gaussian pixel noise, for every camera model (with a robust
+    /// [`Solver::loss`], the sum of the loss of the squared residuals). [`Solution::cost`] is
+    /// that sum in pixels^2, [`Solution::reprojection_rmse`] the RMS pixel residual divided by
+    /// `max(fx, fy)`.
+    ///
+    /// How: the pixels are undistorted to normalised coordinates ([`Camera::undistort`]); a
+    /// pixel that cannot be undistorted is left out and counted in [`Solution::skipped`]. The
+    /// solve on the undistorted points weights the residual of point `i` by
+    /// `|det J_i| / (fx fy)`, `J_i` the Jacobian of [`Camera::project`] at the point
+    /// ([`Camera::project_jacobian`]), and the x and y rows by `fx^2` and `fy^2` (normalised):
+    /// to first order the pixel error, exactly for a pinhole camera. With distortion (or a
+    /// robust loss) a last Levenberg-Marquardt refinement then minimises the pixel error
+    /// through the camera model itself (stage S10 of docs/algorithm.md).
     ///
     /// ```
     /// use eopnp::{camera::Camera, Solver};

@@ -9,8 +9,10 @@ use super::reprojection::ReprojOptions;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Refinement {
-    /// EOPnP (S0-S8) followed by Levenberg-Marquardt on the reprojection error (S9): the
-    /// maximum-likelihood pose for isotropic Gaussian image noise. Default.
+    /// EOPnP (S0-S8) followed by Levenberg-Marquardt on the reprojection error (S9, and with
+    /// pixel input through a camera with distortion S10, on the pixel error through the
+    /// camera model): the maximum-likelihood pose for isotropic Gaussian image noise (pixel
+    /// noise for pixel input). Default.
     #[default]
     Reprojection,
     /// EOPnP alone (S0-S8): the minimiser of the paper's depth-weighted algebraic cost.

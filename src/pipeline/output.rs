@@ -28,14 +28,17 @@ pub struct Solution {
     /// The rotation `R` as a matrix (the same rotation as `pose.rotation`, without the
     /// quaternion round trip).
     pub rotation: Matrix3<f64>,
-    /// The minimised cost: the (weighted) sum of squared normalised reprojection residuals in
-    /// [`Refinement::Reprojection`] mode (saturated at `f64::MAX` when weights near the top of
-    /// the f64 range make it overflow), `f / trace(M)` in [`Refinement::Algebraic`] mode.
+    /// The minimised cost: in [`Refinement::Reprojection`] mode the (weighted) sum of squared
+    /// reprojection residuals, normalised for normalised input and in pixels^2 for pixel input
+    /// (through the camera model), each passed through the [`crate::Loss`] when one is set
+    /// (saturated at `f64::MAX` when weights near the top of the f64 range make it overflow);
+    /// `f / trace(M)` in [`Refinement::Algebraic`] mode.
     pub cost: f64,
     /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (docs/algorithm.md S7).
     pub algebraic_cost: f64,
-    /// Root-mean-square normalised reprojection residual (weighted), in units of the focal
-    /// length: multiply by `f` for pixels. `f64::INFINITY` if a point lies in the focal plane
+    /// Root-mean-square normalised reprojection residual (weighted, without the loss), in units
+    /// of the focal length: multiply by `f` for pixels (pixel input: the RMS pixel residual
+    /// through the camera divided by `max(fx, fy)`). `f64::INFINITY` if a point lies in the focal plane
     /// (depth 0) of the returned pose, which can happen only in [`Refinement::Algebraic`] mode
     /// (in the default mode such a pose is never returned).
     pub reprojection_rmse: f64,
