@@ -390,5 +390,6 @@ fn cauchy_loss_resists_outliers_through_the_camera() {
             robust.cost
         );
     }
+    println!("Cauchy (2 px) at most half the squared loss's rotation error in {wins} of 20");
     assert!(wins >= 18, "Cauchy beat squared by 2x in only {wins} of 20");
 }
