@@ -255,16 +255,15 @@ pub(crate) fn refine(
     let out = prep.output(world, image, weights, pixel);
     // The world pose in the working frame (the inverse of `WorkingFrame::to_world`).
     let r_work = r * fr.rw.transpose();
-    let t_work = (t + r * fr.c) / fr.d;
     // S6 from the prior's rotation: damped Newton on the algebraic cost, O(1) per iteration
     // (M is already accumulated), to the algebraic minimum of the prior's basin, whose
     // translation follows from its rotation; S9 then needs the few passes it needs after a
     // full search. If Newton fails, S9 starts at the prior itself.
     let m = Search::new(opts, &prep.sys, m45, prep.scale)
         .refine(&r_work, CandidateSource::Initial)
-        .unwrap_or(Minimum {
+        .unwrap_or_else(|| Minimum {
             r: r_work,
-            t: t_work,
+            t: (t + r * fr.c) / fr.d,
             f: newton::cost_at(m45, &r_work),
             source: CandidateSource::Initial,
             planar: false,

@@ -35,7 +35,11 @@ pub(super) fn chance_inlier_rate(
     threshold_px: f64,
 ) -> f64 {
     let (fx, fy) = focal;
-    let area = spread(image.iter().map(|p| p.x)) * fx * spread(image.iter().map(|p| p.y)) * fy;
+    // One buffer for both coordinates.
+    let mut buf = Vec::with_capacity(image.len());
+    let wx = spread(&mut buf, image.iter().map(|p| p.x));
+    let wy = spread(&mut buf, image.iter().map(|p| p.y));
+    let area = wx * fx * wy * fy;
     let disk = std::f64::consts::PI * threshold_px * threshold_px;
     if area.is_finite() && area > disk {
         disk / area
@@ -47,8 +51,9 @@ pub(super) fn chance_inlier_rate(
 /// The width of the central 90 % of the values (between the 5 % and 95 % quantiles),
 /// stretched by `1 / 0.9` to the full width of a uniform distribution: the extremes for a few
 /// values, and unmoved by a few far-away ones among many.
-fn spread(values: impl Iterator<Item = f64>) -> f64 {
-    let mut v: Vec<f64> = values.collect();
+fn spread(v: &mut Vec<f64>, values: impl Iterator<Item = f64>) -> f64 {
+    v.clear();
+    v.extend(values);
     if v.len() < 2 {
         return 0.0;
     }
