@@ -393,3 +393,56 @@ fn cauchy_loss_resists_outliers_through_the_camera() {
     println!("Cauchy (2 px) at most half the squared loss's rotation error in {wins} of 20");
     assert!(wins >= 18, "Cauchy beat squared by 2x in only {wins} of 20");
 }
+
+/// An unusable loss scale is `InvalidOption("loss")` from every entry point, before any work;
+/// scales whose square is normal are accepted.
+#[test]
+fn unusable_loss_scales_are_invalid_options() {
+    let case = &cases()[1];
+    let p = problem(case, 7);
+    let image: Vec<Point2<f64>> = p
+        .pixels
+        .iter()
+        .map(|u| case.camera.undistort(*u).unwrap())
+        .collect();
+    let init = nalgebra::Isometry3::from_parts(
+        nalgebra::Translation3::from(p.t),
+        nalgebra::UnitQuaternion::from_matrix(&p.r),
+    );
+    for bad in [
+        Loss::Huber(0.0),
+        Loss::Huber(-1.0),
+        Loss::Cauchy(f64::NAN),
+        Loss::Cauchy(f64::INFINITY),
+        Loss::Huber(1e-200),
+        Loss::Cauchy(1e200),
+    ] {
+        let s = Solver::default().loss(bad);
+        let invalid = |r: Result<eopnp::Solution, eopnp::PnpError>| {
+            matches!(r, Err(eopnp::PnpError::InvalidOption { option: "loss" }))
+        };
+        assert!(invalid(s.solve(&p.world, &image)), "{bad:?}");
+        assert!(
+            invalid(s.solve_pixels(&p.world, &p.pixels, &case.camera)),
+            "{bad:?}"
+        );
+        assert!(invalid(s.refine(&p.world, &image, &init)), "{bad:?}");
+        assert!(
+            invalid(s.refine_pixels(&p.world, &p.pixels, &case.camera, &init)),
+            "{bad:?}"
+        );
+        assert!(
+            matches!(
+                Ransac::default().estimate_pixels(&s, &case.camera, &p.world, &p.pixels),
+                Err(eopnp::PnpError::InvalidOption { option: "loss" })
+            ),
+            "{bad:?}"
+        );
+    }
+    for good in [Loss::Huber(1e-150), Loss::Cauchy(1e150), Loss::Huber(2.0)] {
+        Solver::default()
+            .loss(good)
+            .solve_pixels(&p.world, &p.pixels, &case.camera)
+            .unwrap_or_else(|e| panic!("{good:?}: {e}"));
+    }
+}

@@ -23,7 +23,7 @@
 //!   identical, bit for bit, with no temporary files left (`colmap_write`).
 
 use eopnp::ransac::Ransac;
-use eopnp::{PlanarDetection, PnpError, Refinement, Solution, Solver};
+use eopnp::{Loss, PlanarDetection, PnpError, Refinement, Solution, Solver};
 use nalgebra::{Matrix3, Point2, Point3, Rotation3, Vector3};
 
 /// Largest N the decoder builds (N up to 10,000).
@@ -227,6 +227,14 @@ pub fn decode_solver(b: u8) -> Solver {
         s = s
             .newton_iterations(u32::from(b >> 5))
             .reprojection_iterations(u32::from(b >> 5));
+    } else {
+        // A robust loss for the final refinement (S10), at a small or a large scale.
+        let scale = if b & 128 != 0 { 1e-2 } else { 1e-4 };
+        s = s.loss(match (b >> 5) & 3 {
+            1 => Loss::Huber(scale),
+            2 => Loss::Cauchy(scale),
+            _ => Loss::Squared,
+        });
     }
     s
 }

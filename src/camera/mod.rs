@@ -386,6 +386,21 @@ impl Camera {
     }
 }
 
+/// A projection from normalised points to pixels with its Jacobian: what the per-point loop of
+/// the pixel-space refinement (S10) is generic over.
+pub(crate) trait Project {
+    /// The pixel of the normalised point `(x, y)` and the Jacobian `d pixel / d (x, y)`,
+    /// row-major.
+    fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]);
+}
+
+impl Project for Projector {
+    #[inline]
+    fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
+        Projector::project_with_jacobian(self, x, y)
+    }
+}
+
 /// A camera's projection, normalised point to pixel, with the parameters unpacked once
 /// ([`Camera::projector`]): what the per-point loops of the pixel-space refinement call.
 #[derive(Clone, Copy, Debug)]

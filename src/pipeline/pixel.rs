@@ -29,7 +29,8 @@ use super::options::Loss;
 use super::reprojection::{
     levenberg_marquardt, Composed, Normal, ReprojOptions, ReprojOutcome, Residuals,
 };
-use crate::camera::Projector;
+use crate::camera::{Project, Projector};
+use crate::numeric::lanes::{lane_sum, Block, LANES};
 use crate::numeric::mat3::pow2_scale;
 
 /// What S10 needs beyond the solve's inputs: the observations in the camera's units.
@@ -62,115 +63,235 @@ pub(crate) struct PixelOutcome {
     pub weight_sum: f64,
 }
 
-/// The residuals of S10 ([`Residuals`]).
-struct PixelProblem<'a> {
+/// The residuals of S10 ([`Residuals`]) through the projection `P`.
+struct PixelProblem<'a, P> {
     world: &'a [Point3<f64>],
     pixels: &'a [Point2<f64>],
     weights: Option<&'a [f64]>,
     /// `1 / unit`: the weights in a power-of-two unit (largest in `[1, 2)`).
     inv_weight: f64,
     c: Vector3<f64>,
-    projector: Projector,
+    projection: P,
     loss: Loss,
 }
 
 /// Number of sums: `E` (1), `J^T W J` (21, upper triangle row-major), `g` (6).
 const NSUMS: usize = 28;
 
-impl PixelProblem<'_> {
-    // Index loops fill the triangle of J^T W J by position.
-    #[allow(clippy::needless_range_loop)]
+/// Lane-wise partial sums of one pass (lane `l` sums the points `l, l + LANES, ...` of the
+/// sequence of active points), as in S9's pass.
+#[repr(C, align(16))]
+struct LaneSums {
+    s: [[f64; LANES]; NSUMS],
+    min_abs_z: [f64; LANES],
+    max_abs_z: [f64; LANES],
+    max_q2: [f64; LANES],
+    flipped: [u64; LANES],
+}
+
+/// A pose and a reference pose as plain scalars.
+struct PassPose {
+    a: [[f64; 3]; 3],
+    t: [f64; 3],
+    c: [f64; 3],
+    /// Third row of the reference `A` and its `t_z` (zeros without a reference).
+    ref_a: [f64; 3],
+    ref_tz: f64,
+}
+
+impl<P: Project> PixelProblem<'_, P> {
     /// One pass at `pose` with `loss` (see [`Residuals::accumulate`]). `HESS`: form
-    /// `J^T W J` (otherwise `h` is zero).
+    /// `J^T W J` (otherwise `h` is zero). The active points (weight > 0), in order, are
+    /// gathered into blocks of [`LANES`]; per block the geometry and the camera run lane by
+    /// lane, then the loss, then the sums, so that the compiler can use packed operations.
     fn pass<const HESS: bool>(
         &self,
         pose: &Composed,
         reference: Option<&Composed>,
         loss: Loss,
     ) -> Option<Normal> {
-        let a = &pose.a;
-        let t = &pose.t;
-        let mut s = [0.0f64; NSUMS];
-        let mut min_abs_z = f64::INFINITY;
-        let mut max_abs_z = 0.0f64;
-        let mut max_q2 = 0.0f64;
-        let ref_row = reference.map(|rf| (rf.a.row(2).transpose(), rf.t.z));
+        let row = |m: &Matrix3<f64>, j: usize| [m[(j, 0)], m[(j, 1)], m[(j, 2)]];
+        let (ref_a, ref_tz) = reference.map_or(([0.0; 3], 0.0), |rf| (row(&rf.a, 2), rf.t.z));
+        let k = PassPose {
+            a: [row(&pose.a, 0), row(&pose.a, 1), row(&pose.a, 2)],
+            t: [pose.t.x, pose.t.y, pose.t.z],
+            c: [self.c.x, self.c.y, self.c.z],
+            ref_a,
+            ref_tz,
+        };
+        let mut acc = LaneSums {
+            s: [[0.0; LANES]; NSUMS],
+            min_abs_z: [f64::INFINITY; LANES],
+            max_abs_z: [0.0; LANES],
+            max_q2: [0.0; LANES],
+            flipped: [0; LANES],
+        };
+        let check = reference.is_some();
+        let mut blk = Block::new();
+        let mut filled = 0;
         for (i, (x, u)) in self.world.iter().zip(self.pixels).enumerate() {
-            let w = self.weights.map_or(1.0, |w| w[i] * self.inv_weight);
+            let w = match self.weights {
+                Some(w) => w[i] * self.inv_weight,
+                None => 1.0,
+            };
             if w == 0.0 {
                 continue;
             }
-            let xc = x.coords - self.c;
-            let q = a * xc;
-            let p = q + t;
-            if let Some((ra, rtz)) = &ref_row {
-                let z_ref = ra.dot(&xc) + rtz;
-                let same_side = if z_ref > 0.0 { p.z > 0.0 } else { p.z < 0.0 };
-                if !same_side {
+            blk.set(filled, x, u);
+            blk.w[filled] = w;
+            filled += 1;
+            if filled == LANES {
+                self.block::<HESS>(&k, &blk, LANES, loss, &mut acc);
+                if check && acc.flipped.iter().any(|&f| f != 0) {
                     return None;
                 }
-            } else {
-                max_q2 = max_q2.max(q.norm_squared());
-            }
-            let az = p.z.abs();
-            min_abs_z = min_abs_z.min(az);
-            max_abs_z = max_abs_z.max(az);
-            let iz = 1.0 / p.z;
-            let (mx, my) = (p.x * iz, p.y * iz);
-            let ((px, py), j) = self.projector.project_with_jacobian(mx, my);
-            let (ex, ey) = (u.x - px, u.y - py);
-            let (rho, drho) = loss.eval(ex * ex + ey * ey);
-            s[0] += w * rho;
-            let sw = w * drho;
-            // g_k = d K_k / d p; the residual rows are [g_k x q, -g_k].
-            let g0 = Vector3::new(j[0] * iz, j[1] * iz, -(j[0] * mx + j[1] * my) * iz);
-            let g1 = Vector3::new(j[2] * iz, j[3] * iz, -(j[2] * mx + j[3] * my) * iz);
-            let c0 = g0.cross(&q);
-            let c1 = g1.cross(&q);
-            let r0 = [c0.x, c0.y, c0.z, -g0.x, -g0.y, -g0.z];
-            let r1 = [c1.x, c1.y, c1.z, -g1.x, -g1.y, -g1.z];
-            let (bx, by) = (sw * ex, sw * ey);
-            for k in 0..6 {
-                s[22 + k] += bx * r0[k] + by * r1[k];
-            }
-            if HESS {
-                let mut idx = 1;
-                for k in 0..6 {
-                    let (a0, a1) = (sw * r0[k], sw * r1[k]);
-                    for l in k..6 {
-                        s[idx] += a0 * r0[l] + a1 * r1[l];
-                        idx += 1;
-                    }
-                }
+                filled = 0;
             }
         }
+        if filled > 0 {
+            // The unused lanes repeat lane 0 (finite where it is), with no weight.
+            for l in filled..LANES {
+                let (x, m, _) = blk.point(0);
+                for d in 0..3 {
+                    blk.x[d][l] = x[d];
+                }
+                blk.m[0][l] = m[0];
+                blk.m[1][l] = m[1];
+            }
+            self.block::<HESS>(&k, &blk, filled, loss, &mut acc);
+            if check && acc.flipped.iter().any(|&f| f != 0) {
+                return None;
+            }
+        }
+        let s: [f64; NSUMS] = core::array::from_fn(|j| lane_sum(&acc.s[j]));
         let mut h = [[0.0f64; 6]; 6];
         if HESS {
             let mut idx = 1;
-            for k in 0..6 {
-                for l in k..6 {
-                    h[k][l] = s[idx];
-                    h[l][k] = s[idx];
+            for kk in 0..6 {
+                for l in kk..6 {
+                    h[kk][l] = s[idx];
+                    h[l][kk] = s[idx];
                     idx += 1;
                 }
             }
         }
         Some(Normal {
             h,
-            g: core::array::from_fn(|k| s[22 + k]),
+            g: core::array::from_fn(|j| s[22 + j]),
             e: s[0],
-            min_abs_z,
-            max_abs_z,
-            max_abs_q: if reference.is_some() {
+            min_abs_z: acc.min_abs_z.iter().fold(f64::INFINITY, |a, &z| a.min(z)),
+            max_abs_z: acc.max_abs_z.iter().fold(0.0f64, |a, &z| a.max(z)),
+            max_abs_q: if check {
                 f64::NAN
             } else {
-                max_q2.sqrt()
+                acc.max_q2.iter().fold(0.0f64, |a, &q| a.max(q)).sqrt()
             },
         })
     }
+
+    /// The first `n` lanes of `blk` into `acc` (the other lanes are left out).
+    // Index loops fill the sums by position.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn block<const HESS: bool>(
+        &self,
+        k: &PassPose,
+        blk: &Block,
+        n: usize,
+        loss: Loss,
+        acc: &mut LaneSums,
+    ) {
+        // Geometry and camera, lane by lane.
+        let mut q = [[0.0f64; LANES]; 3];
+        let mut g0 = [[0.0f64; LANES]; 3];
+        let mut g1 = [[0.0f64; LANES]; 3];
+        let mut e = [[0.0f64; LANES]; 2];
+        let mut r2 = [0.0f64; LANES];
+        let mut live = [0.0f64; LANES];
+        for l in 0..LANES {
+            let xc = [
+                blk.x[0][l] - k.c[0],
+                blk.x[1][l] - k.c[1],
+                blk.x[2][l] - k.c[2],
+            ];
+            let dot = |r: &[f64; 3]| r[0] * xc[0] + r[1] * xc[1] + r[2] * xc[2];
+            let (qx, qy, qz) = (dot(&k.a[0]), dot(&k.a[1]), dot(&k.a[2]));
+            let (px, py, pz) = (qx + k.t[0], qy + k.t[1], qz + k.t[2]);
+            let z_ref = dot(&k.ref_a) + k.ref_tz;
+            let same_side = if z_ref > 0.0 { pz > 0.0 } else { pz < 0.0 };
+            let on = l < n;
+            acc.flipped[l] |= u64::from(on && !same_side);
+            let q2 = if on { qx * qx + qy * qy + qz * qz } else { 0.0 };
+            let mq = acc.max_q2[l];
+            acc.max_q2[l] = if q2 > mq { q2 } else { mq };
+            let az = if on { pz.abs() } else { f64::INFINITY };
+            let mn = acc.min_abs_z[l];
+            acc.min_abs_z[l] = if az < mn { az } else { mn };
+            let az = if on { pz.abs() } else { 0.0 };
+            let mx = acc.max_abs_z[l];
+            acc.max_abs_z[l] = if az > mx { az } else { mx };
+            let iz = 1.0 / pz;
+            let (nx, ny) = (px * iz, py * iz);
+            let ((ux, uy), j) = self.projection.project_with_jacobian(nx, ny);
+            e[0][l] = blk.m[0][l] - ux;
+            e[1][l] = blk.m[1][l] - uy;
+            r2[l] = e[0][l] * e[0][l] + e[1][l] * e[1][l];
+            // g_k = d K_k / d p = (J_k / z) [[1, 0, -x], [0, 1, -y]].
+            g0[0][l] = j[0] * iz;
+            g0[1][l] = j[1] * iz;
+            g0[2][l] = -(j[0] * nx + j[1] * ny) * iz;
+            g1[0][l] = j[2] * iz;
+            g1[1][l] = j[3] * iz;
+            g1[2][l] = -(j[2] * nx + j[3] * ny) * iz;
+            q[0][l] = qx;
+            q[1][l] = qy;
+            q[2][l] = qz;
+            live[l] = if on { blk.w[l] } else { 0.0 };
+        }
+        // The loss: rho and the IRLS weight rho' (1 for the squared loss).
+        let mut rho = r2;
+        let mut sw = live;
+        if loss != Loss::Squared {
+            for l in 0..n {
+                let (r, d) = loss.eval(r2[l]);
+                rho[l] = r;
+                sw[l] = live[l] * d;
+            }
+        }
+        // The sums. Residual rows [g_k x q, -g_k].
+        let s = &mut acc.s;
+        for l in 0..LANES {
+            s[0][l] += live[l] * rho[l];
+            let cross = |g: &[[f64; LANES]; 3]| {
+                [
+                    g[1][l] * q[2][l] - g[2][l] * q[1][l],
+                    g[2][l] * q[0][l] - g[0][l] * q[2][l],
+                    g[0][l] * q[1][l] - g[1][l] * q[0][l],
+                ]
+            };
+            let c0 = cross(&g0);
+            let c1 = cross(&g1);
+            let r0 = [c0[0], c0[1], c0[2], -g0[0][l], -g0[1][l], -g0[2][l]];
+            let r1 = [c1[0], c1[1], c1[2], -g1[0][l], -g1[1][l], -g1[2][l]];
+            let (bx, by) = (sw[l] * e[0][l], sw[l] * e[1][l]);
+            for m in 0..6 {
+                s[22 + m][l] += bx * r0[m] + by * r1[m];
+            }
+            if HESS {
+                let mut idx = 1;
+                for a in 0..6 {
+                    let (a0, a1) = (sw[l] * r0[a], sw[l] * r1[a]);
+                    for b in a..6 {
+                        s[idx][l] += a0 * r0[b] + a1 * r1[b];
+                        idx += 1;
+                    }
+                }
+            }
+        }
+    }
 }
 
-impl Residuals for PixelProblem<'_> {
+impl<P: Project> Residuals for PixelProblem<'_, P> {
     fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal> {
         self.pass::<true>(pose, reference, self.loss)
     }
@@ -215,7 +336,7 @@ pub(crate) fn refine_pixels(
         weights: px.weights,
         inv_weight: 1.0 / unit,
         c: fr.c,
-        projector: px.projector,
+        projection: px.projector,
         loss: px.loss,
     };
     let out = levenberg_marquardt(&prob, fr, r_work, t_work, opts);
