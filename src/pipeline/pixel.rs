@@ -100,6 +100,8 @@ struct PassPose {
 }
 
 impl<P: Project> PixelProblem<'_, P> {
+    // Index loops fill the blocks and the triangle of J^T W J by position.
+    #[allow(clippy::needless_range_loop)]
     /// One pass at `pose` with `loss` (see [`Residuals::accumulate`]). `HESS`: form
     /// `J^T W J` (otherwise `h` is zero). The active points (weight > 0), in order, are
     /// gathered into blocks of [`LANES`]; per block the geometry and the camera run lane by
