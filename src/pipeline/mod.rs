@@ -10,12 +10,12 @@
 //! | S6 | [`newton`] | damped Newton on SO(3) from every start, to local minima of `f(R)` | no |
 //! | cert. | [`certificate`] | a Lagrangian dual certificate that a minimum is global (early exit) | no |
 //! | S7 | [`select`] | the minimum with the smallest `f` among those with most points in front | yes (depth signs) |
-//! | S9, S10, S8 | [`reprojection`], [`pixel`], [`output`] | LM on the reprojection error; with a camera (or a robust loss) LM on the pixel error through it; back to the world frame | yes |
+//! | S9 or S10, S8 | [`reprojection`], [`pixel`], [`output`] | LM on the reprojection error, or with a camera with distortion (or a robust loss) LM on the pixel error through it; back to the world frame | yes |
 //!
 //! [`run`] is the only place that calls the stages. It tries a certified fast path first (the
 //! case-1 start through S6, the certificate and S7's depth test) and, when that does not settle
-//! the solve, the full search (S4, S4', S6 from every start, S7); either ends in S9, S10 (pixel
-//! input through a camera with distortion, or a robust [`Loss`]) and S8.
+//! the solve, the full search (S4, S4', S6 from every start, S7); either ends in S9 (or, for
+//! pixel input through a camera with distortion or with a robust [`Loss`], S10) and S8.
 
 /// The stages one at a time, for `benches/stages.rs` only: compiled only with
 /// `RUSTFLAGS="--cfg eopnp_bench"`, never part of the library's API.

@@ -143,12 +143,48 @@ impl Output<'_> {
         let (mut r, mut t) = (m.r, m.t);
         let mut iters = 0;
         let mut converged = true;
-        // What S9 already knows at its final pose: the cost (equal to the reprojection error
-        // when the two residual rows are not reweighted) and the depth signs, which it never
-        // changes (a step that moves a point across z = 0 is rejected).
+        // What S9 (or S10) already knows at its final pose: the cost (for S9, equal to the
+        // reprojection error when the two residual rows are not reweighted) and the depth
+        // signs, which it never changes (a step that moves a point across z = 0 is rejected).
+        //
+        // S10: the pixel error through the camera (or a robust loss), from S7's minimum (S9,
+        // on the first-order error, would only bring the start closer by about as much as
+        // one S10 pass does, at a comparable cost). Its cost and RMS residual replace S9's; it
+        // keeps the depth signs as S9 does. If it cannot run (a point at depth 0, a non-finite
+        // result), S9 runs instead.
         let mut s9_error = None;
         let mut depth_signs_kept = false;
+        let mut s10 = None;
         if mode == Refinement::Reprojection {
+            if let Some(px) = self.pixel.filter(|px| px.refine) {
+                let po = pixel::refine_pixels(self.world, px, self.fr, &r, &t, opts);
+                let out = &po.out;
+                let finite = out.r.iter().all(|x| x.is_finite())
+                    && out.t.iter().all(|x| x.is_finite())
+                    && out.e.is_finite();
+                if finite && out.stop != reprojection::ReprojStop::SkippedZeroDepth {
+                    r = out.r;
+                    t = out.t;
+                    iters = out.iterations;
+                    converged = matches!(
+                        out.stop,
+                        reprojection::ReprojStop::Gradient
+                            | reprojection::ReprojStop::Step
+                            | reprojection::ReprojStop::FinalStep
+                            | reprojection::ReprojStop::Damping
+                    );
+                    let rmse = if po.weight_sum > 0.0 {
+                        (po.squared / po.weight_sum).sqrt() / px.scale
+                    } else {
+                        f64::INFINITY
+                    };
+                    s10 = Some(((out.e * po.unit).min(f64::MAX), rmse));
+                    depth_signs_kept = true;
+                }
+            }
+        }
+        // S9 when S10 did not run: the normalised reprojection error.
+        if mode == Refinement::Reprojection && s10.is_none() {
             let out = reprojection::refine_reprojection(
                 self.world,
                 self.image,
@@ -176,37 +212,6 @@ impl Output<'_> {
                     | reprojection::ReprojStop::FinalStep
                     | reprojection::ReprojStop::Damping
             );
-        }
-        // S10: the pixel error through the camera (or a robust loss), from S9's pose. Its cost
-        // and RMS residual replace S9's; it keeps the depth signs as S9 does.
-        let mut s10 = None;
-        if mode == Refinement::Reprojection {
-            if let Some(px) = self.pixel.filter(|px| px.refine) {
-                let po = pixel::refine_pixels(self.world, px, self.fr, &r, &t, opts);
-                let out = &po.out;
-                let finite = out.r.iter().all(|x| x.is_finite())
-                    && out.t.iter().all(|x| x.is_finite())
-                    && out.e.is_finite();
-                if finite && out.stop != reprojection::ReprojStop::SkippedZeroDepth {
-                    r = out.r;
-                    t = out.t;
-                    iters += out.iterations;
-                    converged = matches!(
-                        out.stop,
-                        reprojection::ReprojStop::Gradient
-                            | reprojection::ReprojStop::Step
-                            | reprojection::ReprojStop::FinalStep
-                            | reprojection::ReprojStop::Damping
-                    );
-                    let rmse = if po.weight_sum > 0.0 {
-                        (po.squared / po.weight_sum).sqrt() / px.scale
-                    } else {
-                        f64::INFINITY
-                    };
-                    s10 = Some(((out.e * po.unit).min(f64::MAX), rmse));
-                    depth_signs_kept = true;
-                }
-            }
         }
         // M is positive semi-definite, so f >= 0 in exact arithmetic. With wildly scaled input
         // (found by fuzzing: an image coordinate of 3e9) the accumulated M is not PSD to
