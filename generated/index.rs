@@ -2,7 +2,7 @@
 // Refresh the committed copy with `cargo run -p eopnp-codegen -- emit generated`.
 
 /// Operation counts of every generated kernel, in manifest order.
-pub const ALL_KERNEL_OPS: [&KernelOps; 15] = [
+pub const ALL_KERNEL_OPS: [&KernelOps; 21] = [
     &COST_COEFFICIENTS_OPS,
     &COST_OPS,
     &COST_GRADIENT_OPS,
@@ -18,4 +18,10 @@ pub const ALL_KERNEL_OPS: [&KernelOps; 15] = [
     &CASE3_CUBICS_OPS,
     &CASE4_MATRIX_OPS,
     &CASE4_DETERMINANT_OPS,
+    &DISTORTION_SIMPLE_RADIAL_OPS,
+    &DISTORTION_RADIAL_OPS,
+    &DISTORTION_OPENCV_OPS,
+    &DISTORTION_FISHEYE_OPS,
+    &DISTORTION_FULL_OPENCV_OPS,
+    &DISTORTION_THIN_PRISM_OPS,
 ];

@@ -1,7 +1,8 @@
 //! Generated polynomial kernels (straight-line code emitted by `eopnp-codegen`).
 //!
 //! Every function here is generated from the symbolic definitions in `codegen/src/defs/` (the
-//! cost in `cost.rs`, the resultants in `resultant.rs`) by the emitter in
+//! cost in `cost.rs`, the resultants in `resultant.rs`, the camera models' distortion in
+//! `camera.rs`) by the emitter in
 //! `codegen/src/emit.rs`, and checked numerically by the `eopnp-verify` crate (`verify/`).
 //! The formatted output is committed in `generated/` (and shipped in the package); `build.rs`
 //! puts it into `OUT_DIR`, copied from `generated/` by default or rendered afresh with feature
@@ -18,11 +19,14 @@
 //! | [`case2_resultant`], [`case2_cubics`] | case 2: the quartic in beta = alpha2^2 and the back-substitution cubics (G4) |
 //! | [`case3_quartic`], [`case3_resultant`], [`case3_cubics`] | case 3: the bivariate quartic, its degree-9 resultant, the cubics (G5) |
 //! | [`case4_matrix`], [`case4_determinant`] | case 4: M(k1) and its degree-8 determinant (G6) |
+//! | [`distortion_simple_radial`], [`distortion_radial`], [`distortion_opencv`], [`distortion_fisheye`] | a camera model's polynomial lens distortion at a normalised point, its 2x2 Jacobian and radial factor (`codegen/src/defs/camera.rs`) |
+//! | [`distortion_full_opencv`], [`distortion_thin_prism`] | the polynomial pieces (numerator, denominator, tangential and thin-prism terms) of the rational models and their derivatives |
 //!
 //! Symbols follow docs/algorithm.md: `s1, s2, s3` are the CGR parameters, `mIJ` the entry `M[I][J]`,
 //! `rIJ` the rotation entry `R[I-1][J-1]`.
 //!
-//! The solver calls `so3_local_model` (S6) and the case kernels (S4, S4'). The global-chart
+//! The solver calls `so3_local_model` (S6) and the case kernels (S4, S4'); `eopnp::camera`
+//! calls the distortion kernels. The global-chart
 //! cost kernels (`cost_coefficients`, `cost`, `cost_gradient`, `cost_hessian` and their
 //! planar analogues) are the paper's form of the same cost, kept as an exactly and numerically
 //! checked reference (the solver works in a chart centred on each iterate instead).
@@ -90,5 +94,11 @@ mod generated {
     include!(concat!(env!("OUT_DIR"), "/case3_cubics.rs"));
     include!(concat!(env!("OUT_DIR"), "/case4_matrix.rs"));
     include!(concat!(env!("OUT_DIR"), "/case4_determinant.rs"));
+    include!(concat!(env!("OUT_DIR"), "/distortion_simple_radial.rs"));
+    include!(concat!(env!("OUT_DIR"), "/distortion_radial.rs"));
+    include!(concat!(env!("OUT_DIR"), "/distortion_opencv.rs"));
+    include!(concat!(env!("OUT_DIR"), "/distortion_fisheye.rs"));
+    include!(concat!(env!("OUT_DIR"), "/distortion_full_opencv.rs"));
+    include!(concat!(env!("OUT_DIR"), "/distortion_thin_prism.rs"));
     include!(concat!(env!("OUT_DIR"), "/index.rs"));
 }

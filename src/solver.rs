@@ -679,26 +679,30 @@ pub(crate) fn undistort_all(
     let (fx, fy) = out.focal;
     let fmax = fx.max(fy);
     out.rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
-    for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
-        let Ok((m, weight)) = camera.undistort_weighted(*px) else {
-            continue;
-        };
-        let weight = user_weights.map_or(weight, |uw| uw[i] * weight);
-        if !weight.is_finite() {
-            return Err(PnpError::NonFinite {
-                index: i,
-                input: InputKind::Weight,
-            });
-        }
-        out.weights.push(weight);
-        out.world.push(*x);
-        out.image.push(m);
-        out.used.push(i);
-        out.pixels.push(*px);
-        if let (Some(uw), Some(keep)) = (user_weights, out.user_weights.as_mut()) {
-            keep.push(uw[i]);
-        }
-    }
+    // The camera unpacked and its model dispatched once, not per point.
+    camera
+        .projector()
+        .try_undistort_weighted_each(pixels, |i, undistorted| {
+            let Ok((m, weight)) = undistorted else {
+                return Ok(());
+            };
+            let weight = user_weights.map_or(weight, |uw| uw[i] * weight);
+            if !weight.is_finite() {
+                return Err(PnpError::NonFinite {
+                    index: i,
+                    input: InputKind::Weight,
+                });
+            }
+            out.weights.push(weight);
+            out.world.push(world[i]);
+            out.image.push(m);
+            out.used.push(i);
+            out.pixels.push(pixels[i]);
+            if let (Some(uw), Some(keep)) = (user_weights, out.user_weights.as_mut()) {
+                keep.push(uw[i]);
+            }
+            Ok(())
+        })?;
     Ok(out)
 }
 

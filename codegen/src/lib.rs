@@ -5,7 +5,8 @@
 //!   partial derivative, substitution, collect by one variable, exact division, fraction-free
 //!   determinants). No floating point anywhere in the symbolic stage.
 //! - [`program`]: a kernel as inputs, named intermediate definitions and outputs.
-//! - [`defs`]: the EOPnP polynomials, each defined once (docs/algorithm.md section 4).
+//! - [`defs`]: the EOPnP polynomials, each defined once (docs/algorithm.md section 4), and the
+//!   camera models' distortion maps (`defs::camera`).
 //! - [`emit`]: kernel -> formatted Rust (`quote` + `prettyplease`), with common-subexpression
 //!   elimination and operation counts.
 //!
@@ -17,6 +18,7 @@ pub mod emit;
 pub mod poly;
 pub mod program;
 
+use defs::camera::{self, Polynomial};
 use defs::cost::{self, Order};
 use defs::resultant::{self, Case};
 use program::Kernel;
@@ -46,6 +48,20 @@ pub const KERNELS: &[(&str, KernelDef)] = &[
     ("case3_cubics", || resultant::cubics(Case::Three)),
     ("case4_matrix", resultant::case4_matrix),
     ("case4_determinant", resultant::case4_determinant),
+    ("distortion_simple_radial", || {
+        camera::polynomial(Polynomial::SimpleRadial)
+    }),
+    ("distortion_radial", || {
+        camera::polynomial(Polynomial::Radial)
+    }),
+    ("distortion_opencv", || {
+        camera::polynomial(Polynomial::OpenCv)
+    }),
+    ("distortion_fisheye", || {
+        camera::polynomial(Polynomial::Fisheye)
+    }),
+    ("distortion_full_opencv", || camera::rational(false)),
+    ("distortion_thin_prism", || camera::rational(true)),
 ];
 
 /// Renders every kernel: `(file name, contents)`, plus `index.rs` listing their op counts.

@@ -61,7 +61,10 @@ mod distortion;
 mod model;
 mod opencv;
 
-use distortion::{iterative_undistortion, tilt_matrix, Distortion};
+use distortion::{
+    iterative_undistortion, tilt_matrix, with_lens, Distortion, Fisheye, FullOpenCv, Lens,
+    NoDistortion, OpenCv, Radial, SimpleRadial, ThinPrismTilted,
+};
 pub use model::{CameraError, CameraModel, SUPPORTED_MODELS};
 
 /// The serialized form of a [`Camera`]: its fields, checked by [`Camera::new`] on the way in.
@@ -251,36 +254,31 @@ impl Camera {
         )
     }
 
+    /// The model's distortion, its coefficients copied out of the parameters once.
     fn distortion(&self) -> Distortion {
         let p = &self.params;
-        let mut d = Distortion::default();
         match self.model {
-            CameraModel::SimplePinhole | CameraModel::Pinhole => {}
-            CameraModel::SimpleRadial | CameraModel::SimpleRadialFisheye => d.k[0] = p[3],
+            CameraModel::SimplePinhole | CameraModel::Pinhole => Distortion::None(NoDistortion),
+            CameraModel::SimpleRadial | CameraModel::SimpleRadialFisheye => {
+                Distortion::SimpleRadial(SimpleRadial([p[3]]))
+            }
             CameraModel::Radial | CameraModel::RadialFisheye => {
-                d.k[0] = p[3];
-                d.k[1] = p[4];
+                Distortion::Radial(Radial([p[3], p[4]]))
             }
-            CameraModel::OpenCv => {
-                d.k[0] = p[4];
-                d.k[1] = p[5];
-                d.p = [p[6], p[7]];
-            }
-            CameraModel::OpenCvFisheye => d.k = [p[4], p[5], p[6], p[7]],
+            CameraModel::OpenCv => Distortion::OpenCv(OpenCv([p[4], p[5], p[6], p[7]])),
+            CameraModel::OpenCvFisheye => Distortion::Fisheye(Fisheye([p[4], p[5], p[6], p[7]])),
             CameraModel::FullOpenCv => {
-                d.p = [p[6], p[7]];
-                d.rational = Some([p[4], p[5], p[8], p[9], p[10], p[11]]);
+                let mut k = [0.0; 8];
+                k.copy_from_slice(&p[4..12]);
+                Distortion::FullOpenCv(FullOpenCv(k))
             }
             CameraModel::OpenCvThinPrismTilted => {
-                d.p = [p[6], p[7]];
-                d.rational = Some([p[4], p[5], p[8], p[9], p[10], p[11]]);
-                d.prism = [p[12], p[13], p[14], p[15]];
-                if p[16] != 0.0 || p[17] != 0.0 {
-                    d.tilt = Some(tilt_matrix(p[16], p[17]));
-                }
+                let mut k = [0.0; 12];
+                k.copy_from_slice(&p[4..16]);
+                let tilt = (p[16] != 0.0 || p[17] != 0.0).then(|| tilt_matrix(p[16], p[17]));
+                Distortion::ThinPrismTilted(ThinPrismTilted { k, tilt })
             }
         }
-        d
     }
 
     /// The camera's projection with its parameters unpacked once, for per-point loops.
@@ -324,41 +322,7 @@ impl Camera {
     /// if the iteration does not converge, [`CameraError::BeyondHemisphere`] for a fisheye
     /// pixel 90 degrees or more off axis.
     pub fn undistort(&self, pixel: Point2<f64>) -> Result<Point2<f64>, CameraError> {
-        if !(pixel.x.is_finite() && pixel.y.is_finite()) {
-            return Err(CameraError::NonFinite);
-        }
-        let (fx, fy) = self.intrinsics_scale();
-        let (cx, cy) = self.principal_point();
-        let x0 = ((pixel.x - cx) / fx, (pixel.y - cy) / fy);
-        let fail = CameraError::NoConvergence {
-            pixel: (pixel.x, pixel.y),
-        };
-        let (u, v) = if self.has_distortion() {
-            iterative_undistortion(&self.distortion(), x0).ok_or(fail)?
-        } else {
-            x0
-        };
-        if !(u.is_finite() && v.is_finite()) {
-            return Err(CameraError::OutOfRange {
-                pixel: (pixel.x, pixel.y),
-            });
-        }
-        if !self.model.is_fisheye() {
-            return Ok(Point2::new(u, v));
-        }
-        // Equidistant fisheye: theta = |(u, v)|, normalised radius tan(theta).
-        let theta = u.hypot(v);
-        if theta >= core::f64::consts::FRAC_PI_2 {
-            return Err(CameraError::BeyondHemisphere {
-                pixel: (pixel.x, pixel.y),
-            });
-        }
-        if theta > f64::EPSILON {
-            let s = theta.tan() / theta;
-            Ok(Point2::new(u * s, v * s))
-        } else {
-            Ok(Point2::new(u, v))
-        }
+        self.projector().undistort(pixel).map(|(n, _)| n)
     }
 
     /// [`Camera::undistort`] and the weight of the point in [`crate::Solver::solve_pixels`]:
@@ -372,17 +336,7 @@ impl Camera {
         &self,
         pixel: Point2<f64>,
     ) -> Result<(Point2<f64>, f64), CameraError> {
-        let n = self.undistort(pixel)?;
-        let (fx, fy) = self.intrinsics_scale();
-        let j = self.project_jacobian(n);
-        let w = ((j[0] * j[3] - j[1] * j[2]) / (fx * fy)).abs();
-        if w.is_finite() {
-            Ok((n, w))
-        } else {
-            Err(CameraError::OutOfRange {
-                pixel: (pixel.x, pixel.y),
-            })
-        }
+        self.projector().undistort_weighted(pixel)
     }
 }
 
@@ -394,58 +348,24 @@ pub(crate) trait Project {
     fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]);
 }
 
-impl Project for Projector {
-    #[inline]
-    fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
-        Projector::project_with_jacobian(self, x, y)
-    }
+/// Code generic over the projection ([`Projector::with_projection`]).
+pub(crate) trait ProjectionJob {
+    type Output;
+    fn run<P: Project>(self, projection: P) -> Self::Output;
 }
 
-/// A camera's projection, normalised point to pixel, with the parameters unpacked once
-/// ([`Camera::projector`]): what the per-point loops of the pixel-space refinement call.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Projector {
+/// A projection with one lens model: the per-point code of [`Projector`] without the dispatch.
+#[derive(Clone, Copy)]
+pub(crate) struct LensProjection<L> {
     focal: (f64, f64),
     centre: (f64, f64),
     fisheye: bool,
-    distortion: Distortion,
+    lens: L,
 }
 
-impl Projector {
-    /// The identity: a pinhole camera with unit focal lengths at the origin (normalised
-    /// coordinates are its pixels).
-    pub(crate) fn identity() -> Projector {
-        Projector {
-            focal: (1.0, 1.0),
-            centre: (0.0, 0.0),
-            fisheye: false,
-            distortion: Distortion::default(),
-        }
-    }
-
-    /// The pixel of the normalised point `(x, y)`.
-    #[inline]
-    pub(crate) fn project(&self, x: f64, y: f64) -> (f64, f64) {
-        let (mut u, mut v) = (x, y);
-        if self.fisheye {
-            let r = (x * x + y * y).sqrt();
-            if r > f64::EPSILON {
-                let s = r.atan() / r;
-                u *= s;
-                v *= s;
-            }
-        }
-        let ((xd, yd), _) = self.distortion.apply(u, v);
-        (
-            self.focal.0 * xd + self.centre.0,
-            self.focal.1 * yd + self.centre.1,
-        )
-    }
-
-    /// The pixel of the normalised point `(x, y)` and the Jacobian `d pixel / d (x, y)`,
-    /// row-major.
-    #[inline]
-    pub(crate) fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
+impl<L: Lens> Project for LensProjection<L> {
+    #[inline(always)]
+    fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
         let (fx, fy) = self.focal;
         // Fisheye models: chain rule through (u, v) = s(r) (x, y), s = atan(r) / r.
         let (u, v, jf) = if self.fisheye {
@@ -467,7 +387,7 @@ impl Projector {
         } else {
             (x, y, [1.0, 0.0, 0.0, 1.0])
         };
-        let ((xd, yd), jd) = self.distortion.apply(u, v);
+        let ([xd, yd], jd, _) = self.lens.apply(u, v);
         let m = [
             jd[0] * jf[0] + jd[1] * jf[2],
             jd[0] * jf[1] + jd[1] * jf[3],
@@ -478,6 +398,163 @@ impl Projector {
             (fx * xd + self.centre.0, fy * yd + self.centre.1),
             [fx * m[0], fx * m[1], fy * m[2], fy * m[3]],
         )
+    }
+}
+
+/// A camera's projection, normalised point to pixel, with the parameters unpacked once
+/// ([`Camera::projector`]): what the per-point loops of the pixel-space refinement call.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Projector {
+    focal: (f64, f64),
+    centre: (f64, f64),
+    fisheye: bool,
+    distortion: Distortion,
+}
+
+impl Projector {
+    /// The identity: a pinhole camera with unit focal lengths at the origin (normalised
+    /// coordinates are its pixels).
+    pub(crate) fn identity() -> Projector {
+        Projector {
+            focal: (1.0, 1.0),
+            centre: (0.0, 0.0),
+            fisheye: false,
+            distortion: Distortion::None(NoDistortion),
+        }
+    }
+
+    /// The pixel of the normalised point `(x, y)`.
+    #[inline]
+    pub(crate) fn project(&self, x: f64, y: f64) -> (f64, f64) {
+        let (mut u, mut v) = (x, y);
+        if self.fisheye {
+            let r = (x * x + y * y).sqrt();
+            if r > f64::EPSILON {
+                let s = r.atan() / r;
+                u *= s;
+                v *= s;
+            }
+        }
+        let ([xd, yd], _, _) = with_lens!(self.distortion, l => l.apply(u, v));
+        (
+            self.focal.0 * xd + self.centre.0,
+            self.focal.1 * yd + self.centre.1,
+        )
+    }
+
+    /// The pixel of the normalised point `(x, y)` and the Jacobian `d pixel / d (x, y)`,
+    /// row-major.
+    #[inline]
+    pub(crate) fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
+        let (focal, centre, fisheye) = (self.focal, self.centre, self.fisheye);
+        with_lens!(self.distortion, lens => LensProjection { focal, centre, fisheye, lens }
+            .project_with_jacobian(x, y))
+    }
+
+    /// Runs `job` with this projection's lens model fixed at compile time (the model
+    /// dispatched once, not per point).
+    pub(crate) fn with_projection<J: ProjectionJob>(&self, job: J) -> J::Output {
+        let (focal, centre, fisheye) = (self.focal, self.centre, self.fisheye);
+        with_lens!(self.distortion, lens => job.run(LensProjection { focal, centre, fisheye, lens }))
+    }
+
+    /// [`Camera::undistort`]: the normalised point of a pixel, and `det J / (fx fy)`, `J` the
+    /// Jacobian of [`Projector::project`] at that point (1 without distortion).
+    #[inline]
+    pub(crate) fn undistort(&self, pixel: Point2<f64>) -> Result<(Point2<f64>, f64), CameraError> {
+        with_lens!(self.distortion, l => self.undistort_with(l, pixel))
+    }
+
+    /// [`Camera::undistort_weighted`].
+    #[inline]
+    pub(crate) fn undistort_weighted(
+        &self,
+        pixel: Point2<f64>,
+    ) -> Result<(Point2<f64>, f64), CameraError> {
+        with_lens!(self.distortion, l => self.undistort_weighted_with(l, pixel))
+    }
+
+    /// Every pixel through [`Projector::undistort_weighted`] with the model dispatched once:
+    /// `each(i, result)` for pixel `i`, in order; stops at the first error `each` returns.
+    pub(crate) fn try_undistort_weighted_each<E>(
+        &self,
+        pixels: &[Point2<f64>],
+        mut each: impl FnMut(usize, Result<(Point2<f64>, f64), CameraError>) -> Result<(), E>,
+    ) -> Result<(), E> {
+        with_lens!(self.distortion, l => {
+            for (i, px) in pixels.iter().enumerate() {
+                each(i, self.undistort_weighted_with(l, *px))?;
+            }
+            Ok(())
+        })
+    }
+
+    /// [`Projector::undistort_weighted`] for one lens: the weight `|det J| / (fx fy)` of
+    /// [`Camera::undistort_weighted`] from the Jacobian of the distortion at the last Newton
+    /// iterate (the point the convergence check evaluated it at) and, for the fisheye models,
+    /// the determinant of the equidistant map in closed form, `theta / (r (1 + r^2))`,
+    /// `r = tan theta`.
+    #[inline(always)]
+    fn undistort_weighted_with<L: Lens>(
+        &self,
+        lens: L,
+        pixel: Point2<f64>,
+    ) -> Result<(Point2<f64>, f64), CameraError> {
+        let (n, det) = self.undistort_with(lens, pixel)?;
+        let w = det.abs();
+        if w.is_finite() {
+            Ok((n, w))
+        } else {
+            Err(CameraError::OutOfRange {
+                pixel: (pixel.x, pixel.y),
+            })
+        }
+    }
+
+    /// [`Projector::undistort`] for one lens; the second value is `det J / (fx fy)`, `J` the
+    /// Jacobian of the projection at the normalised point.
+    #[inline(always)]
+    fn undistort_with<L: Lens>(
+        &self,
+        lens: L,
+        pixel: Point2<f64>,
+    ) -> Result<(Point2<f64>, f64), CameraError> {
+        if !(pixel.x.is_finite() && pixel.y.is_finite()) {
+            return Err(CameraError::NonFinite);
+        }
+        let (fx, fy) = self.focal;
+        let (cx, cy) = self.centre;
+        let x0 = ((pixel.x - cx) / fx, (pixel.y - cy) / fy);
+        let ((u, v), det) = if L::IDENTITY {
+            (x0, 1.0)
+        } else {
+            iterative_undistortion(&lens, x0).ok_or(CameraError::NoConvergence {
+                pixel: (pixel.x, pixel.y),
+            })?
+        };
+        if !(u.is_finite() && v.is_finite()) {
+            return Err(CameraError::OutOfRange {
+                pixel: (pixel.x, pixel.y),
+            });
+        }
+        if !self.fisheye {
+            return Ok((Point2::new(u, v), det));
+        }
+        // Equidistant fisheye: theta = |(u, v)|, normalised radius r = tan(theta); the map
+        // (x, y) -> theta / r (x, y) has determinant theta / (r (1 + r^2)).
+        let theta = (u * u + v * v).sqrt();
+        if theta >= core::f64::consts::FRAC_PI_2 {
+            return Err(CameraError::BeyondHemisphere {
+                pixel: (pixel.x, pixel.y),
+            });
+        }
+        if theta > f64::EPSILON {
+            let r = theta.tan();
+            let s = r / theta;
+            Ok((Point2::new(u * s, v * s), det / (s * (1.0 + r * r))))
+        } else {
+            Ok((Point2::new(u, v), det))
+        }
     }
 }
 

@@ -30,7 +30,7 @@ use super::options::Loss;
 use super::reprojection::{
     levenberg_marquardt, Composed, Normal, ReprojOptions, ReprojOutcome, Residuals,
 };
-use crate::camera::{Project, Projector};
+use crate::camera::{Project, ProjectionJob, Projector};
 use crate::numeric::lanes::{lane_sum, Block, LANES};
 use crate::numeric::mat3::pow2_scale;
 
@@ -313,6 +313,44 @@ impl<P: Project> Residuals for PixelProblem<'_, P> {
     }
 }
 
+/// S10 with the camera's model fixed at compile time: the refinement, and the plain squared
+/// error at its pose.
+struct Job<'a> {
+    world: &'a [Point3<f64>],
+    px: &'a PixelInputs<'a>,
+    fr: &'a WorkingFrame,
+    r_work: &'a Matrix3<f64>,
+    t_work: &'a Vector3<f64>,
+    opts: &'a ReprojOptions,
+    inv_weight: f64,
+}
+
+impl ProjectionJob for Job<'_> {
+    type Output = (ReprojOutcome, f64);
+
+    fn run<P: Project>(self, projection: P) -> (ReprojOutcome, f64) {
+        let (px, fr) = (self.px, self.fr);
+        let prob = PixelProblem {
+            world: self.world,
+            pixels: px.pixels,
+            weights: px.weights,
+            inv_weight: self.inv_weight,
+            c: fr.c,
+            projection,
+            loss: px.loss,
+        };
+        let out = levenberg_marquardt(&prob, fr, self.r_work, self.t_work, self.opts);
+        let squared = if px.loss == Loss::Squared {
+            out.e
+        } else {
+            let pose = Composed::new(&out.r, &fr.rw, fr.d, &out.t);
+            prob.pass::<false>(&pose, None, Loss::Squared)
+                .map_or(f64::NAN, |n| n.e)
+        };
+        (out, squared)
+    }
+}
+
 /// S10 from the working-frame pose `(r_work, t_work)` (S9's result). `world` are the solve's
 /// world points, `px` their observations; `fr` is S1's working frame. No allocation.
 pub(crate) fn refine_pixels(
@@ -333,26 +371,19 @@ pub(crate) fn refine_pixels(
             1.0
         }
     });
-    let prob = PixelProblem {
-        world,
-        pixels: px.pixels,
-        weights: px.weights,
-        inv_weight: 1.0 / unit,
-        c: fr.c,
-        projection: px.projector,
-        loss: px.loss,
-    };
-    let out = levenberg_marquardt(&prob, fr, r_work, t_work, opts);
     let weight_sum = px.weights.map_or(world.len() as f64, |w| {
         w.iter().map(|&x| x / unit).sum::<f64>()
     });
-    let squared = if px.loss == Loss::Squared {
-        out.e
-    } else {
-        let pose = Composed::new(&out.r, &fr.rw, fr.d, &out.t);
-        prob.pass::<false>(&pose, None, Loss::Squared)
-            .map_or(f64::NAN, |n| n.e)
+    let job = Job {
+        world,
+        px,
+        fr,
+        r_work,
+        t_work,
+        opts,
+        inv_weight: 1.0 / unit,
     };
+    let (out, squared) = px.projector.with_projection(job);
     PixelOutcome {
         out,
         unit,

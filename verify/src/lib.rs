@@ -10,9 +10,12 @@
 //! - `strategies`: seeded random inputs spanning scales, and proptest strategies.
 //! - `checks`: one function per check, returning a `report::Measurement`; shared by the tests
 //!   (which assert the bounds) and `cargo run -p eopnp-verify --release` (which prints them).
+//! - `camera`: the camera distortion kernels against the hand-written maps they replace
+//!   (values, complex step) and against central differences.
 //! - `report`: the measurement type and the Markdown table.
 #![warn(missing_docs)]
 
+pub mod camera;
 pub mod checks;
 pub mod fd;
 pub mod reference;

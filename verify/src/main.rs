@@ -1,9 +1,11 @@
-//! `cargo run -p eopnp-verify --release`: runs every check of `eopnp_verify::checks` and prints
+//! `cargo run -p eopnp-verify --release`: runs every check of `eopnp_verify::checks` and
+//! `eopnp_verify::camera` and prints
 //! a Markdown table (kernel | check | samples | worst error (norm) | bound | worst/bound | ops
 //! after CSE | naive ops (terms)). Exits with status 1 if any check fails.
 
 fn main() {
-    let ms = eopnp_verify::checks::all();
+    let mut ms = eopnp_verify::checks::all();
+    ms.extend(eopnp_verify::camera::all(eopnp_verify::camera::N_CAMERA));
     print!("{}", eopnp_verify::report::table(&ms));
     let failed: Vec<_> = ms.iter().filter(|m| !m.passed()).collect();
     if !failed.is_empty() {

@@ -1,4 +1,5 @@
 //! Kernel definitions: each polynomial is defined once here and everything else is derived.
 
+pub mod camera;
 pub mod cost;
 pub mod resultant;
