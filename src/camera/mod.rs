@@ -351,7 +351,7 @@ pub(crate) trait Project {
 /// Code generic over the projection ([`Projector::with_projection`]).
 pub(crate) trait ProjectionJob {
     type Output;
-    fn run<P: Project>(self, projection: P) -> Self::Output;
+    fn run<P: Project + Copy>(self, projection: P) -> Self::Output;
 }
 
 /// A projection with one lens model: the per-point code of [`Projector`] without the dispatch.

@@ -1,23 +1,24 @@
 //! S10: Levenberg-Marquardt on the pixel residuals through the camera model.
 //!
-//! With a camera (pixel input), S1-S9 solve on undistorted points: S9 minimises the normalised
-//! residuals weighted by the lens distortion's local scale, a first-order stand-in for the
-//! pixel error. S10 then minimises the pixel error itself,
-//! `E(R, t) = sum_i w_i rho(|u_i - K(pi(R P_i + t))|^2)`, with `u_i` the observed pixel, `K`
-//! the camera's projection (distortion included, [`Projector`]), `pi(x, y, z) = (x/z, y/z)`,
-//! `w_i` the caller's weight and `rho` the [`Loss`]: for the squared loss the
-//! maximum-likelihood pose under isotropic Gaussian pixel noise, for any camera model. With a
-//! robust loss the weights are iteratively reweighted (`rho'(r2)` per point), and the step is
-//! accepted only if `E` itself decreases.
+//! With a camera (pixel input), S1-S7 solve on undistorted points weighted by the lens
+//! distortion's local scale, a first-order stand-in for the pixel error. S10 minimises the
+//! pixel error itself, `E(R, t) = sum_i w_i rho(|u_i - K(pi(R P_i + t))|^2)`, with `u_i` the
+//! observed pixel, `K` the camera's projection (distortion included, [`Projector`]),
+//! `pi(x, y, z) = (x/z, y/z)`, `w_i` the caller's weight and `rho` the [`Loss`]: for the
+//! squared loss the maximum-likelihood pose under isotropic Gaussian pixel noise, for any
+//! camera model. With a robust loss the weights are iteratively reweighted (`rho'(r2)` per
+//! point), and a step is accepted only if `E` itself decreases.
 //!
-//! It runs the same Levenberg-Marquardt iteration as S9
-//! ([`super::reprojection::levenberg_marquardt`]: damping, depth-sign guard, reuse of
-//! `J^T W J`, final step), in S1's working frame, from S7's minimum, in place of S9 (which
-//! runs only if S10 cannot: a point at depth 0, a non-finite result). Starting S10 from S9's
-//! first-order minimum instead saves about one S10 pass but costs S9's two or three passes
-//! (on the bundled COLMAP model: 17 % more instructions per image, callgrind). Per point, the Jacobian row of residual `k` is
-//! `[g_k x q, -g_k]` with `g_k = d K_k / d p = (J_k / z) [[1, 0, -x], [0, 1, -y]]`, `J` the
-//! camera's 2 x 2 Jacobian at the normalised point `(x, y)` and `q` the rotated point.
+//! It runs S9's Levenberg-Marquardt iteration ([`super::reprojection::levenberg_marquardt`]:
+//! damping, depth-sign guard, reuse of `J^T W J`, final step) and S9's vectorised pass
+//! ([`super::reprojection::pass`]) with the camera's metric ([`CameraMetric`]): at the
+//! normalised projection of a point, `C = w rho' J^T J` and `e~ = w rho' J^T e` (`J` the
+//! camera's Jacobian, `e` the pixel residual) take the place of S9's row weights and
+//! normalised residual. The lens model is fixed at compile time ([`Projector::with_projection`]).
+//! S10 starts from S7's minimum, in place of S9 (which runs only if S10 cannot: a point at
+//! depth 0, a non-finite result). Starting it from S9's first-order minimum instead saves
+//! about one S10 pass but costs S9's two or three passes (on the bundled COLMAP model: 17 %
+//! more instructions per image, callgrind).
 //!
 //! S10 does not run for a pinhole camera with the squared loss: S9 with the row weights
 //! `(fx^2, fy^2)` already minimises exactly that cost. With normalised input and a robust loss,
@@ -27,11 +28,11 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::frame::{WorkingFrame, MIN_UNIT};
 use super::options::Loss;
+use super::reprojection::pass::{pass, LaneMetric, Metric, PassInputs};
 use super::reprojection::{
     levenberg_marquardt, Composed, Normal, ReprojOptions, ReprojOutcome, Residuals,
 };
 use crate::camera::{Project, ProjectionJob, Projector};
-use crate::numeric::lanes::{lane_sum, Block, LANES};
 use crate::numeric::mat3::pow2_scale;
 
 /// What S10 needs beyond the solve's inputs: the observations in the camera's units.
@@ -64,239 +65,61 @@ pub(crate) struct PixelOutcome {
     pub weight_sum: f64,
 }
 
-/// The residuals of S10 ([`Residuals`]) through the projection `P`.
-struct PixelProblem<'a, P> {
+/// S10's metric ([`Metric`]): the pixel residual through the projection `P`, with the loss
+/// when `ROBUST` (the squared loss otherwise, `rho' = 1` compiled in).
+struct CameraMetric<P, const ROBUST: bool> {
+    projection: P,
+    loss: Loss,
+}
+
+impl<P: Project, const ROBUST: bool> Metric for CameraMetric<P, ROBUST> {
+    const DIAGONAL: bool = false;
+
+    /// At the normalised projection `(u, v)`: the pixel residual `e = m - K(u, v)`, the
+    /// camera's Jacobian `J`, `s = w rho'(|e|^2)`; `C = s J^T J`, `e~ = s J^T e`, cost
+    /// `w rho(|e|^2)`.
+    #[inline(always)]
+    fn at(&self, m: [f64; 2], w: f64, u: f64, v: f64) -> LaneMetric {
+        let ((px, py), j) = self.projection.project_with_jacobian(u, v);
+        let (e0, e1) = (m[0] - px, m[1] - py);
+        let r2 = e0 * e0 + e1 * e1;
+        let (rho, drho) = if ROBUST {
+            self.loss.eval(r2)
+        } else {
+            (r2, 1.0)
+        };
+        let s = w * drho;
+        LaneMetric {
+            cost: w * rho,
+            c00: s * (j[0] * j[0] + j[2] * j[2]),
+            c01: s * (j[0] * j[1] + j[2] * j[3]),
+            c11: s * (j[1] * j[1] + j[3] * j[3]),
+            ex: s * (j[0] * e0 + j[2] * e1),
+            ey: s * (j[1] * e0 + j[3] * e1),
+        }
+    }
+}
+
+/// The residuals of S10 ([`Residuals`]) under the metric `M`.
+struct PixelProblem<'a, M> {
     world: &'a [Point3<f64>],
     pixels: &'a [Point2<f64>],
     weights: Option<&'a [f64]>,
     /// `1 / unit`: the weights in a power-of-two unit (largest in `[1, 2)`).
     inv_weight: f64,
     c: Vector3<f64>,
-    projection: P,
-    loss: Loss,
+    metric: M,
 }
 
-/// Number of sums: `E` (1), `J^T W J` (21, upper triangle row-major), `g` (6).
-const NSUMS: usize = 28;
-
-/// Lane-wise partial sums of one pass (lane `l` sums the points `l, l + LANES, ...` of the
-/// sequence of active points), as in S9's pass.
-#[repr(C, align(16))]
-struct LaneSums {
-    s: [[f64; LANES]; NSUMS],
-    min_abs_z: [f64; LANES],
-    max_abs_z: [f64; LANES],
-    max_q2: [f64; LANES],
-    flipped: [u64; LANES],
-}
-
-/// A pose and a reference pose as plain scalars.
-struct PassPose {
-    a: [[f64; 3]; 3],
-    t: [f64; 3],
-    c: [f64; 3],
-    /// Third row of the reference `A` and its `t_z` (zeros without a reference).
-    ref_a: [f64; 3],
-    ref_tz: f64,
-}
-
-impl<P: Project> PixelProblem<'_, P> {
-    // Index loops fill the blocks and the triangle of J^T W J by position.
-    #[allow(clippy::needless_range_loop)]
-    /// One pass at `pose` with `loss` (see [`Residuals::accumulate`]). `HESS`: form
-    /// `J^T W J` (otherwise `h` is zero). The active points (weight > 0), in order, are
-    /// gathered into blocks of [`LANES`]; per block the geometry and the camera run lane by
-    /// lane, then the loss, then the sums, so that the compiler can use packed operations.
-    fn pass<const HESS: bool>(
-        &self,
-        pose: &Composed,
-        reference: Option<&Composed>,
-        loss: Loss,
-    ) -> Option<Normal> {
-        let row = |m: &Matrix3<f64>, j: usize| [m[(j, 0)], m[(j, 1)], m[(j, 2)]];
-        let (ref_a, ref_tz) = reference.map_or(([0.0; 3], 0.0), |rf| (row(&rf.a, 2), rf.t.z));
-        let k = PassPose {
-            a: [row(&pose.a, 0), row(&pose.a, 1), row(&pose.a, 2)],
-            t: [pose.t.x, pose.t.y, pose.t.z],
-            c: [self.c.x, self.c.y, self.c.z],
-            ref_a,
-            ref_tz,
-        };
-        let mut acc = LaneSums {
-            s: [[0.0; LANES]; NSUMS],
-            min_abs_z: [f64::INFINITY; LANES],
-            max_abs_z: [0.0; LANES],
-            max_q2: [0.0; LANES],
-            flipped: [0; LANES],
-        };
-        let check = reference.is_some();
-        let mut blk = Block::new();
-        let mut filled = 0;
-        for (i, (x, u)) in self.world.iter().zip(self.pixels).enumerate() {
-            let w = match self.weights {
-                Some(w) => w[i] * self.inv_weight,
-                None => 1.0,
-            };
-            if w == 0.0 {
-                continue;
-            }
-            blk.set(filled, x, u);
-            blk.w[filled] = w;
-            filled += 1;
-            if filled == LANES {
-                self.block::<HESS>(&k, &blk, LANES, loss, &mut acc);
-                if check && acc.flipped.iter().any(|&f| f != 0) {
-                    return None;
-                }
-                filled = 0;
-            }
-        }
-        if filled > 0 {
-            // The unused lanes repeat lane 0 (finite where it is), with no weight.
-            for l in filled..LANES {
-                let (x, m, _) = blk.point(0);
-                for d in 0..3 {
-                    blk.x[d][l] = x[d];
-                }
-                blk.m[0][l] = m[0];
-                blk.m[1][l] = m[1];
-            }
-            self.block::<HESS>(&k, &blk, filled, loss, &mut acc);
-            if check && acc.flipped.iter().any(|&f| f != 0) {
-                return None;
-            }
-        }
-        let s: [f64; NSUMS] = core::array::from_fn(|j| lane_sum(&acc.s[j]));
-        let mut h = [[0.0f64; 6]; 6];
-        if HESS {
-            let mut idx = 1;
-            for kk in 0..6 {
-                for l in kk..6 {
-                    h[kk][l] = s[idx];
-                    h[l][kk] = s[idx];
-                    idx += 1;
-                }
-            }
-        }
-        Some(Normal {
-            h,
-            g: core::array::from_fn(|j| s[22 + j]),
-            e: s[0],
-            min_abs_z: acc.min_abs_z.iter().fold(f64::INFINITY, |a, &z| a.min(z)),
-            max_abs_z: acc.max_abs_z.iter().fold(0.0f64, |a, &z| a.max(z)),
-            max_abs_q: if check {
-                f64::NAN
-            } else {
-                acc.max_q2.iter().fold(0.0f64, |a, &q| a.max(q)).sqrt()
-            },
-        })
-    }
-
-    /// The first `n` lanes of `blk` into `acc` (the other lanes are left out).
-    // Index loops fill the sums by position.
-    #[allow(clippy::needless_range_loop)]
-    #[inline(always)]
-    fn block<const HESS: bool>(
-        &self,
-        k: &PassPose,
-        blk: &Block,
-        n: usize,
-        loss: Loss,
-        acc: &mut LaneSums,
-    ) {
-        // Geometry and camera, lane by lane.
-        let mut q = [[0.0f64; LANES]; 3];
-        let mut g0 = [[0.0f64; LANES]; 3];
-        let mut g1 = [[0.0f64; LANES]; 3];
-        let mut e = [[0.0f64; LANES]; 2];
-        let mut r2 = [0.0f64; LANES];
-        let mut live = [0.0f64; LANES];
-        for l in 0..LANES {
-            let xc = [
-                blk.x[0][l] - k.c[0],
-                blk.x[1][l] - k.c[1],
-                blk.x[2][l] - k.c[2],
-            ];
-            let dot = |r: &[f64; 3]| r[0] * xc[0] + r[1] * xc[1] + r[2] * xc[2];
-            let (qx, qy, qz) = (dot(&k.a[0]), dot(&k.a[1]), dot(&k.a[2]));
-            let (px, py, pz) = (qx + k.t[0], qy + k.t[1], qz + k.t[2]);
-            let z_ref = dot(&k.ref_a) + k.ref_tz;
-            let same_side = if z_ref > 0.0 { pz > 0.0 } else { pz < 0.0 };
-            let on = l < n;
-            acc.flipped[l] |= u64::from(on && !same_side);
-            let q2 = if on { qx * qx + qy * qy + qz * qz } else { 0.0 };
-            let mq = acc.max_q2[l];
-            acc.max_q2[l] = if q2 > mq { q2 } else { mq };
-            let az = if on { pz.abs() } else { f64::INFINITY };
-            let mn = acc.min_abs_z[l];
-            acc.min_abs_z[l] = if az < mn { az } else { mn };
-            let az = if on { pz.abs() } else { 0.0 };
-            let mx = acc.max_abs_z[l];
-            acc.max_abs_z[l] = if az > mx { az } else { mx };
-            let iz = 1.0 / pz;
-            let (nx, ny) = (px * iz, py * iz);
-            let ((ux, uy), j) = self.projection.project_with_jacobian(nx, ny);
-            e[0][l] = blk.m[0][l] - ux;
-            e[1][l] = blk.m[1][l] - uy;
-            r2[l] = e[0][l] * e[0][l] + e[1][l] * e[1][l];
-            // g_k = d K_k / d p = (J_k / z) [[1, 0, -x], [0, 1, -y]].
-            g0[0][l] = j[0] * iz;
-            g0[1][l] = j[1] * iz;
-            g0[2][l] = -(j[0] * nx + j[1] * ny) * iz;
-            g1[0][l] = j[2] * iz;
-            g1[1][l] = j[3] * iz;
-            g1[2][l] = -(j[2] * nx + j[3] * ny) * iz;
-            q[0][l] = qx;
-            q[1][l] = qy;
-            q[2][l] = qz;
-            live[l] = if on { blk.w[l] } else { 0.0 };
-        }
-        // The loss: rho and the IRLS weight rho' (1 for the squared loss).
-        let mut rho = r2;
-        let mut sw = live;
-        if loss != Loss::Squared {
-            for l in 0..n {
-                let (r, d) = loss.eval(r2[l]);
-                rho[l] = r;
-                sw[l] = live[l] * d;
-            }
-        }
-        // The sums. Residual rows [g_k x q, -g_k].
-        let s = &mut acc.s;
-        for l in 0..LANES {
-            s[0][l] += live[l] * rho[l];
-            let cross = |g: &[[f64; LANES]; 3]| {
-                [
-                    g[1][l] * q[2][l] - g[2][l] * q[1][l],
-                    g[2][l] * q[0][l] - g[0][l] * q[2][l],
-                    g[0][l] * q[1][l] - g[1][l] * q[0][l],
-                ]
-            };
-            let c0 = cross(&g0);
-            let c1 = cross(&g1);
-            let r0 = [c0[0], c0[1], c0[2], -g0[0][l], -g0[1][l], -g0[2][l]];
-            let r1 = [c1[0], c1[1], c1[2], -g1[0][l], -g1[1][l], -g1[2][l]];
-            let (bx, by) = (sw[l] * e[0][l], sw[l] * e[1][l]);
-            for m in 0..6 {
-                s[22 + m][l] += bx * r0[m] + by * r1[m];
-            }
-            if HESS {
-                let mut idx = 1;
-                for a in 0..6 {
-                    let (a0, a1) = (sw[l] * r0[a], sw[l] * r1[a]);
-                    for b in a..6 {
-                        s[idx][l] += a0 * r0[b] + a1 * r1[b];
-                        idx += 1;
-                    }
-                }
-            }
-        }
-    }
-}
-
-impl<P: Project> Residuals for PixelProblem<'_, P> {
+impl<M: Metric> Residuals for PixelProblem<'_, M> {
     fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal> {
-        self.pass::<true>(pose, reference, self.loss)
+        let k = PassInputs::new(&self.c, self.inv_weight, pose, reference);
+        let (w, m, wt) = (self.world, self.pixels, self.weights);
+        if reference.is_some() {
+            pass::<true, true, M>(&k, &self.metric, w, m, wt)
+        } else {
+            pass::<false, true, M>(&k, &self.metric, w, m, wt)
+        }
     }
 
     fn accumulate_gradient(
@@ -305,11 +128,12 @@ impl<P: Project> Residuals for PixelProblem<'_, P> {
         reference: &Composed,
         h_prev: &[[f64; 6]; 6],
     ) -> Option<Normal> {
-        self.pass::<false>(pose, Some(reference), self.loss)
-            .map(|mut nrm| {
-                nrm.h = *h_prev;
-                nrm
-            })
+        let k = PassInputs::new(&self.c, self.inv_weight, pose, Some(reference));
+        let (w, m, wt) = (self.world, self.pixels, self.weights);
+        pass::<true, false, M>(&k, &self.metric, w, m, wt).map(|mut nrm| {
+            nrm.h = *h_prev;
+            nrm
+        })
     }
 }
 
@@ -328,26 +152,37 @@ struct Job<'a> {
 impl ProjectionJob for Job<'_> {
     type Output = (ReprojOutcome, f64);
 
-    fn run<P: Project>(self, projection: P) -> (ReprojOutcome, f64) {
+    fn run<P: Project + Copy>(self, projection: P) -> (ReprojOutcome, f64) {
         let (px, fr) = (self.px, self.fr);
-        let prob = PixelProblem {
+        let problem = |loss| PixelProblem {
             world: self.world,
             pixels: px.pixels,
             weights: px.weights,
             inv_weight: self.inv_weight,
             c: fr.c,
-            projection,
-            loss: px.loss,
+            metric: CameraMetric::<P, false> { projection, loss },
         };
-        let out = levenberg_marquardt(&prob, fr, self.r_work, self.t_work, self.opts);
-        let squared = if px.loss == Loss::Squared {
-            out.e
-        } else {
-            let pose = Composed::new(&out.r, &fr.rw, fr.d, &out.t);
-            prob.pass::<false>(&pose, None, Loss::Squared)
-                .map_or(f64::NAN, |n| n.e)
+        let squared = problem(Loss::Squared);
+        if px.loss == Loss::Squared {
+            let out = levenberg_marquardt(&squared, fr, self.r_work, self.t_work, self.opts);
+            return (out, out.e);
+        }
+        let robust = PixelProblem {
+            world: self.world,
+            pixels: px.pixels,
+            weights: px.weights,
+            inv_weight: self.inv_weight,
+            c: fr.c,
+            metric: CameraMetric::<P, true> {
+                projection,
+                loss: px.loss,
+            },
         };
-        (out, squared)
+        let out = levenberg_marquardt(&robust, fr, self.r_work, self.t_work, self.opts);
+        // The plain squared error at the pose (for the RMS residual).
+        let pose = Composed::new(&out.r, &fr.rw, fr.d, &out.t);
+        let e = squared.accumulate(&pose, None).map_or(f64::NAN, |n| n.e);
+        (out, e)
     }
 }
 

@@ -51,9 +51,9 @@
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-mod pass;
+pub(super) mod pass;
 
-use pass::{pass, PassInputs};
+use pass::{pass, PassInputs, RowWeights};
 
 use super::frame::WorkingFrame;
 use crate::numeric::linalg::solve_damped6;
@@ -207,6 +207,15 @@ struct Problem<'a> {
     row_weights: (f64, f64),
 }
 
+impl Problem<'_> {
+    fn rows(&self) -> RowWeights {
+        RowWeights {
+            wx: self.row_weights.0,
+            wy: self.row_weights.1,
+        }
+    }
+}
+
 impl Residuals for Problem<'_> {
     /// One O(N) pass at `pose`: cost, normal equations and depth range. With `reference`,
     /// returns `None` as soon as a depth differs in sign from its depth under `reference`.
@@ -227,14 +236,15 @@ impl Residuals for Problem<'_> {
     /// once at the end. The sequence of active points, and so the result to the bit, does not
     /// depend on the points of weight 0; the depth-sign test is the scalar one, lane by lane.
     fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal> {
-        let k = PassInputs::new(self, pose, reference);
+        let k = PassInputs::new(&self.c, self.inv_weight, pose, reference);
+        let rows = self.rows();
         let world = &self.world[..self.n];
         let image = &self.image[..self.n];
         let weights = self.weights.map(|w| &w[..self.n]);
         if reference.is_some() {
-            pass::<true, true>(&k, world, image, weights)
+            pass::<true, true, _>(&k, &rows, world, image, weights)
         } else {
-            pass::<false, true>(&k, world, image, weights)
+            pass::<false, true, _>(&k, &rows, world, image, weights)
         }
     }
 
@@ -245,11 +255,11 @@ impl Residuals for Problem<'_> {
         reference: &Composed,
         h_prev: &[[f64; 6]; 6],
     ) -> Option<Normal> {
-        let k = PassInputs::new(self, pose, Some(reference));
+        let k = PassInputs::new(&self.c, self.inv_weight, pose, Some(reference));
         let world = &self.world[..self.n];
         let image = &self.image[..self.n];
         let weights = self.weights.map(|w| &w[..self.n]);
-        pass::<true, false>(&k, world, image, weights).map(|mut nrm| {
+        pass::<true, false, _>(&k, &self.rows(), world, image, weights).map(|mut nrm| {
             nrm.h = *h_prev;
             nrm
         })

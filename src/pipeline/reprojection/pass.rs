@@ -1,19 +1,75 @@
-//! The O(N) pass of S9, vectorised across points: cost, gradient and (optionally) `J^T W J`
-//! at one pose, with the depth-sign test against a reference pose.
+//! The O(N) pass of S9 and S10, vectorised across points: cost, gradient and (optionally)
+//! `J^T W J` at one pose, with the depth-sign test against a reference pose.
+//!
+//! Per point the residual enters through a [`Metric`]: at the normalised projection
+//! `(u, v)` of the point it gives the point's cost, a symmetric 2 x 2 matrix `C` and a vector
+//! `e~` such that, to first order in a change `d` of `(u, v)`, the cost changes by
+//! `-2 e~ . d + d^T C d`. S9's metric is `C = w diag(wx, wy)`, `e~ = C (m - (u, v))`; S10's is
+//! `C = w rho' J^T J`, `e~ = w rho' J^T (pixel - K(u, v))`, `J` the camera's Jacobian. The
+//! normal equations follow from `C` and `e~` alone (see [`lane`]).
 
-use nalgebra::{Matrix3, Point2, Point3};
+use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-use super::{Composed, Normal, Problem};
+use super::{Composed, Normal};
 use crate::numeric::lanes::{lane_sum, Block, LANES};
 
 /// Number of sums of one pass: `E` (1), `H_rr` (6, upper triangle, row-major), `H_rt = sum K`
 /// (9, row-major, the third column negated), `H_tt` (`kx`, `ky`, `fx`, `fy`, `n22`: 5),
-/// `sum [q]x b` (3), `sum b` (3, the third entry negated). The two negations are undone in
-/// [`LaneSums::normal`] (exactly: negation does not round).
-const NSUMS: usize = 27;
+/// `sum [q]x b` (3), `sum b` (3, the third entry negated), and `kxy` (1, the off-diagonal of
+/// `H_tt`; 0 for a diagonal metric). The two negations are undone in [`LaneSums::normal`]
+/// (exactly: negation does not round).
+const NSUMS: usize = 28;
+
+/// What a residual contributes at the normalised projection of a point ([`Metric::at`]).
+#[derive(Clone, Copy)]
+pub(in crate::pipeline) struct LaneMetric {
+    /// The point's cost (weight and loss applied).
+    pub cost: f64,
+    /// `C = [[c00, c01], [c01, c11]]`.
+    pub c00: f64,
+    pub c01: f64,
+    pub c11: f64,
+    /// `e~`.
+    pub ex: f64,
+    pub ey: f64,
+}
+
+/// How the residual of a point is measured (module documentation).
+pub(in crate::pipeline) trait Metric {
+    /// `c01` is always 0 (the cross terms are compiled out).
+    const DIAGONAL: bool;
+    /// The metric of a point with observation `m` and weight `w` (in the weight unit) at the
+    /// normalised projection `(u, v)`.
+    fn at(&self, m: [f64; 2], w: f64, u: f64, v: f64) -> LaneMetric;
+}
+
+/// S9's metric: row weights `(wx, wy)` on the normalised residual.
+pub(super) struct RowWeights {
+    pub wx: f64,
+    pub wy: f64,
+}
+
+impl Metric for RowWeights {
+    const DIAGONAL: bool = true;
+
+    #[inline(always)]
+    fn at(&self, m: [f64; 2], w: f64, u: f64, v: f64) -> LaneMetric {
+        let (ex, ey) = (m[0] - u, m[1] - v);
+        let sx = w * self.wx;
+        let sy = w * self.wy;
+        LaneMetric {
+            cost: sx * ex * ex + sy * ey * ey,
+            c00: sx,
+            c01: 0.0,
+            c11: sy,
+            ex: sx * ex,
+            ey: sy * ey,
+        }
+    }
+}
 
 /// What one pass needs of the problem and the poses, as plain scalars.
-pub(super) struct PassInputs {
+pub(in crate::pipeline) struct PassInputs {
     /// `A` of the pose, row-major.
     a: [[f64; 3]; 3],
     t: [f64; 3],
@@ -22,25 +78,27 @@ pub(super) struct PassInputs {
     /// Third row of `A` and `t_z` of the reference pose (zeros without one).
     ref_a: [f64; 3],
     ref_tz: f64,
-    wx: f64,
-    wy: f64,
-    /// `1 / w_unit`: point weights in S1's weight unit.
+    /// `1 / w_unit`: point weights in the weight unit.
     inv_weight: f64,
 }
 
 impl PassInputs {
-    pub(super) fn new(prob: &Problem<'_>, pose: &Composed, reference: Option<&Composed>) -> Self {
+    /// The pose (and reference), the working frame's centroid `c` and `1 / w_unit`.
+    pub(in crate::pipeline) fn new(
+        c: &Vector3<f64>,
+        inv_weight: f64,
+        pose: &Composed,
+        reference: Option<&Composed>,
+    ) -> Self {
         let row = |m: &Matrix3<f64>, j: usize| [m[(j, 0)], m[(j, 1)], m[(j, 2)]];
         let (ref_a, ref_tz) = reference.map_or(([0.0; 3], 0.0), |rf| (row(&rf.a, 2), rf.t.z));
         Self {
             a: [row(&pose.a, 0), row(&pose.a, 1), row(&pose.a, 2)],
             t: [pose.t.x, pose.t.y, pose.t.z],
-            c: [prob.c.x, prob.c.y, prob.c.z],
+            c: [c.x, c.y, c.z],
             ref_a,
             ref_tz,
-            wx: prob.row_weights.0,
-            wy: prob.row_weights.1,
-            inv_weight: prob.inv_weight,
+            inv_weight,
         }
     }
 }
@@ -87,7 +145,7 @@ impl LaneSums {
             h[j][5] = -hrt[3 * j + 2];
         }
         h[3][3] = htt[0];
-        h[3][4] = 0.0;
+        h[3][4] = s[27];
         h[3][5] = -htt[2];
         h[4][4] = htt[1];
         h[4][5] = -htt[3];
@@ -116,8 +174,9 @@ impl LaneSums {
 /// point, straight from the slices) and runs [`lane`] on each lane. `CHECK`: compare depth
 /// signs with the reference pose of `k`; `None` after the first block with a flipped sign.
 #[inline(always)]
-pub(super) fn pass<const CHECK: bool, const HESS: bool>(
+pub(in crate::pipeline) fn pass<const CHECK: bool, const HESS: bool, M: Metric>(
     k: &PassInputs,
+    metric: &M,
     world: &[Point3<f64>],
     image: &[Point2<f64>],
     weights: Option<&[f64]>,
@@ -147,7 +206,7 @@ pub(super) fn pass<const CHECK: bool, const HESS: bool>(
                     core::array::from_fn(|l| ms[l].y),
                 ];
                 for l in 0..LANES {
-                    lane::<CHECK, HESS>(k, &blk, l, &mut acc);
+                    lane::<CHECK, HESS, M>(k, metric, &blk, l, &mut acc);
                 }
                 if flipped(&acc) {
                     return None;
@@ -169,7 +228,7 @@ pub(super) fn pass<const CHECK: bool, const HESS: bool>(
                 filled = l + 1;
                 if filled == LANES {
                     for l in 0..LANES {
-                        lane::<CHECK, HESS>(k, &blk, l, &mut acc);
+                        lane::<CHECK, HESS, M>(k, metric, &blk, l, &mut acc);
                     }
                     if flipped(&acc) {
                         return None;
@@ -180,7 +239,7 @@ pub(super) fn pass<const CHECK: bool, const HESS: bool>(
         }
     }
     for l in 0..filled.min(LANES) {
-        lane::<CHECK, HESS>(k, &blk, l, &mut acc);
+        lane::<CHECK, HESS, M>(k, metric, &blk, l, &mut acc);
     }
     if flipped(&acc) {
         return None;
@@ -190,8 +249,9 @@ pub(super) fn pass<const CHECK: bool, const HESS: bool>(
 
 /// Adds point `l` of `blk` to lane `l` of `acc` (see [`Problem::accumulate`]).
 #[inline(always)]
-fn lane<const CHECK: bool, const HESS: bool>(
+fn lane<const CHECK: bool, const HESS: bool, M: Metric>(
     k: &PassInputs,
+    metric: &M,
     blk: &Block,
     l: usize,
     acc: &mut LaneSums,
@@ -223,41 +283,51 @@ fn lane<const CHECK: bool, const HESS: bool>(
     let iz = 1.0 / pz;
     let pu = px * iz;
     let pv = py * iz;
-    let (ex, ey) = (blk.m[0][l] - pu, blk.m[1][l] - pv);
-    let wi = blk.w[l];
-    let sx = wi * k.wx;
-    let sy = wi * k.wy;
-    // N = sx a_x a_x^T + sy a_y a_y^T = [[kx, 0, -fx], [0, ky, -fy], [-fx, -fy, n22]] with
-    // a_x = iz (1, 0, -u), a_y = iz (0, 1, -v); b = sx ex a_x + sy ey a_y = (bx, by, -bz).
+    let lm = metric.at([blk.m[0][l], blk.m[1][l]], blk.w[l], pu, pv);
+    // N = sum_ab C_ab a_a a_b^T with a_x = iz (1, 0, -u), a_y = iz (0, 1, -v):
+    // [[kx, kxy, -fx], [kxy, ky, -fy], [-fx, -fy, n22]] with (kx, kxy, ky) = iz^2 C,
+    // fx = kx u + kxy v, fy = kxy u + ky v, n22 = fx u + fy v; b = e~x a_x + e~y a_y =
+    // (bx, by, -bz).
     let iz2 = iz * iz;
-    let kx = sx * iz2;
-    let ky = sy * iz2;
-    let fx = kx * pu;
-    let fy = ky * pv;
-    let bx = sx * ex * iz;
-    let by = sy * ey * iz;
+    let kx = lm.c00 * iz2;
+    let ky = lm.c11 * iz2;
+    let kxy = if M::DIAGONAL { 0.0 } else { lm.c01 * iz2 };
+    let (fx, fy) = if M::DIAGONAL {
+        (kx * pu, ky * pv)
+    } else {
+        (kx * pu + kxy * pv, kxy * pu + ky * pv)
+    };
+    let bx = lm.ex * iz;
+    let by = lm.ey * iz;
     let s = &mut acc.s;
-    s[0][l] += sx * ex * ex + sy * ey * ey;
+    s[0][l] += lm.cost;
     if HESS {
         s[16][l] += kx;
         s[17][l] += ky;
         s[18][l] += fx;
         s[19][l] += fy;
         s[20][l] += fx * pu + fy * pv;
+        if !M::DIAGONAL {
+            s[27][l] += kxy;
+        }
     }
     s[24][l] += bx;
     s[25][l] += by;
     s[26][l] += bx * pu + by * pv;
-    // With c1 = q x (1, 0, -u) and c2 = q x (0, 1, -v): [q]x N = kx c1 (1, 0, -u)^T +
-    // ky c2 (0, 1, -v)^T, so H_rt row j = (k1, k2, -(k1 u + k2 v)) with k1 = kx c1_j,
-    // k2 = ky c2_j; H_rr = [q]x N [q]x^T = kx c1 c1^T + ky c2 c2^T; [q]x b = bx c1 + by c2.
+    // With c1 = q x (1, 0, -u) and c2 = q x (0, 1, -v): [q]x N = (kx c1 + kxy c2)
+    // (1, 0, -u)^T + (kxy c1 + ky c2) (0, 1, -v)^T, so H_rt row j = (k1, k2, -(k1 u + k2 v))
+    // with k1 = kx c1_j + kxy c2_j, k2 = kxy c1_j + ky c2_j; H_rr = [q]x N [q]x^T has
+    // entries k1_j c1_m + k2_j c2_m; [q]x b = bx c1 + by c2.
     let c1 = [-pu * qy, qz + pu * qx, -qy];
     let c2 = [-(pv * qy + qz), pv * qx, qx];
     let mut idx = 1;
     for j in 0..3 {
         if HESS {
-            let k1 = kx * c1[j];
-            let k2 = ky * c2[j];
+            let (k1, k2) = if M::DIAGONAL {
+                (kx * c1[j], ky * c2[j])
+            } else {
+                (kx * c1[j] + kxy * c2[j], kxy * c1[j] + ky * c2[j])
+            };
             s[7 + 3 * j][l] += k1;
             s[8 + 3 * j][l] += k2;
             s[9 + 3 * j][l] += k1 * pu + k2 * pv;
