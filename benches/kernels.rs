@@ -154,6 +154,33 @@ fn kernels_bench(c: &mut Criterion) {
     bench_kernel!(c, "case4_determinant", t21, |x| kernels::case4_determinant(
         x
     ));
+    // Camera distortion: a normalised point in [-1, 1]^2 and small coefficients.
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(0x00CA_3E2A);
+    let cam: Vec<([f64; 2], [f64; 12])> = (0..SETS)
+        .map(|_| {
+            let k: [f64; 12] = uniform(&mut rng);
+            (uniform(&mut rng), k.map(|x| 0.1 * x))
+        })
+        .collect();
+    let first = |k: &[f64; 12]| -> [f64; 4] { std::array::from_fn(|i| k[i]) };
+    bench_kernel!(c, "distortion_simple_radial", cam, |x| {
+        kernels::distortion_simple_radial(&x.0, &[x.1[0]])
+    });
+    bench_kernel!(c, "distortion_radial", cam, |x| {
+        kernels::distortion_radial(&x.0, &[x.1[0], x.1[1]])
+    });
+    bench_kernel!(c, "distortion_opencv", cam, |x| {
+        kernels::distortion_opencv(&x.0, &first(&x.1))
+    });
+    bench_kernel!(c, "distortion_fisheye", cam, |x| {
+        kernels::distortion_fisheye(&x.0, &first(&x.1))
+    });
+    bench_kernel!(c, "distortion_full_opencv", cam, |x| {
+        kernels::distortion_full_opencv(&x.0, &std::array::from_fn(|i| x.1[i]))
+    });
+    bench_kernel!(c, "distortion_thin_prism", cam, |x| {
+        kernels::distortion_thin_prism(&x.0, &x.1)
+    });
 }
 
 criterion_group! {

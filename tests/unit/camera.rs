@@ -143,6 +143,38 @@ fn project_then_undistort_is_identity() {
     }
 }
 
+/// The weight of `undistort_weighted` comes from the Jacobian the undistortion's convergence
+/// check evaluated (and, for the fisheye models, the equidistant map's determinant in closed
+/// form): it equals `|det J| / (fx fy)` of `project_jacobian` at the undistorted point to
+/// rounding, over the whole image of every model.
+#[test]
+fn undistortion_weight_is_the_projection_jacobian_determinant() {
+    for cam in cameras() {
+        let (fx, fy) = cam.intrinsics_scale();
+        let mut worst = 0.0f64;
+        for i in 0..=20 {
+            for j in 0..=20 {
+                let p = Point2::new(
+                    cam.width() as f64 * f64::from(i) / 20.0,
+                    cam.height() as f64 * f64::from(j) / 20.0,
+                );
+                let (n, w) = cam.undistort_weighted(p).unwrap();
+                assert_eq!(n, cam.undistort(p).unwrap(), "{}", cam.model());
+                let jac = cam.project_jacobian(n);
+                let want = ((jac[0] * jac[3] - jac[1] * jac[2]) / (fx * fy)).abs();
+                worst = worst.max((w - want).abs() / want);
+            }
+        }
+        // Both sides are a few dozen roundings of the same quantity, at points that differ
+        // by the rounding of the equidistant map (fisheye): 1e-12 relative.
+        assert!(
+            worst <= 1e-12,
+            "{}: worst relative difference {worst:e}",
+            cam.model()
+        );
+    }
+}
+
 #[test]
 fn jacobian_matches_finite_differences() {
     for cam in cameras() {
