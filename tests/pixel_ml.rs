@@ -392,3 +392,47 @@ fn cauchy_loss_resists_outliers_through_the_camera() {
     }
     assert!(wins >= 18, "Cauchy beat squared by 2x in only {wins} of 20");
 }
+
+/// An unusable loss scale is `InvalidOption { option: "loss" }` from every entry point, with a
+/// message that names the loss (not a RANSAC option), and `Loss::is_valid` says so beforehand.
+#[test]
+fn unusable_loss_scale_is_invalid_option() {
+    let case = &cases()[0];
+    let p = problem(case, trial_seed("loss-scale", 0));
+    let normalised: Vec<Point2<f64>> = p
+        .pixels
+        .iter()
+        .map(|u| case.camera.undistort(*u).unwrap())
+        .collect();
+    for loss in [
+        Loss::Huber(0.0),
+        Loss::Huber(-1.0),
+        Loss::Cauchy(f64::NAN),
+        Loss::Cauchy(f64::INFINITY),
+        Loss::Huber(1e-160),
+        Loss::Cauchy(1e160),
+    ] {
+        assert!(!loss.is_valid(), "{loss:?}");
+        let s = Solver::default().loss(loss);
+        let results = [
+            s.solve(&p.world, &normalised).map(|_| ()),
+            s.solve_pixels(&p.world, &p.pixels, &case.camera)
+                .map(|_| ()),
+        ];
+        for r in results {
+            let e = r.unwrap_err();
+            assert_eq!(
+                e,
+                eopnp::PnpError::InvalidOption { option: "loss" },
+                "{loss:?}"
+            );
+            assert!(
+                e.to_string().starts_with("the loss scale is out of range"),
+                "{e}"
+            );
+        }
+    }
+    for loss in [Loss::Squared, Loss::Huber(1e-150), Loss::Cauchy(1e150)] {
+        assert!(loss.is_valid(), "{loss:?}");
+    }
+}
