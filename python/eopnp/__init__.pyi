@@ -32,8 +32,20 @@ _F64Array = npt.NDArray[np.float64]
 _Refinement = Literal["ml", "reprojection", "algebraic"]
 _Planar = Literal["auto", "planar", "nonplanar"]
 _Source = Literal[
-    "case1", "case2", "case3", "case4", "planar1", "planar2", "extra_start", "other"
+    "case1",
+    "case2",
+    "case3",
+    "case4",
+    "planar1",
+    "planar2",
+    "extra_start",
+    "other",
 ]
+_Loss = Union[
+    Literal["squared"], tuple[Literal["huber", "cauchy"], float], None
+]
+"""``loss=``: None or "squared" (default), ``("huber", s)`` or ``("cauchy", s)``, the scale
+``s`` in pixels with a camera, in normalised units otherwise (finite, > 0)."""
 
 @final
 class Solution:
@@ -59,8 +71,10 @@ class Solution:
         """The 3x4 matrix [R | t]."""
     @property
     def cost(self) -> float:
-        """The minimised cost: sum of (weighted) squared normalised reprojection residuals
-        (refinement "ml"), or the algebraic cost (refinement "algebraic")."""
+        """The minimised cost (refinement "ml"): the (weighted) sum of the loss of the squared
+        reprojection residuals, in pixels^2 for pixel input (through the camera), normalised
+        units otherwise (the sum of squares with the default loss); or the algebraic cost
+        (refinement "algebraic")."""
     @property
     def algebraic_cost(self) -> float:
         """The paper's algebraic cost of the rotation."""
@@ -304,6 +318,7 @@ def solve(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     covariance: _Covariance = None,
+    loss: _Loss = None,
 ) -> Solution:
     """The camera pose from N >= 4 correspondences: world (N, 3), image (N, 2) normalised, or
     pixels with ``camera``; optional weights (N,) >= 0. Default: EOPnP + maximum-likelihood
@@ -312,6 +327,11 @@ def solve(
     ``covariance``: None, "estimated" (noise from the residuals) or the noise standard
     deviation in image units (pixels with ``camera``): fills ``Solution.covariance`` and
     ``Solution.sigma``.
+
+    ``loss``: the loss of the final refinement: None or "squared" (default, the
+    maximum-likelihood pose for Gaussian noise), ``("huber", s)`` (a few moderate outliers;
+    ``s`` 1-3 times the noise) or ``("cauchy", s)`` (gross outliers hardly move the pose);
+    ``s`` in pixels with ``camera``, normalised units otherwise.
 
     Raises InvalidInputError (InputTypeError), DegenerateError, NoSolutionError,
     InvalidOptionError."""
@@ -327,6 +347,7 @@ def solve_all(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     covariance: _Covariance = None,
+    loss: _Loss = None,
 ) -> list[Solution]:
     """Every distinct local minimum, best first (normalised image points)."""
 
@@ -341,6 +362,7 @@ def solve_batch(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     covariance: _Covariance = None,
+    loss: _Loss = None,
     threads: int | None = None,
 ) -> list[Solution | PnpError]:
     """``solve`` on many problems, ``(world, image)`` or ``(world, image, weights)`` tuples,
@@ -364,6 +386,7 @@ def solve_ransac_batch(
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
+    loss: _Loss = None,
     threads: int | None = None,
 ) -> list[tuple[Solution, _RansacInfo] | PnpError]:
     """``solve_ransac`` on many problems in parallel: entry ``i`` is what ``solve_ransac``
@@ -387,10 +410,13 @@ def solve_ransac(
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
+    loss: _Loss = None,
 ) -> tuple[Solution, _RansacInfo]:
     """Robust pose by RANSAC: pixels with ``camera``, or normalised points with
     ``focal=(fx, fy)`` (exactly one). Returns the pose and the info dict (inlier mask,
-    iterations, inlier ratio, cost, RMSE). Raises NoConsensusError if no pose has 4 inliers."""
+    iterations, inlier ratio, cost, RMSE). ``loss``: of the fits' final refinement (pixels with
+    ``camera``, normalised units with ``focal``). Raises NoConsensusError if no pose has 4
+    inliers."""
 
 def read_colmap_model(path: str | os.PathLike[str]) -> Model:
     """Reads a COLMAP model directory (text or binary). Raises ModelError."""
@@ -406,6 +432,7 @@ def register_image(
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
+    loss: _Loss = None,
 ) -> Registration:
     """Re-estimates an image's pose from its correspondences (plain, or RANSAC with
     ``ransac=True`` / options) and compares it with the model's. Raises UnknownIdError."""

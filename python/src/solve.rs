@@ -9,7 +9,7 @@ use pyo3::types::PyList;
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
 use crate::errors::pnp_error;
-use crate::options::{covariance_arg, SolverOptions};
+use crate::options::SolverOptions;
 use crate::solution::PySolution;
 
 /// NaN or infinite input as the library reports it on normalised input (lengths first, then
@@ -75,6 +75,13 @@ pub(crate) fn check_finite(
 ///         otherwise; pycolmap assumes 1 px): fills ``Solution.covariance``, the 6x6
 ///         covariance of ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``,
 ///         ``t = t_hat + delta_t`` (pycolmap's convention), and ``Solution.sigma``.
+///     loss: the loss of the final refinement: None or "squared" (default; the
+///         maximum-likelihood pose for Gaussian noise), ``("huber", s)`` (quadratic up to a
+///         residual of ``s``, linear beyond: a few moderate outliers; ``s`` about 1-3 times
+///         the noise) or ``("cauchy", s)`` (the influence of a residual decays beyond ``s``:
+///         gross outliers hardly move the pose, when RANSAC is not run). ``s`` is in pixels
+///         with ``camera``, in normalised units otherwise; it must be finite and > 0 (about
+///         1e-154 < s < 1e154). ``Solution.cost`` is then the loss's cost.
 ///
 /// Returns:
 ///     Solution: the pose (``R``, ``t``, ``rvec``, ``q``), its cost and diagnostics.
@@ -88,7 +95,7 @@ pub(crate) fn check_finite(
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, refinement = "ml",
     planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, covariance = None))]
+    reprojection_iterations = None, exhaustive = false, covariance = None, loss = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     py: Python<'_>,
@@ -103,6 +110,7 @@ pub(crate) fn solve(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     covariance: Option<&Bound<'_, PyAny>>,
+    loss: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PySolution> {
     let solver = SolverOptions {
         refinement,
@@ -111,9 +119,10 @@ pub(crate) fn solve(
         newton_step_tolerance,
         reprojection_iterations,
         exhaustive,
+        loss,
+        covariance,
     }
-    .solver(py)?
-    .covariance(covariance_arg(py, covariance)?);
+    .solver(py)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
@@ -142,8 +151,8 @@ pub(crate) fn solve(
 /// planar scenes several poses can explain the data about equally well; this lists them.
 ///
 /// ``world`` (N, 3) and ``image`` (N, 2) normalised, and the solver options, as ``solve``
-/// (no weights or camera: undistort pixels first with ``Camera.undistort``), and
-/// ``covariance`` as ``solve`` (each pose's own).
+/// (no weights or camera: undistort pixels first with ``Camera.undistort``), ``covariance``
+/// as ``solve`` (each pose's own) and ``loss`` as ``solve`` (normalised units).
 ///
 /// Returns:
 ///     list[Solution]: at least one.
@@ -153,7 +162,7 @@ pub(crate) fn solve(
 #[pyfunction]
 #[pyo3(signature = (world, image, *, refinement = "ml", planar = "auto",
     newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false, covariance = None))]
+    exhaustive = false, covariance = None, loss = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_all<'py>(
     py: Python<'py>,
@@ -166,6 +175,7 @@ pub(crate) fn solve_all<'py>(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     covariance: Option<&Bound<'py, PyAny>>,
+    loss: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = SolverOptions {
         refinement,
@@ -174,9 +184,10 @@ pub(crate) fn solve_all<'py>(
         newton_step_tolerance,
         reprojection_iterations,
         exhaustive,
+        loss,
+        covariance,
     }
-    .solver(py)?
-    .covariance(covariance_arg(py, covariance)?);
+    .solver(py)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let all = py
@@ -196,15 +207,7 @@ pub(crate) fn _time_solve(
     repeats: u32,
     refinement: &str,
 ) -> PyResult<f64> {
-    let solver = SolverOptions {
-        refinement,
-        planar: "auto",
-        newton_iterations: None,
-        newton_step_tolerance: None,
-        reprojection_iterations: None,
-        exhaustive: false,
-    }
-    .solver(py)?;
+    let solver = SolverOptions::default_with(refinement).solver(py)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let r = py.detach(|| {
