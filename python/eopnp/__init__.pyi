@@ -39,6 +39,7 @@ _Source = Literal[
     "planar1",
     "planar2",
     "extra_start",
+    "initial",
     "other",
 ]
 _Loss = Union[
@@ -100,6 +101,10 @@ class Solution:
     @property
     def reprojection_iterations(self) -> int:
         """Levenberg-Marquardt iterations of the refinement (0 in algebraic mode)."""
+    @property
+    def converged(self) -> bool:
+        """The refinement stopped at a minimum (False when it ran out of iterations or could
+        not start; True in algebraic mode)."""
     @property
     def used(self) -> int:
         """Correspondences that entered the solve (weight > 0, undistorted)."""
@@ -351,6 +356,35 @@ def solve_all(
 ) -> list[Solution]:
     """Every distinct local minimum, best first (normalised image points)."""
 
+_Rotation = _ArrayLike
+"""A rotation: a (3, 3) matrix, a (3,) rotation vector (OpenCV's rvec) or a (4,) quaternion
+(w, x, y, z)."""
+_Pose = Union[Solution, tuple[_Rotation, _ArrayLike], _ArrayLike]
+"""A pose (world to camera): a ``Solution``, ``(rotation, t)``, or a (3, 4) ``[R | t]`` or
+(4, 4) matrix."""
+
+def refine(
+    world: _ArrayLike,
+    image: _ArrayLike,
+    initial: _Pose,
+    *,
+    camera: Camera | None = None,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+) -> Solution:
+    """Refines a prior pose (tracking: the previous frame's) to the maximum-likelihood pose of
+    the basin it starts in, without the global search (OpenCV's ``solvePnPRefineLM``,
+    PoseLib's ``refine_absolute_pose``). ``initial``: a ``Solution``, ``(R, t)``,
+    ``(rvec, t)``, ``(q_wxyz, t)``, or a (3, 4) ``[R | t]`` or (4, 4) matrix. Pixels with
+    ``camera`` (through the camera model, as ``solve``). Releases the GIL.
+
+    Returns a ``Solution`` with ``converged`` and ``source == "initial"``. Raises as
+    ``solve``, and InvalidOptionError (option "initial") for a non-finite initial pose or
+    one of another form."""
+
 def solve_batch(
     problems: Sequence[_Problem],
     *,
@@ -457,6 +491,7 @@ __all__ = [
     "__version__",
     "problem_seed",
     "read_colmap_model",
+    "refine",
     "register_image",
     "solve",
     "solve_all",

@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyList;
 
 use crate::camera::PyCamera;
-use crate::convert::{points2, points3, vector};
+use crate::convert::{points2, points3, pose_arg, vector};
 use crate::errors::pnp_error;
 use crate::options::SolverOptions;
 use crate::solution::PySolution;
@@ -224,5 +224,73 @@ pub(crate) fn _time_solve(
     match r.1 {
         Some(Err(e)) => Err(pnp_error(py, &e)),
         _ => Ok(r.0),
+    }
+}
+
+/// Refines a prior pose (tracking: the previous frame's pose) to the maximum-likelihood pose
+/// of the basin it starts in: Levenberg-Marquardt on the reprojection error from
+/// ``initial``, without EOPnP's global search (OpenCV's ``solvePnPRefineLM``, PoseLib's
+/// ``refine_absolute_pose``). From a start in the basin of ``solve``'s pose, the same pose.
+///
+/// Args:
+///     world: world points, shape (N, 3), N >= 4.
+///     image: their image points, shape (N, 2): normalised, or pixels with ``camera``.
+///     initial: the starting pose (world to camera, ``x_cam = R @ X + t``): a ``Solution``
+///         (e.g. the previous frame's), a pair ``(rotation, t)`` with ``t`` of shape (3,) and
+///         the rotation as a (3, 3) matrix ``R``, a (3,) rotation vector (OpenCV's ``rvec``)
+///         or a (4,) quaternion (w, x, y, z; COLMAP's order, normalised here), or a (3, 4)
+///         matrix ``[R | t]`` (``Solution.Rt``) or a (4, 4) homogeneous matrix. A matrix ``R``
+///         must be a rotation to 1e-6 (``R^T R = I``, ``det R > 0``).
+///     camera: a ``Camera``: ``image`` holds observed pixels; the refinement minimises the
+///         pixel residuals through the camera model, as ``solve``.
+///     loss, covariance, newton_iterations, newton_step_tolerance, reprojection_iterations:
+///         as ``solve``.
+///
+/// Returns:
+///     Solution: the refined pose; ``converged`` says whether the refinement reached a
+///     minimum, ``source`` is "initial".
+///
+/// Raises:
+///     As ``solve``; InvalidOptionError (``option`` "initial") for an initial pose that is
+///     not finite (the library's message) or not of the forms above.
+#[pyfunction]
+#[pyo3(signature = (world, image, initial, *, camera = None, loss = None, covariance = None,
+    newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refine(
+    py: Python<'_>,
+    world: &Bound<'_, PyAny>,
+    image: &Bound<'_, PyAny>,
+    initial: &Bound<'_, PyAny>,
+    camera: Option<&Bound<'_, PyCamera>>,
+    loss: Option<&Bound<'_, PyAny>>,
+    covariance: Option<&Bound<'_, PyAny>>,
+    newton_iterations: Option<i64>,
+    newton_step_tolerance: Option<f64>,
+    reprojection_iterations: Option<i64>,
+) -> PyResult<PySolution> {
+    let solver = SolverOptions {
+        newton_iterations,
+        newton_step_tolerance,
+        reprojection_iterations,
+        loss,
+        covariance,
+        ..SolverOptions::default_with("ml")
+    }
+    .solver(py)?;
+    let initial = pose_arg(initial, "initial")?;
+    let w = points3(world, "world")?;
+    let img = points2(image, "image")?;
+    let result = match camera {
+        None => py.detach(|| solver.refine(&w, &img, &initial)),
+        Some(cam) => {
+            let cam = &cam.get().inner;
+            check_finite(&w, &img, None).map_err(|e| pnp_error(py, &e))?;
+            py.detach(|| solver.refine_pixels(&w, &img, cam, &initial))
+        }
+    };
+    match result {
+        Ok(s) => Ok(PySolution::from(&s)),
+        Err(e) => Err(pnp_error(py, &e)),
     }
 }

@@ -63,6 +63,7 @@ def test_cost_is_the_loss_cost_in_pixels(rng, kind):
     else:
         rho = s * s * np.log1p(r2 / (s * s))
     assert sol.cost == pytest.approx(rho.sum(), rel=1e-9)
+    assert sol.converged
 
 
 def test_squared_is_the_default(rng):
@@ -155,6 +156,7 @@ def test_every_entry_point_rejects_a_bad_loss_before_solving(rng):
     calls = [
         lambda loss: eopnp.solve(world, image, loss=loss),
         lambda loss: eopnp.solve_all(world, image, loss=loss),
+        lambda loss: eopnp.refine(world, image, (np.eye(3), np.zeros(3)), loss=loss),
         lambda loss: eopnp.solve_ransac(world, pixels, camera=CAM, loss=loss),
         # Raised, not returned per problem.
         lambda loss: eopnp.solve_batch([(world, image)], loss=loss),
