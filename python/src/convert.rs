@@ -278,24 +278,15 @@ pub(crate) fn pose_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Isometry3
             UnitQuaternion::new_unchecked(Quaternion::new(q[0], q[1], q[2], q[3])),
         ));
     }
-    let pair: Option<Vec<Bound<'_, PyAny>>> = if let Ok(t) = obj.cast::<PyTuple>() {
-        Some(t.iter().collect())
+    // A 2-sequence is a (rotation, t) pair; anything else is read as a matrix.
+    let parts: Vec<Bound<'_, PyAny>> = if let Ok(t) = obj.cast::<PyTuple>() {
+        t.iter().collect()
     } else if let Ok(l) = obj.cast::<PyList>() {
-        Some(l.iter().collect()).filter(|v: &Vec<_>| v.len() == 2)
+        l.iter().collect()
     } else {
-        None
+        vec![]
     };
-    if let Some(parts) = pair {
-        let [rot, t] = parts.as_slice() else {
-            return Err(option_error(
-                py,
-                name,
-                format!(
-                    "{name}: expected a (rotation, t) pair, got a tuple of {}",
-                    parts.len()
-                ),
-            ));
-        };
+    if let [rot, t] = parts.as_slice() {
         let q = rotation_arg(rot, name)?;
         let t = vector(t, name, false)?;
         let [tx, ty, tz] = t.as_slice() else {

@@ -61,7 +61,8 @@ def test_every_pose_form_gives_the_same_pose(rng):
     rt = np.column_stack([r0, t0])
     h = np.vstack([rt, [0, 0, 0, 1]])
     forms = [(r0, t0), [r0, t0], (r0.tolist(), tuple(t0)), (rvec_of(r0), t0),
-             (quat_of(r0), t0), (3.0 * quat_of(r0), t0), rt, h, h.tolist(), rt.astype(np.float32)]
+             (quat_of(r0), t0), (3.0 * quat_of(r0), t0), rt, h, h.tolist(), tuple(map(tuple, h)),
+             rt.astype(np.float32)]
     base = eopnp.refine(world, image, (r0, t0))
     for form in forms:
         ref = eopnp.refine(world, image, form)
