@@ -8,7 +8,7 @@ use eopnp::camera::Camera;
 use eopnp::ransac::Ransac;
 use eopnp::{Loss, Solver};
 use eopnp_testkit::{haar_rotation, lm_refine_projection, rng_from_seed, rot_err_deg, trial_seed};
-use nalgebra::{Matrix3, Point2, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point2, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
 
 /// Problems per model.
@@ -435,4 +435,76 @@ fn unusable_loss_scale_is_invalid_option() {
     for loss in [Loss::Squared, Loss::Huber(1e-150), Loss::Cauchy(1e150)] {
         assert!(loss.is_valid(), "{loss:?}");
     }
+}
+
+/// The weighted refinement from a prior pose: from the ground truth a little perturbed, the
+/// pose of `solve_pixels_weighted` (and of `solve_weighted` on normalised points), and a point
+/// of weight 0 changes nothing.
+#[test]
+fn weighted_refine_is_the_weighted_solve_pose() {
+    for case in cases() {
+        let cam = &case.camera;
+        let name = cam.model().name();
+        for trial in 0..10 {
+            let p = problem(&case, trial_seed(&format!("{name}-refine-weighted"), trial));
+            let mut weights: Vec<f64> = (0..N).map(|i| (1 + i % 3) as f64).collect();
+            weights[0] = 0.0;
+            let prior = Isometry3::from_parts(
+                Translation3::from(p.t + Vector3::new(0.05, -0.03, 0.1)),
+                UnitQuaternion::from_euler_angles(0.02, -0.01, 0.015)
+                    * UnitQuaternion::from_matrix(&p.r),
+            );
+            let s = Solver::default();
+            let solved = s
+                .solve_pixels_weighted(&p.world, &p.pixels, cam, &weights)
+                .unwrap();
+            let refined = s
+                .refine_pixels_weighted(&p.world, &p.pixels, cam, &weights, &prior)
+                .unwrap();
+            assert!(refined.converged, "{name} trial {trial}");
+            assert!(
+                rot_err_deg(&refined.rotation, &solved.rotation) < 1e-7
+                    && (refined.pose.translation.vector - solved.pose.translation.vector).norm()
+                        < 1e-8,
+                "{name} trial {trial}: refined {refined:?} solved {solved:?}"
+            );
+            assert!((refined.cost - solved.cost).abs() <= 1e-9 * solved.cost);
+            assert_eq!(refined.used, N - 1);
+            // Weight 0 = dropped.
+            let dropped = s
+                .refine_pixels_weighted(&p.world[1..], &p.pixels[1..], cam, &weights[1..], &prior)
+                .unwrap();
+            assert!(rot_err_deg(&dropped.rotation, &refined.rotation) < 1e-7);
+            // Normalised input: solve_weighted's pose.
+            let image: Vec<Point2<f64>> = p
+                .pixels
+                .iter()
+                .map(|u| cam.undistort(*u).unwrap())
+                .collect();
+            let solved = s.solve_weighted(&p.world, &image, &weights).unwrap();
+            let refined = s
+                .refine_weighted(&p.world, &image, &weights, &prior)
+                .unwrap();
+            assert!(refined.converged, "{name} trial {trial}");
+            assert!(
+                rot_err_deg(&refined.rotation, &solved.rotation) < 1e-7,
+                "{name} trial {trial}"
+            );
+            assert!((refined.cost - solved.cost).abs() <= 1e-9 * solved.cost);
+        }
+    }
+    // Bad weights: the errors of the weighted solves.
+    let case = &cases()[0];
+    let p = problem(case, trial_seed("refine-weighted-errors", 0));
+    let prior = Isometry3::from_parts(Translation3::from(p.t), UnitQuaternion::from_matrix(&p.r));
+    let mut w = vec![1.0; N];
+    w[3] = -1.0;
+    let e = Solver::default()
+        .refine_pixels_weighted(&p.world, &p.pixels, &case.camera, &w, &prior)
+        .unwrap_err();
+    assert_eq!(e, eopnp::PnpError::InvalidWeight { index: 3 });
+    let e = Solver::default()
+        .refine_weighted(&p.world, &p.pixels, &w[..N - 1], &prior)
+        .unwrap_err();
+    assert!(matches!(e, eopnp::PnpError::WeightsLength { .. }), "{e:?}");
 }
