@@ -368,6 +368,7 @@ def refine(
     image: _ArrayLike,
     initial: _Pose,
     *,
+    weights: _ArrayLike | None = None,
     camera: Camera | None = None,
     loss: _Loss = None,
     covariance: _Covariance = None,
@@ -379,7 +380,8 @@ def refine(
     the basin it starts in, without the global search (OpenCV's ``solvePnPRefineLM``,
     PoseLib's ``refine_absolute_pose``). ``initial``: a ``Solution``, ``(R, t)``,
     ``(rvec, t)``, ``(q_wxyz, t)``, or a (3, 4) ``[R | t]`` or (4, 4) matrix. Pixels with
-    ``camera`` (through the camera model, as ``solve``). Releases the GIL.
+    ``camera`` (through the camera model, as ``solve``); ``weights`` (N,) >= 0 as ``solve``.
+    Releases the GIL.
 
     Returns a ``Solution`` with ``converged`` and ``source == "initial"``. Raises as
     ``solve``, and InvalidOptionError (option "initial") for a non-finite initial pose or

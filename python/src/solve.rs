@@ -241,6 +241,7 @@ pub(crate) fn _time_solve(
 ///         or a (4,) quaternion (w, x, y, z; COLMAP's order, normalised here), or a (3, 4)
 ///         matrix ``[R | t]`` (``Solution.Rt``) or a (4, 4) homogeneous matrix. A matrix ``R``
 ///         must be a rotation to 1e-6 (``R^T R = I``, ``det R > 0``).
+///     weights: optional non-negative weight per point, shape (N,), as ``solve``.
 ///     camera: a ``Camera``: ``image`` holds observed pixels; the refinement minimises the
 ///         pixel residuals through the camera model, as ``solve``.
 ///     loss, covariance, newton_iterations, newton_step_tolerance, reprojection_iterations:
@@ -254,14 +255,16 @@ pub(crate) fn _time_solve(
 ///     As ``solve``; InvalidOptionError (``option`` "initial") for an initial pose that is
 ///     not finite (the library's message) or not of the forms above.
 #[pyfunction]
-#[pyo3(signature = (world, image, initial, *, camera = None, loss = None, covariance = None,
-    newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None))]
+#[pyo3(signature = (world, image, initial, *, weights = None, camera = None, loss = None,
+    covariance = None, newton_iterations = None, newton_step_tolerance = None,
+    reprojection_iterations = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     py: Python<'_>,
     world: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     initial: &Bound<'_, PyAny>,
+    weights: Option<&Bound<'_, PyAny>>,
     camera: Option<&Bound<'_, PyCamera>>,
     loss: Option<&Bound<'_, PyAny>>,
     covariance: Option<&Bound<'_, PyAny>>,
@@ -281,12 +284,19 @@ pub(crate) fn refine(
     let initial = pose_arg(initial, "initial")?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
+    let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
     let result = match camera {
-        None => py.detach(|| solver.refine(&w, &img, &initial)),
+        None => py.detach(|| match &wts {
+            None => solver.refine(&w, &img, &initial),
+            Some(wts) => solver.refine_weighted(&w, &img, wts, &initial),
+        }),
         Some(cam) => {
             let cam = &cam.get().inner;
-            check_finite(&w, &img, None).map_err(|e| pnp_error(py, &e))?;
-            py.detach(|| solver.refine_pixels(&w, &img, cam, &initial))
+            check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
+            py.detach(|| match &wts {
+                None => solver.refine_pixels(&w, &img, cam, &initial),
+                Some(wts) => solver.refine_pixels_weighted(&w, &img, cam, wts, &initial),
+            })
         }
     };
     match result {

@@ -54,6 +54,31 @@ def test_refine_returns_the_solve_pose(rng):
         assert ref.used == 20 and ref.cheirality_ok
 
 
+def test_weighted_refine(rng):
+    cam = eopnp.Camera("OPENCV_FISHEYE", [400.0, 401.0, 320.0, 240.0, 0.02, -0.01, 0.003, -0.001])
+    world, image, r, t = problem(rng, 30)
+    pixels = cam.project(image) + rng.normal(0.0, 1.0, (30, 2))
+    weights = 1.0 + np.arange(30) % 3
+    weights[0] = 0.0
+    for args, kw in [((world, pixels), dict(camera=cam)), ((world, cam.undistort(pixels)), {})]:
+        sol = eopnp.solve(*args, weights, **kw)
+        ref = eopnp.refine(*args, perturbed(rng, r, t), weights=weights, **kw)
+        assert ref.converged and ref.used == 29
+        assert_same_pose(ref, sol)
+        assert ref.cost == pytest.approx(sol.cost, rel=1e-9)
+        # The weights matter: without them, another pose.
+        assert np.abs(eopnp.refine(*args, perturbed(rng, r, t), **kw).R - sol.R).max() > 1e-9
+    bad = np.ones(30)
+    bad[3] = -1.0
+    with pytest.raises(eopnp.InvalidInputError, match="weight 3 is negative"):
+        eopnp.refine(world, pixels, (r, t), weights=bad, camera=cam)
+    bad[3] = math.nan
+    with pytest.raises(eopnp.InvalidInputError, match="weight 3 is not finite"):
+        eopnp.refine(world, pixels, (r, t), weights=bad, camera=cam)
+    with pytest.raises(eopnp.InvalidInputError, match="got 29 weights for 30"):
+        eopnp.refine(world, image, (r, t), weights=np.ones(29))
+
+
 def test_every_pose_form_gives_the_same_pose(rng):
     world, image, r, t = problem(rng, 20, sigma_px=1.0)
     sol = eopnp.solve(world, image)
