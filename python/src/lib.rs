@@ -19,6 +19,7 @@ mod colmap;
 mod convert;
 mod errors;
 mod options;
+mod pose;
 mod ransac;
 mod solution;
 mod solve;

@@ -7,9 +7,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyList;
 
 use crate::camera::PyCamera;
-use crate::convert::{points2, points3, pose_arg, vector};
+use crate::convert::{points2, points3, vector};
 use crate::errors::pnp_error;
 use crate::options::SolverOptions;
+use crate::pose::pose_arg;
 use crate::solution::PySolution;
 
 /// NaN or infinite input as the library reports it on normalised input (lengths first, then
