@@ -116,7 +116,8 @@ pub enum PnpError {
     /// and > 0 with a normal square, `confidence` in (0, 1), `max_iterations` >= 1, `final_threshold_factor` finite
     /// and >= 1; or the focal lengths given to [`crate::ransac::Ransac::estimate`] are not
     /// finite and > 0 (`"focal"`); or the initial pose given to [`crate::Solver::refine`] is
-    /// not finite (`"initial"`).
+    /// not finite (`"initial"`); or the [`crate::Loss`] of [`crate::Solver::loss`] has an
+    /// unusable scale (`"loss"`, see [`crate::Loss::is_valid`]).
     InvalidOption {
         /// The option's field name.
         option: &'static str,
@@ -168,6 +169,10 @@ impl fmt::Display for PnpError {
             ),
             PnpError::InvalidOption { option: "initial" } => f.write_str(
                 "the initial pose is not finite: its rotation and translation must be finite",
+            ),
+            PnpError::InvalidOption { option: "loss" } => f.write_str(
+                "the loss scale is out of range: Huber and Cauchy take a finite scale s > 0 \
+                 whose square and its reciprocal are normal numbers (about 1e-154 < s < 1e154)",
             ),
             PnpError::InvalidOption { option } => {
                 let range = match *option {

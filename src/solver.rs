@@ -334,20 +334,47 @@ impl Solver {
         image: &[Point2<f64>],
         initial: &Isometry3<f64>,
     ) -> Result<Solution, PnpError> {
+        self.refine_impl(world, image, None, initial)
+    }
+
+    /// [`Solver::refine`] with a non-negative weight per point, as [`Solver::solve_weighted`]:
+    /// from a start in its basin, [`Solver::solve_weighted`]'s pose.
+    ///
+    /// # Errors
+    /// As [`Solver::refine`] and [`Solver::solve_weighted`].
+    pub fn refine_weighted(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: &[f64],
+        initial: &Isometry3<f64>,
+    ) -> Result<Solution, PnpError> {
+        self.refine_impl(world, image, Some(weights), initial)
+    }
+
+    /// [`Solver::refine`] and [`Solver::refine_weighted`].
+    fn refine_impl(
+        &self,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: Option<&[f64]>,
+        initial: &Isometry3<f64>,
+    ) -> Result<Solution, PnpError> {
         let r = check_initial(initial)?;
         let t = initial.translation.vector;
         self.check_loss()?;
-        let px = self.normalised_loss(image, None);
+        let px = self.normalised_loss(image, weights);
         let sol = pipeline::refine(
             &self.opts,
             world,
             image,
-            None,
+            weights,
             &self.opts.reproj,
             px.as_ref(),
             (&r, &t),
         )?;
-        Ok(self.with_covariance(sol, world, image, &|_| 1.0, Metric::Identity))
+        let weight = |i: usize| weights.map_or(1.0, |w| w[i]);
+        Ok(self.with_covariance(sol, world, image, &weight, Metric::Identity))
     }
 
     /// [`Solver::refine`] from observed pixels through a camera (as [`Solver::solve_pixels`]).
@@ -361,10 +388,38 @@ impl Solver {
         camera: &Camera,
         initial: &Isometry3<f64>,
     ) -> Result<Solution, PnpError> {
+        self.refine_pixels_impl(world, pixels, camera, None, initial)
+    }
+
+    /// [`Solver::refine_pixels`] with a non-negative weight per point, as
+    /// [`Solver::solve_pixels_weighted`]: from a start in its basin, its pose.
+    ///
+    /// # Errors
+    /// As [`Solver::refine`] and [`Solver::solve_pixels_weighted`].
+    pub fn refine_pixels_weighted(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        camera: &Camera,
+        weights: &[f64],
+        initial: &Isometry3<f64>,
+    ) -> Result<Solution, PnpError> {
+        self.refine_pixels_impl(world, pixels, camera, Some(weights), initial)
+    }
+
+    /// [`Solver::refine_pixels`] and [`Solver::refine_pixels_weighted`].
+    fn refine_pixels_impl(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        camera: &Camera,
+        user_weights: Option<&[f64]>,
+        initial: &Isometry3<f64>,
+    ) -> Result<Solution, PnpError> {
         let r = check_initial(initial)?;
         let t = initial.translation.vector;
         self.check_loss()?;
-        let u = undistort_all(world, pixels, camera, None)?;
+        let u = undistort_all(world, pixels, camera, user_weights)?;
         let mut reproj = self.opts.reproj;
         reproj.row_weights = u.rows;
         let px = self.camera_loss(&u, camera);
@@ -378,7 +433,9 @@ impl Solver {
             (&r, &t),
         )?;
         sol.skipped = world.len() - u.used.len();
-        Ok(self.with_covariance(sol, &u.world, &u.image, &|_| 1.0, Metric::Camera(camera)))
+        // The covariance through the camera with the caller's weights, as `Solver::pixels`.
+        let weight = |k: usize| user_weights.map_or(1.0, |uw| uw[u.used[k]]);
+        Ok(self.with_covariance(sol, &u.world, &u.image, &weight, Metric::Camera(camera)))
     }
 
     /// As [`Solver::solve_weighted`] (weights optional) with the x and y residual rows of the

@@ -8,7 +8,7 @@ use eopnp::camera::Camera;
 use eopnp::ransac::Ransac;
 use eopnp::{Loss, Solver};
 use eopnp_testkit::{haar_rotation, lm_refine_projection, rng_from_seed, rot_err_deg, trial_seed};
-use nalgebra::{Matrix3, Point2, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point2, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
 
 /// Problems per model.
@@ -445,4 +445,120 @@ fn unusable_loss_scales_are_invalid_options() {
             .solve_pixels(&p.world, &p.pixels, &case.camera)
             .unwrap_or_else(|e| panic!("{good:?}: {e}"));
     }
+}
+
+/// An unusable loss scale is `InvalidOption { option: "loss" }` from every entry point, with a
+/// message that names the loss (not a RANSAC option), and `Loss::is_valid` says so beforehand.
+#[test]
+fn unusable_loss_scale_is_invalid_option() {
+    let case = &cases()[0];
+    let p = problem(case, trial_seed("loss-scale", 0));
+    let normalised: Vec<Point2<f64>> = p
+        .pixels
+        .iter()
+        .map(|u| case.camera.undistort(*u).unwrap())
+        .collect();
+    for loss in [
+        Loss::Huber(0.0),
+        Loss::Huber(-1.0),
+        Loss::Cauchy(f64::NAN),
+        Loss::Cauchy(f64::INFINITY),
+        Loss::Huber(1e-160),
+        Loss::Cauchy(1e160),
+    ] {
+        assert!(!loss.is_valid(), "{loss:?}");
+        let s = Solver::default().loss(loss);
+        let results = [
+            s.solve(&p.world, &normalised).map(|_| ()),
+            s.solve_pixels(&p.world, &p.pixels, &case.camera)
+                .map(|_| ()),
+        ];
+        for r in results {
+            let e = r.unwrap_err();
+            assert_eq!(
+                e,
+                eopnp::PnpError::InvalidOption { option: "loss" },
+                "{loss:?}"
+            );
+            assert!(
+                e.to_string().starts_with("the loss scale is out of range"),
+                "{e}"
+            );
+        }
+    }
+    for loss in [Loss::Squared, Loss::Huber(1e-150), Loss::Cauchy(1e150)] {
+        assert!(loss.is_valid(), "{loss:?}");
+    }
+}
+
+/// The weighted refinement from a prior pose: from the ground truth a little perturbed, the
+/// pose of `solve_pixels_weighted` (and of `solve_weighted` on normalised points), and a point
+/// of weight 0 changes nothing.
+#[test]
+fn weighted_refine_is_the_weighted_solve_pose() {
+    for case in cases() {
+        let cam = &case.camera;
+        let name = cam.model().name();
+        for trial in 0..10 {
+            let p = problem(&case, trial_seed(&format!("{name}-refine-weighted"), trial));
+            let mut weights: Vec<f64> = (0..N).map(|i| (1 + i % 3) as f64).collect();
+            weights[0] = 0.0;
+            let prior = Isometry3::from_parts(
+                Translation3::from(p.t + Vector3::new(0.05, -0.03, 0.1)),
+                UnitQuaternion::from_euler_angles(0.02, -0.01, 0.015)
+                    * UnitQuaternion::from_matrix(&p.r),
+            );
+            let s = Solver::default();
+            let solved = s
+                .solve_pixels_weighted(&p.world, &p.pixels, cam, &weights)
+                .unwrap();
+            let refined = s
+                .refine_pixels_weighted(&p.world, &p.pixels, cam, &weights, &prior)
+                .unwrap();
+            assert!(refined.converged, "{name} trial {trial}");
+            assert!(
+                rot_err_deg(&refined.rotation, &solved.rotation) < 1e-7
+                    && (refined.pose.translation.vector - solved.pose.translation.vector).norm()
+                        < 1e-8,
+                "{name} trial {trial}: refined {refined:?} solved {solved:?}"
+            );
+            assert!((refined.cost - solved.cost).abs() <= 1e-9 * solved.cost);
+            assert_eq!(refined.used, N - 1);
+            // Weight 0 = dropped.
+            let dropped = s
+                .refine_pixels_weighted(&p.world[1..], &p.pixels[1..], cam, &weights[1..], &prior)
+                .unwrap();
+            assert!(rot_err_deg(&dropped.rotation, &refined.rotation) < 1e-7);
+            // Normalised input: solve_weighted's pose.
+            let image: Vec<Point2<f64>> = p
+                .pixels
+                .iter()
+                .map(|u| cam.undistort(*u).unwrap())
+                .collect();
+            let solved = s.solve_weighted(&p.world, &image, &weights).unwrap();
+            let refined = s
+                .refine_weighted(&p.world, &image, &weights, &prior)
+                .unwrap();
+            assert!(refined.converged, "{name} trial {trial}");
+            assert!(
+                rot_err_deg(&refined.rotation, &solved.rotation) < 1e-7,
+                "{name} trial {trial}"
+            );
+            assert!((refined.cost - solved.cost).abs() <= 1e-9 * solved.cost);
+        }
+    }
+    // Bad weights: the errors of the weighted solves.
+    let case = &cases()[0];
+    let p = problem(case, trial_seed("refine-weighted-errors", 0));
+    let prior = Isometry3::from_parts(Translation3::from(p.t), UnitQuaternion::from_matrix(&p.r));
+    let mut w = vec![1.0; N];
+    w[3] = -1.0;
+    let e = Solver::default()
+        .refine_pixels_weighted(&p.world, &p.pixels, &case.camera, &w, &prior)
+        .unwrap_err();
+    assert_eq!(e, eopnp::PnpError::InvalidWeight { index: 3 });
+    let e = Solver::default()
+        .refine_weighted(&p.world, &p.pixels, &w[..N - 1], &prior)
+        .unwrap_err();
+    assert!(matches!(e, eopnp::PnpError::WeightsLength { .. }), "{e:?}");
 }

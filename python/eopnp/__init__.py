@@ -11,6 +11,8 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> sol, info = eopnp.solve_ransac(world, pixels, camera=cam)   # info["inliers"]: bool mask
 >>> sol = eopnp.solve(world, pixels, camera=cam, covariance=1.0)  # sol.covariance: 6x6
 >>> results = eopnp.solve_batch([(world, pixels), ...], camera=cam, threads=2)
+>>> sol = eopnp.solve(world, pixels, camera=cam, loss=("cauchy", 2.0))  # robust, 2 px scale
+>>> sol = eopnp.refine(world, pixels, prev_sol, camera=cam)     # tracking: from a prior pose
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
 read as float64; results are new float64 arrays. Errors raise the exceptions of
@@ -39,6 +41,7 @@ from ._eopnp import (
     __version__,
     problem_seed,
     read_colmap_model,
+    refine,
     register_image,
     solve,
     solve_all,
@@ -67,6 +70,7 @@ __all__ = [
     "__version__",
     "problem_seed",
     "read_colmap_model",
+    "refine",
     "register_image",
     "solve",
     "solve_all",

@@ -32,8 +32,21 @@ _F64Array = npt.NDArray[np.float64]
 _Refinement = Literal["ml", "reprojection", "algebraic"]
 _Planar = Literal["auto", "planar", "nonplanar"]
 _Source = Literal[
-    "case1", "case2", "case3", "case4", "planar1", "planar2", "extra_start", "other"
+    "case1",
+    "case2",
+    "case3",
+    "case4",
+    "planar1",
+    "planar2",
+    "extra_start",
+    "initial",
+    "other",
 ]
+_Loss = Union[
+    Literal["squared"], tuple[Literal["huber", "cauchy"], float], None
+]
+"""``loss=``: None or "squared" (default), ``("huber", s)`` or ``("cauchy", s)``, the scale
+``s`` in pixels with a camera, in normalised units otherwise (finite, > 0)."""
 
 @final
 class Solution:
@@ -59,8 +72,10 @@ class Solution:
         """The 3x4 matrix [R | t]."""
     @property
     def cost(self) -> float:
-        """The minimised cost: sum of (weighted) squared normalised reprojection residuals
-        (refinement "ml"), or the algebraic cost (refinement "algebraic")."""
+        """The minimised cost (refinement "ml"): the (weighted) sum of the loss of the squared
+        reprojection residuals, in pixels^2 for pixel input (through the camera), normalised
+        units otherwise (the sum of squares with the default loss); or the algebraic cost
+        (refinement "algebraic")."""
     @property
     def algebraic_cost(self) -> float:
         """The paper's algebraic cost of the rotation."""
@@ -86,6 +101,10 @@ class Solution:
     @property
     def reprojection_iterations(self) -> int:
         """Levenberg-Marquardt iterations of the refinement (0 in algebraic mode)."""
+    @property
+    def converged(self) -> bool:
+        """The refinement stopped at a minimum (False when it ran out of iterations or could
+        not start; True in algebraic mode)."""
     @property
     def used(self) -> int:
         """Correspondences that entered the solve (weight > 0, undistorted)."""
@@ -304,6 +323,7 @@ def solve(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     covariance: _Covariance = None,
+    loss: _Loss = None,
 ) -> Solution:
     """The camera pose from N >= 4 correspondences: world (N, 3), image (N, 2) normalised, or
     pixels with ``camera``; optional weights (N,) >= 0. Default: EOPnP + maximum-likelihood
@@ -312,6 +332,11 @@ def solve(
     ``covariance``: None, "estimated" (noise from the residuals) or the noise standard
     deviation in image units (pixels with ``camera``): fills ``Solution.covariance`` and
     ``Solution.sigma``.
+
+    ``loss``: the loss of the final refinement: None or "squared" (default, the
+    maximum-likelihood pose for Gaussian noise), ``("huber", s)`` (a few moderate outliers;
+    ``s`` 1-3 times the noise) or ``("cauchy", s)`` (gross outliers hardly move the pose);
+    ``s`` in pixels with ``camera``, normalised units otherwise.
 
     Raises InvalidInputError (InputTypeError), DegenerateError, NoSolutionError,
     InvalidOptionError."""
@@ -327,8 +352,40 @@ def solve_all(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     covariance: _Covariance = None,
+    loss: _Loss = None,
 ) -> list[Solution]:
     """Every distinct local minimum, best first (normalised image points)."""
+
+_Rotation = _ArrayLike
+"""A rotation: a (3, 3) matrix, a (3,) rotation vector (OpenCV's rvec) or a (4,) quaternion
+(w, x, y, z)."""
+_Pose = Union[Solution, tuple[_Rotation, _ArrayLike], _ArrayLike]
+"""A pose (world to camera): a ``Solution``, ``(rotation, t)``, or a (3, 4) ``[R | t]`` or
+(4, 4) matrix."""
+
+def refine(
+    world: _ArrayLike,
+    image: _ArrayLike,
+    initial: _Pose,
+    *,
+    weights: _ArrayLike | None = None,
+    camera: Camera | None = None,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+) -> Solution:
+    """Refines a prior pose (tracking: the previous frame's) to the maximum-likelihood pose of
+    the basin it starts in, without the global search (OpenCV's ``solvePnPRefineLM``,
+    PoseLib's ``refine_absolute_pose``). ``initial``: a ``Solution``, ``(R, t)``,
+    ``(rvec, t)``, ``(q_wxyz, t)``, or a (3, 4) ``[R | t]`` or (4, 4) matrix. Pixels with
+    ``camera`` (through the camera model, as ``solve``); ``weights`` (N,) >= 0 as ``solve``.
+    Releases the GIL.
+
+    Returns a ``Solution`` with ``converged`` and ``source == "initial"``. Raises as
+    ``solve``, and InvalidOptionError (option "initial") for a non-finite initial pose or
+    one of another form."""
 
 def solve_batch(
     problems: Sequence[_Problem],
@@ -341,6 +398,7 @@ def solve_batch(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     covariance: _Covariance = None,
+    loss: _Loss = None,
     threads: int | None = None,
 ) -> list[Solution | PnpError]:
     """``solve`` on many problems, ``(world, image)`` or ``(world, image, weights)`` tuples,
@@ -364,6 +422,7 @@ def solve_ransac_batch(
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
+    loss: _Loss = None,
     threads: int | None = None,
 ) -> list[tuple[Solution, _RansacInfo] | PnpError]:
     """``solve_ransac`` on many problems in parallel: entry ``i`` is what ``solve_ransac``
@@ -387,10 +446,13 @@ def solve_ransac(
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
+    loss: _Loss = None,
 ) -> tuple[Solution, _RansacInfo]:
     """Robust pose by RANSAC: pixels with ``camera``, or normalised points with
     ``focal=(fx, fy)`` (exactly one). Returns the pose and the info dict (inlier mask,
-    iterations, inlier ratio, cost, RMSE). Raises NoConsensusError if no pose has 4 inliers."""
+    iterations, inlier ratio, cost, RMSE). ``loss``: of the fits' final refinement (pixels with
+    ``camera``, normalised units with ``focal``). Raises NoConsensusError if no pose has 4
+    inliers."""
 
 def read_colmap_model(path: str | os.PathLike[str]) -> Model:
     """Reads a COLMAP model directory (text or binary). Raises ModelError."""
@@ -406,6 +468,7 @@ def register_image(
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
+    loss: _Loss = None,
 ) -> Registration:
     """Re-estimates an image's pose from its correspondences (plain, or RANSAC with
     ``ransac=True`` / options) and compares it with the model's. Raises UnknownIdError."""
@@ -430,6 +493,7 @@ __all__ = [
     "__version__",
     "problem_seed",
     "read_colmap_model",
+    "refine",
     "register_image",
     "solve",
     "solve_all",

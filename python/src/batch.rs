@@ -22,7 +22,7 @@ use rayon::ThreadPool;
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
 use crate::errors::{error, option_error, pnp_error};
-use crate::options::{covariance_arg, SolverOptions};
+use crate::options::SolverOptions;
 use crate::ransac::{focal_arg, ransac_arg, ransac_result};
 use crate::solution::PySolution;
 use crate::solve::check_finite;
@@ -261,7 +261,7 @@ fn run<T: Send>(py: Python<'_>, threads: Option<i64>, f: impl FnOnce() -> T + Se
 ///     camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
 ///         of one ``Camera`` per problem (image points in pixels).
 ///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, covariance: as ``solve``, for every problem.
+///         exhaustive, covariance, loss: as ``solve``, for every problem.
 ///     threads: None (rayon's global pool: one thread per core, or ``RAYON_NUM_THREADS``) or
 ///         the number of threads (a pool per count, built once and kept).
 ///
@@ -279,7 +279,7 @@ fn run<T: Send>(py: Python<'_>, threads: Option<i64>, f: impl FnOnce() -> T + Se
 #[pyfunction]
 #[pyo3(signature = (problems, *, camera = None, refinement = "ml", planar = "auto",
     newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false, covariance = None, threads = None))]
+    exhaustive = false, covariance = None, loss = None, threads = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_batch<'py>(
     py: Python<'py>,
@@ -292,6 +292,7 @@ pub(crate) fn solve_batch<'py>(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     covariance: Option<&Bound<'py, PyAny>>,
+    loss: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = SolverOptions {
@@ -301,9 +302,10 @@ pub(crate) fn solve_batch<'py>(
         newton_step_tolerance,
         reprojection_iterations,
         exhaustive,
+        loss,
+        covariance,
     }
-    .solver(py)?
-    .covariance(covariance_arg(py, covariance)?);
+    .solver(py)?;
     let batch = convert(py, problems, camera)?;
     let cams: Vec<&Camera> = batch.cameras.iter().map(|c| &c.get().inner).collect();
     let probs = crate_problems(&batch.problems, &cams, (1.0, 1.0));
@@ -330,7 +332,7 @@ pub(crate) fn solve_batch<'py>(
 ///         points (exactly one of ``camera`` and ``focal``).
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
 ///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive: as ``solve_ransac``.
+///         exhaustive, loss: as ``solve_ransac``.
 ///     threads: as ``solve_batch``.
 ///
 /// Returns:
@@ -343,7 +345,7 @@ pub(crate) fn solve_batch<'py>(
 #[pyfunction]
 #[pyo3(signature = (problems, *, camera = None, focal = None, ransac = None, refinement = "ml",
     planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, threads = None))]
+    reprojection_iterations = None, exhaustive = false, loss = None, threads = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_ransac_batch<'py>(
     py: Python<'py>,
@@ -357,6 +359,7 @@ pub(crate) fn solve_ransac_batch<'py>(
     newton_step_tolerance: Option<f64>,
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
+    loss: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = SolverOptions {
@@ -366,6 +369,8 @@ pub(crate) fn solve_ransac_batch<'py>(
         newton_step_tolerance,
         reprojection_iterations,
         exhaustive,
+        loss,
+        covariance: None,
     }
     .solver(py)?;
     let ransac = ransac_arg(py, ransac)?;

@@ -34,9 +34,30 @@ pub(crate) struct PyCamera {
     pub(crate) inner: Camera,
 }
 
-fn k_matrix(k: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
+/// OpenCV's `K` (3x3) and distortion vector (None: no coefficients), as both OpenCV
+/// constructors read them.
+fn opencv_inputs(
+    k: &Bound<'_, PyAny>,
+    dist: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(Matrix3<f64>, Vec<f64>)> {
     let m = matrix3(k, "K")?;
-    Ok(Matrix3::from_fn(|i, j| m[i][j]))
+    let d = match dist {
+        Some(d) => vector(d, "dist", true)?,
+        None => Vec::new(),
+    };
+    Ok((Matrix3::from_fn(|i, j| m[i][j]), d))
+}
+
+/// `(K, dist)` as new arrays, as both OpenCV exports return them.
+fn opencv_arrays<'py>(
+    py: Python<'py>,
+    k: &Matrix3<f64>,
+    d: &[f64],
+) -> (Bound<'py, PyAny>, Bound<'py, PyAny>) {
+    let rows: Vec<f64> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| k[(i, j)]))
+        .collect();
+    (array2(py, 3, 3, &rows).into_any(), array1(py, d).into_any())
 }
 
 #[pymethods]
@@ -82,11 +103,7 @@ impl PyCamera {
         K: &Bound<'_, PyAny>,
         dist: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let k = k_matrix(K)?;
-        let d = match dist {
-            Some(d) => vector(d, "dist", true)?,
-            None => Vec::new(),
-        };
+        let (k, d) = opencv_inputs(K, dist)?;
         let inner = Camera::from_opencv(&k, &d).map_err(|e| camera_error(py, &e))?;
         Ok(PyCamera { inner })
     }
@@ -101,8 +118,7 @@ impl PyCamera {
         K: &Bound<'_, PyAny>,
         dist: &Bound<'_, PyAny>,
     ) -> PyResult<Self> {
-        let k = k_matrix(K)?;
-        let d = vector(dist, "dist", true)?;
+        let (k, d) = opencv_inputs(K, Some(dist))?;
         let d: [f64; 4] = d.as_slice().try_into().map_err(|_| {
             error(
                 py,
@@ -172,13 +188,7 @@ impl PyCamera {
     /// None for the fisheye models (see ``to_opencv_fisheye``).
     fn to_opencv<'py>(&self, py: Python<'py>) -> Option<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let (k, d) = self.inner.to_opencv()?;
-        let rows: Vec<f64> = (0..3)
-            .flat_map(|i| (0..3).map(move |j| k[(i, j)]))
-            .collect();
-        Some((
-            array2(py, 3, 3, &rows).into_any(),
-            array1(py, &d).into_any(),
-        ))
+        Some(opencv_arrays(py, &k, &d))
     }
 
     /// ``cv2.fisheye``'s ``(K, dist)`` of an OPENCV_FISHEYE camera, else None.
@@ -187,13 +197,7 @@ impl PyCamera {
         py: Python<'py>,
     ) -> Option<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let (k, d) = self.inner.to_opencv_fisheye()?;
-        let rows: Vec<f64> = (0..3)
-            .flat_map(|i| (0..3).map(move |j| k[(i, j)]))
-            .collect();
-        Some((
-            array2(py, 3, 3, &rows).into_any(),
-            array1(py, &d).into_any(),
-        ))
+        Some(opencv_arrays(py, &k, &d))
     }
 
     /// Pixels of normalised image points (x/z, y/z), shape (N, 2) -> (N, 2).

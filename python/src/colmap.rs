@@ -299,7 +299,7 @@ impl PyRegistration {
 ///         True (default options), a ``RansacOptions`` or a dict of its fields: robust, as
 ///         ``solve_ransac``.
 ///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive: as ``solve``.
+///         exhaustive, loss: as ``solve`` (``loss``'s scale in pixels).
 ///
 /// Returns:
 ///     Registration: the pose, its errors against the model's, RANSAC's statistics.
@@ -311,7 +311,7 @@ impl PyRegistration {
 #[pyfunction]
 #[pyo3(signature = (model, image_id, *, ransac = None, refinement = "ml", planar = "auto",
     newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false))]
+    exhaustive = false, loss = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn register_image(
     py: Python<'_>,
@@ -324,6 +324,7 @@ pub(crate) fn register_image(
     newton_step_tolerance: Option<f64>,
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
+    loss: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyRegistration> {
     let solver = SolverOptions {
         refinement,
@@ -332,6 +333,8 @@ pub(crate) fn register_image(
         newton_step_tolerance,
         reprojection_iterations,
         exhaustive,
+        loss,
+        covariance: None,
     }
     .solver(py)?;
     // `ransac`: None or False (plain), True (defaults), RansacOptions or a dict.

@@ -13,7 +13,7 @@ use crate::errors::{dtype_error, error, shape_error};
 
 static NUMPY: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
 
-fn shape_str(shape: &[usize]) -> String {
+pub(crate) fn shape_str(shape: &[usize]) -> String {
     match shape {
         [n] => format!("({n},)"),
         _ => {
@@ -25,7 +25,10 @@ fn shape_str(shape: &[usize]) -> String {
 
 /// `obj` as a `float64` array: as is if it is one, otherwise through `numpy.asarray` when its
 /// dtype is a float or integer type.
-fn float_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+pub(crate) fn float_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     if let Ok(a) = obj.cast::<PyArrayDyn<f64>>() {
         return Ok(a.clone());
     }
@@ -57,7 +60,7 @@ fn float_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, 
 }
 
 /// The rows of an `(N, C)` array, each mapped by `f`.
-fn rows<T>(
+pub(crate) fn rows<T>(
     obj: &Bound<'_, PyAny>,
     name: &str,
     cols: usize,

@@ -19,6 +19,7 @@ mod colmap;
 mod convert;
 mod errors;
 mod options;
+mod pose;
 mod ransac;
 mod solution;
 mod solve;
@@ -28,6 +29,7 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(solve::solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve::solve_all, m)?)?;
+    m.add_function(wrap_pyfunction!(solve::refine, m)?)?;
     m.add_function(wrap_pyfunction!(solve::_time_solve, m)?)?;
     m.add_function(wrap_pyfunction!(ransac::solve_ransac, m)?)?;
     m.add_function(wrap_pyfunction!(batch::solve_batch, m)?)?;

@@ -306,6 +306,9 @@ fn rmse_px(
 ///         confidence 0.999, at most 10000 samples, seed 0).
 ///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
 ///         exhaustive: the options of the EOPnP fits, as ``solve``.
+///     loss: the loss of the fits' final refinement (the local optimisations and the final
+///         fit on the inliers), as ``solve``: ``s`` in pixels with ``camera``, in normalised
+///         units with ``focal``. The inlier classification is unchanged.
 ///
 /// Returns:
 ///     (Solution, dict): the pose fitted to the inliers, and ``info``: ``inliers`` (bool
@@ -322,7 +325,7 @@ fn rmse_px(
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, focal = None, ransac = None,
     refinement = "ml", planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false))]
+    reprojection_iterations = None, exhaustive = false, loss = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_ransac<'py>(
     py: Python<'py>,
@@ -338,6 +341,7 @@ pub(crate) fn solve_ransac<'py>(
     newton_step_tolerance: Option<f64>,
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
+    loss: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
     let solver = SolverOptions {
         refinement,
@@ -346,6 +350,8 @@ pub(crate) fn solve_ransac<'py>(
         newton_step_tolerance,
         reprojection_iterations,
         exhaustive,
+        loss,
+        covariance: None,
     }
     .solver(py)?;
     let ransac = ransac_arg(py, ransac)?;

@@ -15,8 +15,10 @@ use crate::convert::{array1, array2};
 ///     rvec: OpenCV's rotation vector (axis times angle, radians), shape (3,).
 ///     q: unit quaternion (w, x, y, z), COLMAP's order, shape (4,).
 ///     Rt: the 3x4 matrix [R | t].
-///     cost: the minimised cost: the (weighted) sum of squared normalised reprojection
-///         residuals (refinement "ml"), or the algebraic cost (refinement "algebraic").
+///     cost: the minimised cost (refinement "ml"): the (weighted) sum of the loss of the
+///         squared reprojection residuals, in pixels^2 for pixel input (through the camera),
+///         in normalised units otherwise (the sum of squared residuals with the default
+///         loss); or the algebraic cost (refinement "algebraic").
 ///     algebraic_cost: the paper's algebraic cost of the rotation.
 ///     reprojection_rmse: RMS normalised reprojection residual (multiply by the focal length
 ///         for pixels); inf if a point lies in the focal plane (algebraic mode only).
@@ -24,9 +26,11 @@ use crate::convert::{array1, array2};
 ///     degenerate: the configuration is close to degenerate; the pose may be ambiguous.
 ///     planar: the planar branch produced the starting candidate.
 ///     source: the candidate generator of the winning start ("case1", ..., "planar1",
-///         "planar2", "extra_start").
+///         "planar2", "extra_start"; "initial" for ``refine``).
 ///     newton_iterations: damped-Newton iterations of the winning candidate.
 ///     reprojection_iterations: Levenberg-Marquardt iterations of the refinement.
+///     converged: the refinement stopped at a minimum (False when it ran out of iterations or
+///         could not start; True in algebraic mode).
 ///     used: correspondences that entered the solve (weight > 0, undistorted).
 ///     skipped: correspondences left out because their pixel could not be undistorted.
 ///     covariance: the pose's 6x6 covariance (``covariance=`` of ``solve``), or None: of
@@ -62,6 +66,8 @@ pub(crate) struct PySolution {
     #[pyo3(get)]
     reprojection_iterations: u32,
     #[pyo3(get)]
+    converged: bool,
+    #[pyo3(get)]
     used: usize,
     #[pyo3(get)]
     skipped: usize,
@@ -69,7 +75,7 @@ pub(crate) struct PySolution {
     cov: Option<([f64; 36], f64)>,
 }
 
-const SOURCES: [&str; 8] = [
+const SOURCES: [&str; 9] = [
     "case1",
     "case2",
     "case3",
@@ -77,6 +83,7 @@ const SOURCES: [&str; 8] = [
     "planar1",
     "planar2",
     "extra_start",
+    "initial",
     "other",
 ];
 
@@ -89,7 +96,8 @@ fn source_name(s: CandidateSource) -> &'static str {
         CandidateSource::Planar1 => SOURCES[4],
         CandidateSource::Planar2 => SOURCES[5],
         CandidateSource::ExtraStart => SOURCES[6],
-        _ => SOURCES[7],
+        CandidateSource::Initial => SOURCES[7],
+        _ => SOURCES[8],
     }
 }
 
@@ -123,6 +131,7 @@ impl From<&Solution> for PySolution {
             source: source_name(s.source),
             newton_iterations: s.newton_iterations,
             reprojection_iterations: s.reprojection_iterations,
+            converged: s.converged,
             used: s.used,
             skipped: s.skipped,
             cov: s.covariance.map(|c| {
@@ -153,6 +162,11 @@ impl PySolution {
 
     pub(crate) fn translation(&self) -> &[f64; 3] {
         &self.t
+    }
+
+    /// The library's unit quaternion (w, x, y, z).
+    pub(crate) fn quaternion(&self) -> &[f64; 4] {
+        &self.q
     }
 }
 
@@ -224,6 +238,7 @@ impl PySolution {
         d.set_item("source", self.source)?;
         d.set_item("newton_iterations", self.newton_iterations)?;
         d.set_item("reprojection_iterations", self.reprojection_iterations)?;
+        d.set_item("converged", self.converged)?;
         d.set_item("used", self.used)?;
         d.set_item("skipped", self.skipped)?;
         d.set_item("covariance", self.covariance(py))?;
@@ -234,13 +249,14 @@ impl PySolution {
     fn __repr__(&self) -> String {
         let v = |a: &[f64]| a.iter().map(|x| num(*x)).collect::<Vec<_>>().join(", ");
         format!(
-            "Solution(rvec=[{}], t=[{}], cost={:.3e}, cheirality_ok={}, degenerate={}, used={}, \
-             skipped={})",
+            "Solution(rvec=[{}], t=[{}], cost={:.3e}, cheirality_ok={}, degenerate={}, \
+             converged={}, used={}, skipped={})",
             v(&self.rvec),
             v(&self.t),
             self.cost,
             if self.cheirality_ok { "True" } else { "False" },
             if self.degenerate { "True" } else { "False" },
+            if self.converged { "True" } else { "False" },
             self.used,
             self.skipped
         )
@@ -258,8 +274,11 @@ impl PySolution {
                     && (self.cheirality_ok, self.degenerate, self.planar)
                         == (o.cheirality_ok, o.degenerate, o.planar)
                     && self.source == o.source
-                    && (self.newton_iterations, self.reprojection_iterations)
-                        == (o.newton_iterations, o.reprojection_iterations)
+                    && (
+                        self.newton_iterations,
+                        self.reprojection_iterations,
+                        self.converged,
+                    ) == (o.newton_iterations, o.reprojection_iterations, o.converged)
                     && (self.used, self.skipped) == (o.used, o.skipped)
                     && self.cov.map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
                         == o.cov.map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
@@ -282,7 +301,11 @@ impl PySolution {
             (self.cost, self.algebraic_cost, self.reprojection_rmse),
             (self.cheirality_ok, self.degenerate, self.planar),
             self.source,
-            (self.newton_iterations, self.reprojection_iterations),
+            (
+                self.newton_iterations,
+                self.reprojection_iterations,
+                self.converged,
+            ),
             (self.used, self.skipped),
             self.cov.map(|(m, s)| (m.to_vec(), s)),
         );
@@ -298,7 +321,7 @@ type State = (
     (f64, f64, f64),
     (bool, bool, bool),
     String,
-    (u32, u32),
+    (u32, u32, bool),
     (usize, usize),
     Option<(Vec<f64>, f64)>,
 );
@@ -325,7 +348,7 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
         .iter()
         .find(|s| **s == source)
         .copied()
-        .unwrap_or(SOURCES[7]);
+        .unwrap_or(SOURCES[8]);
     Ok(PySolution {
         r: r.try_into().expect("checked"),
         t: t.try_into().expect("checked"),
@@ -340,6 +363,7 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
         source,
         newton_iterations: iters.0,
         reprojection_iterations: iters.1,
+        converged: iters.2,
         used: counts.0,
         skipped: counts.1,
         cov,

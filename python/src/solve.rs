@@ -9,7 +9,8 @@ use pyo3::types::PyList;
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
 use crate::errors::pnp_error;
-use crate::options::{covariance_arg, SolverOptions};
+use crate::options::SolverOptions;
+use crate::pose::pose_arg;
 use crate::solution::PySolution;
 
 /// NaN or infinite input as the library reports it on normalised input (lengths first, then
@@ -75,6 +76,13 @@ pub(crate) fn check_finite(
 ///         otherwise; pycolmap assumes 1 px): fills ``Solution.covariance``, the 6x6
 ///         covariance of ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``,
 ///         ``t = t_hat + delta_t`` (pycolmap's convention), and ``Solution.sigma``.
+///     loss: the loss of the final refinement: None or "squared" (default; the
+///         maximum-likelihood pose for Gaussian noise), ``("huber", s)`` (quadratic up to a
+///         residual of ``s``, linear beyond: a few moderate outliers; ``s`` about 1-3 times
+///         the noise) or ``("cauchy", s)`` (the influence of a residual decays beyond ``s``:
+///         gross outliers hardly move the pose, when RANSAC is not run). ``s`` is in pixels
+///         with ``camera``, in normalised units otherwise; it must be finite and > 0 (about
+///         1e-154 < s < 1e154). ``Solution.cost`` is then the loss's cost.
 ///
 /// Returns:
 ///     Solution: the pose (``R``, ``t``, ``rvec``, ``q``), its cost and diagnostics.
@@ -88,7 +96,7 @@ pub(crate) fn check_finite(
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, refinement = "ml",
     planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, covariance = None))]
+    reprojection_iterations = None, exhaustive = false, covariance = None, loss = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     py: Python<'_>,
@@ -103,6 +111,7 @@ pub(crate) fn solve(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     covariance: Option<&Bound<'_, PyAny>>,
+    loss: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PySolution> {
     let solver = SolverOptions {
         refinement,
@@ -111,9 +120,10 @@ pub(crate) fn solve(
         newton_step_tolerance,
         reprojection_iterations,
         exhaustive,
+        loss,
+        covariance,
     }
-    .solver(py)?
-    .covariance(covariance_arg(py, covariance)?);
+    .solver(py)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
@@ -142,8 +152,8 @@ pub(crate) fn solve(
 /// planar scenes several poses can explain the data about equally well; this lists them.
 ///
 /// ``world`` (N, 3) and ``image`` (N, 2) normalised, and the solver options, as ``solve``
-/// (no weights or camera: undistort pixels first with ``Camera.undistort``), and
-/// ``covariance`` as ``solve`` (each pose's own).
+/// (no weights or camera: undistort pixels first with ``Camera.undistort``), ``covariance``
+/// as ``solve`` (each pose's own) and ``loss`` as ``solve`` (normalised units).
 ///
 /// Returns:
 ///     list[Solution]: at least one.
@@ -153,7 +163,7 @@ pub(crate) fn solve(
 #[pyfunction]
 #[pyo3(signature = (world, image, *, refinement = "ml", planar = "auto",
     newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false, covariance = None))]
+    exhaustive = false, covariance = None, loss = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_all<'py>(
     py: Python<'py>,
@@ -166,6 +176,7 @@ pub(crate) fn solve_all<'py>(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     covariance: Option<&Bound<'py, PyAny>>,
+    loss: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = SolverOptions {
         refinement,
@@ -174,9 +185,10 @@ pub(crate) fn solve_all<'py>(
         newton_step_tolerance,
         reprojection_iterations,
         exhaustive,
+        loss,
+        covariance,
     }
-    .solver(py)?
-    .covariance(covariance_arg(py, covariance)?);
+    .solver(py)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let all = py
@@ -196,15 +208,7 @@ pub(crate) fn _time_solve(
     repeats: u32,
     refinement: &str,
 ) -> PyResult<f64> {
-    let solver = SolverOptions {
-        refinement,
-        planar: "auto",
-        newton_iterations: None,
-        newton_step_tolerance: None,
-        reprojection_iterations: None,
-        exhaustive: false,
-    }
-    .solver(py)?;
+    let solver = SolverOptions::default_with(refinement).solver(py)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let r = py.detach(|| {
@@ -221,5 +225,83 @@ pub(crate) fn _time_solve(
     match r.1 {
         Some(Err(e)) => Err(pnp_error(py, &e)),
         _ => Ok(r.0),
+    }
+}
+
+/// Refines a prior pose (tracking: the previous frame's pose) to the maximum-likelihood pose
+/// of the basin it starts in: Levenberg-Marquardt on the reprojection error from
+/// ``initial``, without EOPnP's global search (OpenCV's ``solvePnPRefineLM``, PoseLib's
+/// ``refine_absolute_pose``). From a start in the basin of ``solve``'s pose, the same pose.
+///
+/// Args:
+///     world: world points, shape (N, 3), N >= 4.
+///     image: their image points, shape (N, 2): normalised, or pixels with ``camera``.
+///     initial: the starting pose (world to camera, ``x_cam = R @ X + t``): a ``Solution``
+///         (e.g. the previous frame's), a pair ``(rotation, t)`` with ``t`` of shape (3,) and
+///         the rotation as a (3, 3) matrix ``R``, a (3,) rotation vector (OpenCV's ``rvec``)
+///         or a (4,) quaternion (w, x, y, z; COLMAP's order, normalised here), or a (3, 4)
+///         matrix ``[R | t]`` (``Solution.Rt``) or a (4, 4) homogeneous matrix. A matrix ``R``
+///         must be a rotation to 1e-6 (``R^T R = I``, ``det R > 0``).
+///     weights: optional non-negative weight per point, shape (N,), as ``solve``.
+///     camera: a ``Camera``: ``image`` holds observed pixels; the refinement minimises the
+///         pixel residuals through the camera model, as ``solve``.
+///     loss, covariance, newton_iterations, newton_step_tolerance, reprojection_iterations:
+///         as ``solve``.
+///
+/// Returns:
+///     Solution: the refined pose; ``converged`` says whether the refinement reached a
+///     minimum, ``source`` is "initial".
+///
+/// Raises:
+///     As ``solve``; InvalidOptionError (``option`` "initial") for an initial pose that is
+///     not finite (the library's message) or not of the forms above.
+#[pyfunction]
+#[pyo3(signature = (world, image, initial, *, weights = None, camera = None, loss = None,
+    covariance = None, newton_iterations = None, newton_step_tolerance = None,
+    reprojection_iterations = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refine(
+    py: Python<'_>,
+    world: &Bound<'_, PyAny>,
+    image: &Bound<'_, PyAny>,
+    initial: &Bound<'_, PyAny>,
+    weights: Option<&Bound<'_, PyAny>>,
+    camera: Option<&Bound<'_, PyCamera>>,
+    loss: Option<&Bound<'_, PyAny>>,
+    covariance: Option<&Bound<'_, PyAny>>,
+    newton_iterations: Option<i64>,
+    newton_step_tolerance: Option<f64>,
+    reprojection_iterations: Option<i64>,
+) -> PyResult<PySolution> {
+    let solver = SolverOptions {
+        newton_iterations,
+        newton_step_tolerance,
+        reprojection_iterations,
+        loss,
+        covariance,
+        ..SolverOptions::default_with("ml")
+    }
+    .solver(py)?;
+    let initial = pose_arg(initial, "initial")?;
+    let w = points3(world, "world")?;
+    let img = points2(image, "image")?;
+    let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
+    let result = match camera {
+        None => py.detach(|| match &wts {
+            None => solver.refine(&w, &img, &initial),
+            Some(wts) => solver.refine_weighted(&w, &img, wts, &initial),
+        }),
+        Some(cam) => {
+            let cam = &cam.get().inner;
+            check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
+            py.detach(|| match &wts {
+                None => solver.refine_pixels(&w, &img, cam, &initial),
+                Some(wts) => solver.refine_pixels_weighted(&w, &img, cam, wts, &initial),
+            })
+        }
+    };
+    match result {
+        Ok(s) => Ok(PySolution::from(&s)),
+        Err(e) => Err(pnp_error(py, &e)),
     }
 }

@@ -1,11 +1,13 @@
 """The package gives the Rust library's results: the same poses as the eopnp CLI (built by
 `cargo test --workspace --release`; scripts/test.sh passes its path in EOPNP_CLI), to the
-last bit, on the bundled model (plain and RANSAC) and on a synthetic `solve` problem."""
+last bit, on the bundled model (plain and RANSAC) and on a synthetic `solve` problem; and
+`refine` started from the CLI's pose stays on it."""
 
 import json
 import subprocess
 
 import numpy as np
+import pytest
 
 import eopnp
 from conftest import DATA, problem
@@ -51,3 +53,11 @@ def test_solve_equals_cli(cli, rng):
     assert_same_pose(sol, out)
     assert sol.cost == out["cost"]
     assert (sol.cheirality_ok, sol.degenerate) == (out["cheirality_ok"], out["degenerate"])
+    # Tracking from the Rust pose: refine keeps it (it is the pixel ML pose).
+    start = (np.array(out["rotation"]), np.array(out["translation"]))
+    for initial in [start, (np.array(out["quaternion_wxyz"]), start[1])]:
+        ref = eopnp.refine(world, pixels, initial, camera=cam)
+        assert ref.converged and ref.source == "initial"
+        assert np.abs(ref.R - start[0]).max() < 1e-12
+        assert np.abs(ref.t - start[1]).max() < 1e-12
+        assert ref.cost == pytest.approx(out["cost"], rel=1e-12)

@@ -97,9 +97,19 @@ impl Loss {
         }
     }
 
-    /// A positive scale whose square and its reciprocal are normal numbers (or
-    /// [`Loss::Squared`]).
-    pub(crate) fn is_valid(self) -> bool {
+    /// Whether the solver accepts this loss: [`Loss::Squared`], or a positive scale whose
+    /// square and its reciprocal are normal numbers (about `1e-154 < s < 1e154`). A solve with
+    /// any other loss is [`crate::PnpError::InvalidOption`] (`"loss"`); bindings use this to
+    /// reject the option before solving.
+    ///
+    /// ```
+    /// use eopnp::Loss;
+    /// assert!(Loss::Squared.is_valid() && Loss::Huber(1.0).is_valid());
+    /// assert!(!Loss::Cauchy(0.0).is_valid() && !Loss::Huber(f64::NAN).is_valid());
+    /// assert!(!Loss::Huber(1e-200).is_valid());
+    /// ```
+    #[must_use]
+    pub fn is_valid(self) -> bool {
         self.scale().is_none_or(|s| {
             let s2 = s * s;
             s > 0.0 && s2.is_normal() && s2.recip().is_normal()
