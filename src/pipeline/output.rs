@@ -166,13 +166,7 @@ impl Output<'_> {
                     r = out.r;
                     t = out.t;
                     iters = out.iterations;
-                    converged = matches!(
-                        out.stop,
-                        reprojection::ReprojStop::Gradient
-                            | reprojection::ReprojStop::Step
-                            | reprojection::ReprojStop::FinalStep
-                            | reprojection::ReprojStop::Damping
-                    );
+                    converged = out.stop.converged();
                     let rmse = if po.weight_sum > 0.0 {
                         (po.squared / po.weight_sum).sqrt() / px.scale
                     } else {
@@ -205,13 +199,7 @@ impl Output<'_> {
                 }
             }
             iters = out.iterations;
-            converged = matches!(
-                out.stop,
-                reprojection::ReprojStop::Gradient
-                    | reprojection::ReprojStop::Step
-                    | reprojection::ReprojStop::FinalStep
-                    | reprojection::ReprojStop::Damping
-            );
+            converged = out.stop.converged();
         }
         // M is positive semi-definite, so f >= 0 in exact arithmetic. With wildly scaled input
         // (found by fuzzing: an image coordinate of 3e9) the accumulated M is not PSD to

@@ -28,9 +28,9 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::frame::{WorkingFrame, MIN_UNIT};
 use super::options::Loss;
-use super::reprojection::pass::{pass, LaneMetric, Metric, PassInputs};
+use super::reprojection::pass::{LaneMetric, Metric};
 use super::reprojection::{
-    levenberg_marquardt, Composed, Normal, ReprojOptions, ReprojOutcome, Residuals,
+    levenberg_marquardt, Composed, Problem, ReprojOptions, ReprojOutcome, Residuals,
 };
 use crate::camera::{Project, ProjectionJob, Projector};
 use crate::numeric::mat3::pow2_scale;
@@ -100,43 +100,6 @@ impl<P: Project, const ROBUST: bool> Metric for CameraMetric<P, ROBUST> {
     }
 }
 
-/// The residuals of S10 ([`Residuals`]) under the metric `M`.
-struct PixelProblem<'a, M> {
-    world: &'a [Point3<f64>],
-    pixels: &'a [Point2<f64>],
-    weights: Option<&'a [f64]>,
-    /// `1 / unit`: the weights in a power-of-two unit (largest in `[1, 2)`).
-    inv_weight: f64,
-    c: Vector3<f64>,
-    metric: M,
-}
-
-impl<M: Metric> Residuals for PixelProblem<'_, M> {
-    fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal> {
-        let k = PassInputs::new(&self.c, self.inv_weight, pose, reference);
-        let (w, m, wt) = (self.world, self.pixels, self.weights);
-        if reference.is_some() {
-            pass::<true, true, M>(&k, &self.metric, w, m, wt)
-        } else {
-            pass::<false, true, M>(&k, &self.metric, w, m, wt)
-        }
-    }
-
-    fn accumulate_gradient(
-        &self,
-        pose: &Composed,
-        reference: &Composed,
-        h_prev: &[[f64; 6]; 6],
-    ) -> Option<Normal> {
-        let k = PassInputs::new(&self.c, self.inv_weight, pose, Some(reference));
-        let (w, m, wt) = (self.world, self.pixels, self.weights);
-        pass::<true, false, M>(&k, &self.metric, w, m, wt).map(|mut nrm| {
-            nrm.h = *h_prev;
-            nrm
-        })
-    }
-}
-
 /// S10 with the camera's model fixed at compile time: the refinement, and the plain squared
 /// error at its pose.
 struct Job<'a> {
@@ -154,9 +117,9 @@ impl ProjectionJob for Job<'_> {
 
     fn run<P: Project + Copy>(self, projection: P) -> (ReprojOutcome, f64) {
         let (px, fr) = (self.px, self.fr);
-        let problem = |loss| PixelProblem {
+        let problem = |loss| Problem {
             world: self.world,
-            pixels: px.pixels,
+            image: px.pixels,
             weights: px.weights,
             inv_weight: self.inv_weight,
             c: fr.c,
@@ -167,9 +130,9 @@ impl ProjectionJob for Job<'_> {
             let out = levenberg_marquardt(&squared, fr, self.r_work, self.t_work, self.opts);
             return (out, out.e);
         }
-        let robust = PixelProblem {
+        let robust = Problem {
             world: self.world,
-            pixels: px.pixels,
+            image: px.pixels,
             weights: px.weights,
             inv_weight: self.inv_weight,
             c: fr.c,

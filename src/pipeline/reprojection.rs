@@ -53,7 +53,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 pub(super) mod pass;
 
-use pass::{pass, PassInputs, RowWeights};
+use pass::{pass, Metric, PassInputs, RowWeights};
 
 use super::frame::WorkingFrame;
 use crate::numeric::linalg::solve_damped6;
@@ -102,6 +102,17 @@ pub(crate) enum ReprojStop {
     MaxIterations,
     /// Some starting depth is zero (`|z_i| <= 1e-12 max |z|`): nothing was done.
     SkippedZeroDepth,
+}
+
+impl ReprojStop {
+    /// The run ended at a minimum: its gradient or step test passed, or no step lowered the
+    /// cost any more.
+    pub(crate) fn converged(self) -> bool {
+        matches!(
+            self,
+            ReprojStop::Gradient | ReprojStop::Step | ReprojStop::FinalStep | ReprojStop::Damping
+        )
+    }
 }
 
 /// Result of [`refine_reprojection`]: the working-frame pose and diagnostics.
@@ -194,57 +205,47 @@ impl Normal {
     }
 }
 
-/// The inputs of one refinement, borrowed from the caller.
-struct Problem<'a> {
-    world: &'a [Point3<f64>],
-    image: &'a [Point2<f64>],
-    weights: Option<&'a [f64]>,
-    /// `1 / w_unit` (S1's power-of-two weight unit): the passes use the weights in that unit,
+/// The inputs of one refinement, borrowed from the caller: S9's (normalised points, row
+/// weights) or S10's (pixels, the camera's metric, [`super::pixel`]).
+pub(super) struct Problem<'a, M> {
+    pub(super) world: &'a [Point3<f64>],
+    /// The observations: normalised image points (S9) or pixels (S10).
+    pub(super) image: &'a [Point2<f64>],
+    pub(super) weights: Option<&'a [f64]>,
+    /// `1 / w_unit` (a power-of-two weight unit): the passes use the weights in that unit,
     /// so that the sums neither overflow nor underflow for any scale of the weights.
-    inv_weight: f64,
-    c: Vector3<f64>,
-    n: usize,
-    row_weights: (f64, f64),
+    pub(super) inv_weight: f64,
+    pub(super) c: Vector3<f64>,
+    /// How a residual is measured ([`pass::Metric`]).
+    pub(super) metric: M,
 }
 
-impl Problem<'_> {
-    fn rows(&self) -> RowWeights {
-        RowWeights {
-            wx: self.row_weights.0,
-            wy: self.row_weights.1,
-        }
-    }
-}
-
-impl Residuals for Problem<'_> {
+impl<M: Metric> Residuals for Problem<'_, M> {
     /// One O(N) pass at `pose`: cost, normal equations and depth range. With `reference`,
     /// returns `None` as soon as a depth differs in sign from its depth under `reference`.
     /// Points of weight 0 are skipped entirely (bit-identical to dropping them).
     ///
     /// Uses the structure of the Jacobian rows `r = [a x q; -a]` (`a` = `A_p`'s row, `q` the
-    /// rotated point, see [`point_terms`]): with `N = sum_rows s a a^T` per point (5 distinct
-    /// entries: `a_x = (1/z)(1, 0, -u)`, `a_y = (1/z)(0, 1, -v)`) and `K = [q]x N`,
-    /// `H = sum [[K [q]x^T, K], [K^T, N]]` and, with `b = sum_rows s e a`,
+    /// rotated point): with `N = sum_ab C_ab a_a a_b^T` per point (`a_x = (1/z)(1, 0, -u)`,
+    /// `a_y = (1/z)(0, 1, -v)`, `C` the metric) and `K = [q]x N`,
+    /// `H = sum [[K [q]x^T, K], [K^T, N]]` and, with `b = e~x a_x + e~y a_y`,
     /// `g = -sum [[q]x b; b]`. `K` and `K [q]x^T` are formed from the two vectors
-    /// `q x (1, 0, -u)` and `q x (0, 1, -v)` (see [`lane`]): about 60 % of the multiply-adds of
-    /// the 21-entry outer products.
+    /// `q x (1, 0, -u)` and `q x (0, 1, -v)` (see `pass::lane`): about 60 % of the
+    /// multiply-adds of the 21-entry outer products.
     ///
     /// Vectorised across points, without `unsafe` or target features: the active points
-    /// (non-zero weight), in order, are gathered into blocks of [`LANES`] transposed values
-    /// ([`Block`]); lane `l` of the block goes into its own partial sums ([`LaneSums`]), so the
-    /// compiler runs the per-point code ([`lane`]) on packed registers. The lanes are added
-    /// once at the end. The sequence of active points, and so the result to the bit, does not
-    /// depend on the points of weight 0; the depth-sign test is the scalar one, lane by lane.
+    /// (non-zero weight), in order, are gathered into blocks of `LANES` transposed values;
+    /// lane `l` of the block goes into its own partial sums, so the compiler runs the
+    /// per-point code on packed registers. The lanes are added once at the end. The sequence
+    /// of active points, and so the result to the bit, does not depend on the points of
+    /// weight 0; the depth-sign test is the scalar one, lane by lane.
     fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal> {
         let k = PassInputs::new(&self.c, self.inv_weight, pose, reference);
-        let rows = self.rows();
-        let world = &self.world[..self.n];
-        let image = &self.image[..self.n];
-        let weights = self.weights.map(|w| &w[..self.n]);
+        let (w, m, wt) = (self.world, self.image, self.weights);
         if reference.is_some() {
-            pass::<true, true, _>(&k, &rows, world, image, weights)
+            pass::<true, true, M>(&k, &self.metric, w, m, wt)
         } else {
-            pass::<false, true, _>(&k, &rows, world, image, weights)
+            pass::<false, true, M>(&k, &self.metric, w, m, wt)
         }
     }
 
@@ -256,10 +257,8 @@ impl Residuals for Problem<'_> {
         h_prev: &[[f64; 6]; 6],
     ) -> Option<Normal> {
         let k = PassInputs::new(&self.c, self.inv_weight, pose, Some(reference));
-        let world = &self.world[..self.n];
-        let image = &self.image[..self.n];
-        let weights = self.weights.map(|w| &w[..self.n]);
-        pass::<true, false, _>(&k, &self.rows(), world, image, weights).map(|mut nrm| {
+        let (w, m, wt) = (self.world, self.image, self.weights);
+        pass::<true, false, M>(&k, &self.metric, w, m, wt).map(|mut nrm| {
             nrm.h = *h_prev;
             nrm
         })
@@ -293,13 +292,15 @@ pub(crate) fn refine_reprojection(
         .min(image.len())
         .min(weights.map_or(usize::MAX, <[f64]>::len));
     let prob = Problem {
-        world,
-        image,
-        weights,
+        world: &world[..n],
+        image: &image[..n],
+        weights: weights.map(|w| &w[..n]),
         inv_weight: 1.0 / fr.weight_unit,
         c: fr.c,
-        n,
-        row_weights: opts.row_weights,
+        metric: RowWeights {
+            wx: opts.row_weights.0,
+            wy: opts.row_weights.1,
+        },
     };
     levenberg_marquardt(&prob, fr, r_work, t_work, opts)
 }

@@ -220,8 +220,7 @@ fn jacobian_matches_central_differences() {
             weights: None,
             inv_weight: 1.0,
             c: s.c,
-            n: s.world.len(),
-            row_weights: (1.0, 1.0),
+            metric: RowWeights { wx: 1.0, wy: 1.0 },
         };
         let pose = Composed::new(&r, &s.rw, s.d, &t);
         let h = 1e-6;
@@ -284,11 +283,10 @@ fn structured_normal_equations_match_outer_products() {
             weights: if seed % 2 == 0 { Some(&w) } else { None },
             inv_weight: 1.0,
             c: s.c,
-            n: s.world.len(),
-            row_weights: if seed % 3 == 0 {
-                (1.0, 1.0)
+            metric: if seed % 3 == 0 {
+                RowWeights { wx: 1.0, wy: 1.0 }
             } else {
-                (0.7, 1.9)
+                RowWeights { wx: 0.7, wy: 1.9 }
             },
         };
         let pose = Composed::new(&r, &s.rw, s.d, &t);
@@ -657,7 +655,7 @@ fn far_offset_millimetre_world() {
     assert!((t1 - t_gt).norm() < 1e-9 * t_gt.norm());
 }
 
-impl Problem<'_> {
+impl Problem<'_, RowWeights> {
     /// The previous form of [`Problem::accumulate`] (explicit rows, 21-entry outer products),
     /// the reference of the tests. One O(N) pass at `pose`: cost, normal equations and depth range. With `reference`,
     /// returns `None` as soon as a depth differs in sign from its depth under `reference`.
@@ -667,7 +665,7 @@ impl Problem<'_> {
         pose: &Composed,
         reference: Option<&Composed>,
     ) -> Option<Normal> {
-        let (wx, wy) = self.row_weights;
+        let (wx, wy) = (self.metric.wx, self.metric.wy);
         let mut nrm = Normal {
             h: [[0.0; 6]; 6],
             g: [0.0; 6],
@@ -676,7 +674,7 @@ impl Problem<'_> {
             max_abs_z: 0.0,
             max_abs_q: f64::NAN,
         };
-        for i in 0..self.n {
+        for i in 0..self.world.len() {
             let wi = self.weights.map_or(1.0, |w| w[i]);
             if wi == 0.0 {
                 continue;
