@@ -23,6 +23,23 @@ pub(crate) fn shape_str(shape: &[usize]) -> String {
     }
 }
 
+/// A read-only view of `arr`, or `InvalidInputError` naming `name` when it is borrowed mutably
+/// elsewhere.
+pub(crate) fn readonly<'py, D: numpy::ndarray::Dimension>(
+    arr: &Bound<'py, numpy::PyArray<f64, D>>,
+    name: &str,
+) -> PyResult<numpy::PyReadonlyArray<'py, f64, D>> {
+    arr.try_readonly().map_err(|e| {
+        error(
+            arr.py(),
+            "InvalidInputError",
+            "Borrow",
+            format!("{name}: {e}"),
+            vec![],
+        )
+    })
+}
+
 /// `obj` as a `float64` array: as is if it is one, otherwise through `numpy.asarray` when its
 /// dtype is a float or integer type.
 pub(crate) fn float_array<'py>(
@@ -79,15 +96,7 @@ pub(crate) fn rows<T>(
             ),
         ));
     }
-    let ro = arr.try_readonly().map_err(|e| {
-        error(
-            py,
-            "InvalidInputError",
-            "Borrow",
-            format!("{name}: {e}"),
-            vec![],
-        )
-    })?;
+    let ro = readonly(&arr, name)?;
     // `as_slice` also accepts Fortran order: the rows are contiguous only in C order.
     if ro.is_c_contiguous() {
         if let Ok(s) = ro.as_slice() {
@@ -156,15 +165,7 @@ pub(crate) fn vector(obj: &Bound<'_, PyAny>, name: &str, flatten: bool) -> PyRes
             ),
         ));
     }
-    let ro = arr.try_readonly().map_err(|e| {
-        error(
-            py,
-            "InvalidInputError",
-            "Borrow",
-            format!("{name}: {e}"),
-            vec![],
-        )
-    })?;
+    let ro = readonly(&arr, name)?;
     let v = ro.as_array();
     Ok(v.iter().copied().collect())
 }

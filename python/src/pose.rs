@@ -3,12 +3,12 @@
 //! `Isometry3` for the library.
 
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
-use numpy::{PyArrayMethods, PyUntypedArrayMethods};
+use numpy::PyUntypedArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
 
-use crate::convert::{array2, float_array, rows, shape_str, vector};
-use crate::errors::{error, option_error};
+use crate::convert::{array2, float_array, readonly, rows, shape_str, vector};
+use crate::errors::option_error;
 use crate::solution::PySolution;
 
 /// The largest `|R^T R - I|` entry and the least determinant accepted of a rotation matrix
@@ -23,15 +23,7 @@ fn rotation_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<UnitQuaternion<f
     let py = obj.py();
     let arr = float_array(obj, name)?;
     let shape = arr.shape().to_vec();
-    let ro = arr.try_readonly().map_err(|e| {
-        error(
-            py,
-            "InvalidInputError",
-            "Borrow",
-            format!("{name}: {e}"),
-            vec![],
-        )
-    })?;
+    let ro = readonly(&arr, name)?;
     let v: Vec<f64> = ro.as_array().iter().copied().collect();
     let nan =
         UnitQuaternion::new_unchecked(Quaternion::new(f64::NAN, f64::NAN, f64::NAN, f64::NAN));

@@ -448,16 +448,27 @@ fn residuals_and_jacobian(
             // d(res)/dp = (f / z) [[1, 0, -x/z], [0, 1, -y/z]];  dp/dw = -[q]x;  dp/dt = I.
             let dp = nalgebra::Matrix2x3::new(1.0, 0.0, -p.x / p.z, 0.0, 1.0, -p.y / p.z)
                 * (cam.f / p.z);
-            let dw = -(dp * q.cross_matrix());
-            for k in 0..3 {
-                jac[(2 * i, k)] = dw[(0, k)];
-                jac[(2 * i + 1, k)] = dw[(1, k)];
-                jac[(2 * i, 3 + k)] = dp[(0, k)];
-                jac[(2 * i + 1, 3 + k)] = dp[(1, k)];
-            }
+            jacobian_rows(&mut jac, i, &dp, &q);
         }
     }
     (res, jac)
+}
+
+/// Rows `2 i` and `2 i + 1` of the Jacobian w.r.t. `(w, t)` from `dp = d(res_i) / d p` at the
+/// rotated point `q`: `dp/dw = -[q]x`, `dp/dt = I`.
+fn jacobian_rows(
+    jac: &mut DMatrix<f64>,
+    i: usize,
+    dp: &nalgebra::Matrix2x3<f64>,
+    q: &Vector3<f64>,
+) {
+    let dw = -(dp * q.cross_matrix());
+    for k in 0..3 {
+        jac[(2 * i, k)] = dw[(0, k)];
+        jac[(2 * i + 1, k)] = dw[(1, k)];
+        jac[(2 * i, 3 + k)] = dp[(0, k)];
+        jac[(2 * i + 1, 3 + k)] = dp[(1, k)];
+    }
 }
 
 /// Sum of squared residuals of a pose (in the camera's units).
@@ -541,14 +552,7 @@ pub fn lm_refine_projection(
                     / (2.0 * h);
                 let jc = nalgebra::Matrix2::new(dx.x, dy.x, dx.y, dy.y);
                 let dn = nalgebra::Matrix2x3::new(1.0, 0.0, -nrm.x, 0.0, 1.0, -nrm.y) / p.z;
-                let dp = jc * dn;
-                let dw = -(dp * q.cross_matrix());
-                for k in 0..3 {
-                    jac[(2 * i, k)] = dw[(0, k)];
-                    jac[(2 * i + 1, k)] = dw[(1, k)];
-                    jac[(2 * i, 3 + k)] = dp[(0, k)];
-                    jac[(2 * i + 1, 3 + k)] = dp[(1, k)];
-                }
+                jacobian_rows(&mut jac, i, &(jc * dn), &q);
             }
         }
         (res, jac)
