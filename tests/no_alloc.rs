@@ -2,8 +2,8 @@
 //!
 //! A counting global allocator (this test binary only) counts the allocations made by the
 //! current thread while counting is switched on; `eopnp::solve`, `Solver::solve` (algebraic and
-//! exhaustive modes) and `Solver::solve_all` must make none after a warm-up call, for N = 4, 10,
-//! 100 in general and planar scenes.
+//! exhaustive modes, and with a robust loss, which runs S10) and `Solver::solve_all` must make
+//! none after a warm-up call, for N = 4, 10, 100 in general and planar scenes.
 //!
 //! Finding where an allocation comes from: run with `EOPNP_ALLOC_BACKTRACE=1` (and
 //! `RUST_BACKTRACE=1` for symbols):
@@ -13,7 +13,7 @@
 use eopnp_testkit as common;
 
 use common::{Problem, ProblemOptions, RotationKind, Scene};
-use eopnp::{Refinement, Solver};
+use eopnp::{Loss, Refinement, Solver};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -97,6 +97,9 @@ fn check_scene(scene: Scene, scene_name: &str) {
             Solver::default().refinement(Refinement::Algebraic),
         ),
         ("exhaustive", Solver::default().exhaustive(true)),
+        // A robust loss runs S10 (the pixel-space refinement, identity camera).
+        ("cauchy", Solver::default().loss(Loss::Cauchy(2.0 / 800.0))),
+        ("huber", Solver::default().loss(Loss::Huber(2.0 / 800.0))),
         (
             "algebraic+exhaustive",
             Solver::default()
