@@ -356,19 +356,20 @@ pub(crate) trait ProjectionJob {
 
 /// A projection with one lens model: the per-point code of [`Projector`] without the dispatch.
 #[derive(Clone, Copy)]
-pub(crate) struct LensProjection<L> {
+/// `FISHEYE`: the equidistant map comes first (a compile-time choice, so that the per-point
+/// code has no branch on the model).
+pub(crate) struct LensProjection<L, const FISHEYE: bool> {
     focal: (f64, f64),
     centre: (f64, f64),
-    fisheye: bool,
     lens: L,
 }
 
-impl<L: Lens> Project for LensProjection<L> {
+impl<L: Lens, const FISHEYE: bool> Project for LensProjection<L, FISHEYE> {
     #[inline(always)]
     fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
         let (fx, fy) = self.focal;
         // Fisheye models: chain rule through (u, v) = s(r) (x, y), s = atan(r) / r.
-        let (u, v, jf) = if self.fisheye {
+        let (u, v, jf) = if FISHEYE {
             let r2 = x * x + y * y;
             let r = r2.sqrt();
             if r > 1e-8 {
@@ -446,16 +447,25 @@ impl Projector {
     /// row-major.
     #[inline]
     pub(crate) fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
-        let (focal, centre, fisheye) = (self.focal, self.centre, self.fisheye);
-        with_lens!(self.distortion, lens => LensProjection { focal, centre, fisheye, lens }
-            .project_with_jacobian(x, y))
+        let (focal, centre) = (self.focal, self.centre);
+        if self.fisheye {
+            with_lens!(self.distortion, lens => LensProjection::<_, true> { focal, centre, lens }
+                .project_with_jacobian(x, y))
+        } else {
+            with_lens!(self.distortion, lens => LensProjection::<_, false> { focal, centre, lens }
+                .project_with_jacobian(x, y))
+        }
     }
 
     /// Runs `job` with this projection's lens model fixed at compile time (the model
     /// dispatched once, not per point).
     pub(crate) fn with_projection<J: ProjectionJob>(&self, job: J) -> J::Output {
-        let (focal, centre, fisheye) = (self.focal, self.centre, self.fisheye);
-        with_lens!(self.distortion, lens => job.run(LensProjection { focal, centre, fisheye, lens }))
+        let (focal, centre) = (self.focal, self.centre);
+        if self.fisheye {
+            with_lens!(self.distortion, lens => job.run(LensProjection::<_, true> { focal, centre, lens }))
+        } else {
+            with_lens!(self.distortion, lens => job.run(LensProjection::<_, false> { focal, centre, lens }))
+        }
     }
 
     /// [`Camera::undistort`]: the normalised point of a pixel, and `det J / (fx fy)`, `J` the
