@@ -225,12 +225,21 @@ pub(super) fn iterative_undistortion<L: Lens>(d: &L, x0: (f64, f64)) -> Option<(
     const REL_RADIUS: f64 = 0.1;
     const RADIUS: f64 = 0.1;
     let (mut u, mut v) = x0;
+    let scale2 = (x0.0 * x0.0 + x0.1 * x0.1).max(1.0);
     let mut steps = Budget::new(Bound::Undistort);
-    while steps.next() {
-        let ([xu, xv], j, _) = d.apply(u, v);
+    loop {
+        let ([xu, xv], j, radial) = d.apply(u, v);
         let (fu, fv) = (xu - x0.0, xv - x0.1);
         let det = j[0] * j[3] - j[1] * j[2];
-        if !(det.is_finite() && det != 0.0 && fu.is_finite() && fv.is_finite()) {
+        // Convergence check, at every iterate (the first that passes ends the iteration): the
+        // equation holds, the map is locally invertible (det J > 0, as at the image centre)
+        // at the solution, and the solution is not mirrored through the principal point
+        // (radial factor 1 + g > 0: with an extreme coefficient both radial and tangential
+        // scales can be negative, so det J > 0 alone does not exclude that root).
+        if fu * fu + fv * fv <= RESIDUAL_TOL * RESIDUAL_TOL * scale2 && det > 0.0 && radial > 0.0 {
+            return (u.is_finite() && v.is_finite()).then_some(((u, v), det));
+        }
+        if !steps.next() || !(det.is_finite() && det != 0.0 && fu.is_finite() && fv.is_finite()) {
             return None;
         }
         let mut su = (j[3] * fu - j[1] * fv) / det;
@@ -250,25 +259,17 @@ pub(super) fn iterative_undistortion<L: Lens>(d: &L, x0: (f64, f64)) -> Option<(
         }
         u -= su;
         v -= sv;
-        // |s| <= STEP_TOL max(1, |x|).
+        // A negligible step that still leaves the check failing: no convergence.
         if su * su + sv * sv <= STEP_TOL * STEP_TOL * (u * u + v * v).max(1.0) {
-            break;
+            let ([xu, xv], j, radial) = d.apply(u, v);
+            let (ru, rv) = (xu - x0.0, xv - x0.1);
+            let det = j[0] * j[3] - j[1] * j[2];
+            let ok = u.is_finite()
+                && v.is_finite()
+                && ru * ru + rv * rv <= RESIDUAL_TOL * RESIDUAL_TOL * scale2
+                && det > 0.0
+                && radial > 0.0;
+            return ok.then_some(((u, v), det));
         }
     }
-    // Convergence check: the equation holds, the map is locally invertible (det J > 0, as at
-    // the image centre) at the solution, and the solution is not mirrored through the
-    // principal point (radial factor 1 + g > 0: with an extreme coefficient both radial and
-    // tangential scales can be negative, so det J > 0 alone does not exclude that root).
-    let ([xu, xv], j, radial) = d.apply(u, v);
-    let (ru, rv) = (xu - x0.0, xv - x0.1);
-    let res2 = ru * ru + rv * rv;
-    let scale2 = (x0.0 * x0.0 + x0.1 * x0.1).max(1.0);
-    let det = j[0] * j[3] - j[1] * j[2];
-    // (Running out of iterations is accepted only if this residual test passes anyway.)
-    let ok = u.is_finite()
-        && v.is_finite()
-        && res2 <= RESIDUAL_TOL * RESIDUAL_TOL * scale2
-        && det > 0.0
-        && radial > 0.0;
-    ok.then_some(((u, v), det))
 }
