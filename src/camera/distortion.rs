@@ -239,7 +239,7 @@ pub(super) fn iterative_undistortion<L: Lens>(d: &L, x0: (f64, f64)) -> Option<(
         if fu * fu + fv * fv <= RESIDUAL_TOL * RESIDUAL_TOL * scale2 && det > 0.0 && radial > 0.0 {
             return (u.is_finite() && v.is_finite()).then_some(((u, v), det));
         }
-        if !steps.next() || !(det.is_finite() && det != 0.0 && fu.is_finite() && fv.is_finite()) {
+        if !(steps.next() && det.is_finite() && det != 0.0 && fu.is_finite() && fv.is_finite()) {
             return None;
         }
         let mut su = (j[3] * fu - j[1] * fv) / det;
