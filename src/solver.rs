@@ -427,7 +427,7 @@ impl Solver {
             &self.opts,
             &u.world,
             &u.image,
-            Some(&u.weights),
+            u.weights.as_deref(),
             &reproj,
             Some(&px),
             (&r, &t),
@@ -602,8 +602,13 @@ impl Solver {
         self.check_loss()?;
         let u = undistort_all(world, pixels, camera, user_weights)?;
         let px = self.camera_loss(&u, camera);
-        let mut sol =
-            self.solve_with_row_weights(&u.world, &u.image, Some(&u.weights), u.rows, Some(&px))?;
+        let mut sol = self.solve_with_row_weights(
+            &u.world,
+            &u.image,
+            u.weights.as_deref(),
+            u.rows,
+            Some(&px),
+        )?;
         sol.skipped = world.len() - u.used.len();
         // The covariance through the camera: the caller's weights, not the first-order
         // distortion weights of the solve.
@@ -673,8 +678,10 @@ pub(crate) struct Undistorted {
     pub world: Vec<Point3<f64>>,
     /// Their normalised image points.
     pub image: Vec<Point2<f64>>,
-    /// Their weights: `|det J_i| / (fx fy)` times the caller's weight.
-    pub weights: Vec<f64>,
+    /// Their weights: `|det J_i| / (fx fy)` times the caller's weight; `None` when they are
+    /// all exactly 1 (a camera without distortion and no weights from the caller), so that the
+    /// solve takes its unweighted path.
+    pub weights: Option<Vec<f64>>,
     /// Their indices in the caller's slices.
     pub used: Vec<usize>,
     /// Their pixels.
@@ -726,7 +733,7 @@ pub(crate) fn undistort_all(
     let mut out = Undistorted {
         world: Vec::with_capacity(n),
         image: Vec::with_capacity(n),
-        weights: Vec::with_capacity(n),
+        weights: (camera.has_distortion() || user_weights.is_some()).then(|| Vec::with_capacity(n)),
         used: Vec::with_capacity(n),
         pixels: Vec::with_capacity(n),
         user_weights: user_weights.map(|_| Vec::with_capacity(n)),
@@ -750,7 +757,9 @@ pub(crate) fn undistort_all(
                     input: InputKind::Weight,
                 });
             }
-            out.weights.push(weight);
+            if let Some(keep) = out.weights.as_mut() {
+                keep.push(weight);
+            }
             out.world.push(world[i]);
             out.image.push(m);
             out.used.push(i);

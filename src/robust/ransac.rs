@@ -536,7 +536,7 @@ impl Ransac {
             &u.world,
             &u.image,
             u.focal,
-            Some(&u.weights),
+            u.weights.as_deref(),
             Some(px),
         )?;
         if u.used.len() != world.len() {
