@@ -355,13 +355,53 @@ pub(crate) trait ProjectionJob {
 }
 
 /// A projection with one lens model: the per-point code of [`Projector`] without the dispatch.
-#[derive(Clone, Copy)]
 /// `FISHEYE`: the equidistant map comes first (a compile-time choice, so that the per-point
 /// code has no branch on the model).
+#[derive(Clone, Copy)]
 pub(crate) struct LensProjection<L, const FISHEYE: bool> {
     focal: (f64, f64),
     centre: (f64, f64),
     lens: L,
+}
+
+/// The pixel of the normalised point `(x, y)` through `p` (no Jacobian).
+#[inline(always)]
+fn project_one<L: Lens, const FISHEYE: bool>(
+    p: &LensProjection<L, FISHEYE>,
+    x: f64,
+    y: f64,
+) -> (f64, f64) {
+    let (mut u, mut v) = (x, y);
+    if FISHEYE {
+        let r = (x * x + y * y).sqrt();
+        if r > f64::EPSILON {
+            let s = r.atan() / r;
+            u *= s;
+            v *= s;
+        }
+    }
+    let ([xd, yd], _, _) = p.lens.apply(u, v);
+    (p.focal.0 * xd + p.centre.0, p.focal.1 * yd + p.centre.1)
+}
+
+/// `body` with `$p` bound to the [`LensProjection`] of the projector `$proj`: the model (lens
+/// and fisheye map) dispatched once.
+macro_rules! with_lens_projection {
+    ($proj:expr, $p:ident => $body:expr) => {{
+        let pr = &$proj;
+        let (focal, centre) = (pr.focal, pr.centre);
+        if pr.fisheye {
+            with_lens!(pr.distortion, lens => {
+                let $p = LensProjection::<_, true> { focal, centre, lens };
+                $body
+            })
+        } else {
+            with_lens!(pr.distortion, lens => {
+                let $p = LensProjection::<_, false> { focal, centre, lens };
+                $body
+            })
+        }
+    }};
 }
 
 impl<L: Lens, const FISHEYE: bool> Project for LensProjection<L, FISHEYE> {
@@ -427,45 +467,20 @@ impl Projector {
     /// The pixel of the normalised point `(x, y)`.
     #[inline]
     pub(crate) fn project(&self, x: f64, y: f64) -> (f64, f64) {
-        let (mut u, mut v) = (x, y);
-        if self.fisheye {
-            let r = (x * x + y * y).sqrt();
-            if r > f64::EPSILON {
-                let s = r.atan() / r;
-                u *= s;
-                v *= s;
-            }
-        }
-        let ([xd, yd], _, _) = with_lens!(self.distortion, l => l.apply(u, v));
-        (
-            self.focal.0 * xd + self.centre.0,
-            self.focal.1 * yd + self.centre.1,
-        )
+        with_lens_projection!(self, p => project_one(&p, x, y))
     }
 
     /// The pixel of the normalised point `(x, y)` and the Jacobian `d pixel / d (x, y)`,
     /// row-major.
     #[inline]
     pub(crate) fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
-        let (focal, centre) = (self.focal, self.centre);
-        if self.fisheye {
-            with_lens!(self.distortion, lens => LensProjection::<_, true> { focal, centre, lens }
-                .project_with_jacobian(x, y))
-        } else {
-            with_lens!(self.distortion, lens => LensProjection::<_, false> { focal, centre, lens }
-                .project_with_jacobian(x, y))
-        }
+        with_lens_projection!(self, p => p.project_with_jacobian(x, y))
     }
 
     /// Runs `job` with this projection's lens model fixed at compile time (the model
     /// dispatched once, not per point).
     pub(crate) fn with_projection<J: ProjectionJob>(&self, job: J) -> J::Output {
-        let (focal, centre) = (self.focal, self.centre);
-        if self.fisheye {
-            with_lens!(self.distortion, lens => job.run(LensProjection::<_, true> { focal, centre, lens }))
-        } else {
-            with_lens!(self.distortion, lens => job.run(LensProjection::<_, false> { focal, centre, lens }))
-        }
+        with_lens_projection!(self, p => job.run(p))
     }
 
     /// [`Camera::undistort`]: the normalised point of a pixel, and `det J / (fx fy)`, `J` the

@@ -116,36 +116,38 @@ impl ProjectionJob for Job<'_> {
     type Output = (ReprojOutcome, f64);
 
     fn run<P: Project + Copy>(self, projection: P) -> (ReprojOutcome, f64) {
-        let (px, fr) = (self.px, self.fr);
-        let problem = |loss| Problem {
-            world: self.world,
-            image: px.pixels,
-            weights: px.weights,
-            inv_weight: self.inv_weight,
-            c: fr.c,
-            metric: CameraMetric::<P, false> { projection, loss },
-        };
-        let squared = problem(Loss::Squared);
-        if px.loss == Loss::Squared {
+        let fr = self.fr;
+        let squared = self.problem(CameraMetric::<P, false> {
+            projection,
+            loss: Loss::Squared,
+        });
+        if self.px.loss == Loss::Squared {
             let out = levenberg_marquardt(&squared, fr, self.r_work, self.t_work, self.opts);
             return (out, out.e);
         }
-        let robust = Problem {
-            world: self.world,
-            image: px.pixels,
-            weights: px.weights,
-            inv_weight: self.inv_weight,
-            c: fr.c,
-            metric: CameraMetric::<P, true> {
-                projection,
-                loss: px.loss,
-            },
-        };
+        let robust = self.problem(CameraMetric::<P, true> {
+            projection,
+            loss: self.px.loss,
+        });
         let out = levenberg_marquardt(&robust, fr, self.r_work, self.t_work, self.opts);
         // The plain squared error at the pose (for the RMS residual).
         let pose = Composed::new(&out.r, &fr.rw, fr.d, &out.t);
         let e = squared.accumulate(&pose, None).map_or(f64::NAN, |n| n.e);
         (out, e)
+    }
+}
+
+impl<'a> Job<'a> {
+    /// The refinement problem of these observations under `metric`.
+    fn problem<M>(&self, metric: M) -> Problem<'a, M> {
+        Problem {
+            world: self.world,
+            image: self.px.pixels,
+            weights: self.px.weights,
+            inv_weight: self.inv_weight,
+            c: self.fr.c,
+            metric,
+        }
     }
 }
 
