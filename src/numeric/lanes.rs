@@ -56,3 +56,76 @@ impl Block {
         )
     }
 }
+
+/// Whether the vectorised passes run their AVX2 + FMA build: the processor has both
+/// (`is_x86_feature_detected!`, a cached atomic load after the first call). Always `false`
+/// off x86-64, and in the library's unit tests inside [`with_baseline`].
+#[inline(always)]
+pub(crate) fn wide() -> bool {
+    #[cfg(test)]
+    if FORCE_BASELINE.with(core::cell::Cell::get) {
+        return false;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+#[cfg(test)]
+std::thread_local! {
+    static FORCE_BASELINE: core::cell::Cell<bool> = const { core::cell::Cell::new(false) };
+}
+
+/// Runs `f` with the vectorised passes on their baseline build (unit tests: both builds must
+/// give the same bits).
+#[cfg(test)]
+pub(crate) fn with_baseline<R>(f: impl FnOnce() -> R) -> R {
+    FORCE_BASELINE.with(|c| c.set(true));
+    let r = f();
+    FORCE_BASELINE.with(|c| c.set(false));
+    r
+}
+
+/// Defines a vectorised pass twice from one `#[inline(always)]` body: the baseline build (SSE2
+/// on x86-64), and on x86-64 a build with `#[target_feature(enable = "avx2,fma")]`, where
+/// each quantity of a block of [`LANES`] points fills one 256-bit register instead of two
+/// 128-bit ones. The defined function picks one at run time ([`wide`]).
+///
+/// Both builds compute the same operations in the same order: Rust never contracts `a * b + c`
+/// into a fused multiply-add (that needs an explicit `mul_add`, which the passes do not use),
+/// so they return the same bits (tested).
+///
+/// Generics go in brackets, their parameters and then the arguments that pass them on:
+/// `pub(crate) fn name[const K: bool, M: Trait][K, M](a: &A, m: &M) -> R = body_fn;`.
+macro_rules! dispatched {
+    (
+        $(#[$meta:meta])*
+        $vis:vis fn $name:ident [$($gp:tt)*] [$($ga:tt)*] ($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty
+        = $body:ident;
+    ) => {
+        $(#[$meta])*
+        $vis fn $name<$($gp)*>($($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            if $crate::numeric::lanes::wide() {
+                #[target_feature(enable = "avx2,fma")]
+                fn avx2<$($gp)*>($($arg: $ty),*) -> $ret {
+                    $body::<$($ga)*>($($arg),*)
+                }
+                // SAFETY: `wide()` has just checked that this processor supports AVX2 and FMA,
+                // the only requirement of a `#[target_feature]` function.
+                return unsafe { avx2::<$($ga)*>($($arg),*) };
+            }
+            $body::<$($ga)*>($($arg),*)
+        }
+    };
+}
+pub(crate) use dispatched;
+
+#[cfg(test)]
+#[path = "../../tests/unit/numeric/lanes.rs"]
+mod tests;

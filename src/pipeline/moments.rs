@@ -22,7 +22,7 @@
 
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector2, Vector3};
 
-use crate::numeric::lanes::{lane_sum, Block, LANES};
+use crate::numeric::lanes::{dispatched, lane_sum, Block, LANES};
 
 /// The weighted sums of S2 (symmetric matrices stored in full).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -317,6 +317,35 @@ fn centred_pass<const W: bool, const R: bool>(
     acc.finish(if W { 1.0 } else { isw })
 }
 
+dispatched! {
+    /// [`centred_pass`] for the weights and `A` given, built for the processor
+    /// ([`crate::numeric::lanes::dispatched`]).
+    fn centred_sums[][](
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: Option<&[f64]>,
+        map: &CentredMap,
+        a: Option<&Matrix3<f64>>,
+    ) -> (Sums, f64) = centred_sums_body;
+}
+
+#[inline(always)]
+fn centred_sums_body(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    map: &CentredMap,
+    a: Option<&Matrix3<f64>>,
+) -> (Sums, f64) {
+    let id = Matrix3::identity();
+    match (weights, a) {
+        (None, None) => centred_pass::<false, false>(world, image, &[], map, &id),
+        (None, Some(a)) => centred_pass::<false, true>(world, image, &[], map, a),
+        (Some(w), None) => centred_pass::<true, false>(world, image, w, map, &id),
+        (Some(w), Some(a)) => centred_pass::<true, true>(world, image, w, map, a),
+    }
+}
+
 /// S1/S2 fused pass: the S2 sums of `p = A Y` (`a = Some(A)`) or of `p = Y` (`a = None`),
 /// `Y = X / sx - centre`, with weights `w / sw` (points with `w <= 0` are skipped, so they give
 /// bit-identical sums to removing them), plus the S1 image spread. The weights must already
@@ -337,13 +366,7 @@ pub(crate) fn accumulate_centred(
     map: &CentredMap,
     a: Option<&Matrix3<f64>>,
 ) -> CentredSums {
-    let id = Matrix3::identity();
-    let (s, spread) = match (weights, a) {
-        (None, None) => centred_pass::<false, false>(world, image, &[], map, &id),
-        (None, Some(a)) => centred_pass::<false, true>(world, image, &[], map, a),
-        (Some(w), None) => centred_pass::<true, false>(world, image, w, map, &id),
-        (Some(w), Some(a)) => centred_pass::<true, true>(world, image, w, map, a),
-    };
+    let (s, spread) = centred_sums(world, image, weights, map, a);
     let vec = |j: usize| Vector3::new(s[1][j], s[2][j], s[3][j]);
     let mat = |j: usize| {
         Matrix3::new(

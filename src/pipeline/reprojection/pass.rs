@@ -11,7 +11,7 @@
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::{Composed, Normal};
-use crate::numeric::lanes::{lane_sum, Block, LANES};
+use crate::numeric::lanes::{dispatched, lane_sum, Block, LANES};
 
 /// Number of sums of one pass: `E` (1), `H_rr` (6, upper triangle, row-major), `H_rt = sum K`
 /// (9, row-major, the third column negated), `H_tt` (`kx`, `ky`, `fx`, `fy`, `n22`: 5),
@@ -170,11 +170,23 @@ impl LaneSums {
     }
 }
 
+dispatched! {
 /// One pass over the points: gathers the active points into blocks (without weights, every
 /// point, straight from the slices) and runs [`lane`] on each lane. `CHECK`: compare depth
 /// signs with the reference pose of `k`; `None` after the first block with a flipped sign.
+///
+/// Built for the processor ([`crate::numeric::lanes::dispatched`]).
+pub(in crate::pipeline) fn pass[const CHECK: bool, const HESS: bool, M: Metric][CHECK, HESS, M](
+        k: &PassInputs,
+        metric: &M,
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: Option<&[f64]>,
+    ) -> Option<Normal> = pass_body;
+}
+
 #[inline(always)]
-pub(in crate::pipeline) fn pass<const CHECK: bool, const HESS: bool, M: Metric>(
+fn pass_body<const CHECK: bool, const HESS: bool, M: Metric>(
     k: &PassInputs,
     metric: &M,
     world: &[Point3<f64>],
