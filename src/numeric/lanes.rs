@@ -1,11 +1,13 @@
 //! Blocks of points for the passes vectorised across points (S2 in `accumulate`, S9 in
 //! `reproj`): active points are gathered, in order, into blocks of [`LANES`], every quantity
-//! is kept per lane, and the lanes are added pairwise at the end ([`lane_sum`]). With the
-//! baseline x86-64 target the compiler then uses packed SSE2 operations.
+//! is kept per lane, and the lanes are added pairwise at the end ([`lane_sum`]). The compiler
+//! then runs the per-point code on packed registers: two 128-bit SSE2 registers per quantity
+//! in the baseline x86-64 build, one 256-bit register in the AVX2 build that [`dispatched`]
+//! adds and picks at run time.
 
 use nalgebra::{Point2, Point3};
 
-/// Points per block: two SSE2 registers per quantity on the baseline x86-64 target.
+/// Points per block: one AVX2 register (two SSE2 registers) per quantity.
 pub(crate) const LANES: usize = 4;
 
 /// Sum of the lanes, pairwise: `(0 + 1) + (2 + 3)`.
@@ -16,9 +18,9 @@ pub(crate) fn lane_sum(v: &[f64; LANES]) -> f64 {
 }
 
 /// Up to [`LANES`] active points, transposed: world coordinates, image coordinates and the
-/// weight. Aligned (every field is a multiple of 16 bytes) so that SSE2 can use its operands
-/// in place.
-#[repr(C, align(16))]
+/// weight. Aligned (every field is a multiple of 32 bytes) so that SSE2 and AVX2 can use its
+/// operands in place.
+#[repr(C, align(32))]
 pub(crate) struct Block {
     pub x: [[f64; LANES]; 3],
     pub m: [[f64; LANES]; 2],

@@ -131,8 +131,9 @@ struct PassInputs {
 /// LaneSums sums of the centred pass. Lane `l` of `s` and `spread` sums the points
 /// `l, l + LANES, ...` of the sequence of active points; the [`ORDERED`] sums take the terms
 /// of a block from `t` in point order ([`LaneSums::flush`]). Aligned (every field is a
-/// multiple of 16 bytes) so that SSE2 can use the sums as operands in place.
-#[repr(C, align(16))]
+/// multiple of 32 bytes but `t` and `ordered`, of 16) so that SSE2 and AVX2 can use the
+/// sums as operands in place.
+#[repr(C, align(32))]
 struct LaneSums {
     /// `s[k][j][l]`: lane `l` of the sum `k, j` of [`Sums`] (unused for the ordered sums).
     s: [[[f64; LANES]; 4]; 10],
@@ -227,7 +228,8 @@ fn lane<const R: bool>(
 
 /// The centred pass over all points (`W`: weights present; `R`: apply `a` to `Y`).
 ///
-/// Vectorised across points, without `unsafe` or target features: the points with weight
+/// Vectorised across points, in safe code built twice (baseline and AVX2,
+/// [`crate::numeric::lanes::dispatched`], the same bits): the points with weight
 /// `w > 0`, in order, are gathered into blocks of [`LANES`] (without weights, every point,
 /// straight from the slices), and point `l` of a block goes into lane `l` of its own partial
 /// sums ([`LaneSums`]), so that the compiler runs the per-point code ([`lane`]) on packed
@@ -353,12 +355,12 @@ fn centred_sums_body(
 ///
 /// Cost per point: 3 (+ 15 with `A`) flops for the point, 7 for the spread, 3 for `q` and
 /// `w u, w v, w q` (without weights, `q` only), 6 for the quadratic monomials and 40
-/// multiply-adds for the sums, on packed SSE2 registers two points at a time
-/// ([`centred_pass`]). Measured with callgrind (x86-64 baseline target, no weights, no `A`):
-/// 103 instructions per point at N = 1000, 108 at N = 100 (158 and 159 for the previous
-/// one-point-at-a-time loop); most of it is the 36 products and their sums (a copy, a
-/// multiply, an add and a store per two points). With weights (86 % active): 127 and 135
-/// instructions per input point (170 and 172 before).
+/// multiply-adds for the sums, on packed registers, two points at a time with SSE2 and four
+/// with AVX2 ([`centred_pass`]). Measured with callgrind (no weights, no `A`): 103
+/// instructions per point at N = 1000 and 108 at N = 100 in the baseline build (158 and 159
+/// for the earlier one-point-at-a-time loop), 55 at N = 1000 in the AVX2 build; most of it is
+/// the 36 products and their sums (a copy, a multiply, an add and a store per block of lanes).
+/// With weights (86 % active, baseline build): 127 and 135 instructions per input point.
 pub(crate) fn accumulate_centred(
     world: &[Point3<f64>],
     image: &[Point2<f64>],

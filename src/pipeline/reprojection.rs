@@ -233,7 +233,8 @@ impl<M: Metric> Residuals for Problem<'_, M> {
     /// `q x (1, 0, -u)` and `q x (0, 1, -v)` (see `pass::lane`): about 60 % of the
     /// multiply-adds of the 21-entry outer products.
     ///
-    /// Vectorised across points, without `unsafe` or target features: the active points
+    /// Vectorised across points, in safe code built twice (baseline and AVX2, `lanes::dispatched`,
+    /// the same bits): the active points
     /// (non-zero weight), in order, are gathered into blocks of `LANES` transposed values;
     /// lane `l` of the block goes into its own partial sums, so the compiler runs the
     /// per-point code on packed registers. The lanes are added once at the end. The sequence

@@ -104,9 +104,9 @@ impl PassInputs {
 }
 
 /// Lane-wise partial sums of one pass: lane `l` sums the points `l, l + LANES, ...` of the
-/// sequence of active points. Aligned (every field is a multiple of 16 bytes) so that SSE2
-/// can use the sums as operands in place.
-#[repr(C, align(16))]
+/// sequence of active points. Aligned (every field is a multiple of 32 bytes) so that SSE2
+/// and AVX2 can use the sums as operands in place.
+#[repr(C, align(32))]
 struct LaneSums {
     /// The [`NSUMS`] sums, in the order of [`NSUMS`]'s documentation.
     s: [[f64; LANES]; NSUMS],
