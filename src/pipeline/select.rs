@@ -5,6 +5,7 @@
 use nalgebra::{Matrix3, Point3, Vector3};
 
 use super::frame::WorkingFrame;
+use crate::numeric::lanes::dispatched;
 use super::nullspace::CandidateSource;
 
 /// A refined local minimum of f (working frame).
@@ -30,16 +31,38 @@ pub(crate) fn in_front(
     t: &Vector3<f64>,
 ) -> bool {
     let a = (r * fr.rw).row(2).transpose() / fr.d;
-    let mut pos = 0usize;
-    for (i, x) in world.iter().enumerate() {
-        if weights.is_some_and(|w| w[i] == 0.0) {
-            continue;
-        }
-        if a.dot(&(x.coords - fr.c)) + t.z > 0.0 {
-            pos += 1;
-        }
+    2 * count_in_front(world, weights, &a, &fr.c, t.z) > fr.n_active
+}
+
+dispatched! {
+    /// The number of active points with `a . (X_i - c) + t_z > 0`: a count, so the same in
+    /// every build; branch-free, so that the compiler vectorises it.
+    fn count_in_front[][](
+        world: &[Point3<f64>],
+        weights: Option<&[f64]>,
+        a: &Vector3<f64>,
+        c: &Vector3<f64>,
+        tz: f64,
+    ) -> usize = count_in_front_body;
+}
+
+#[inline(always)]
+fn count_in_front_body(
+    world: &[Point3<f64>],
+    weights: Option<&[f64]>,
+    a: &Vector3<f64>,
+    c: &Vector3<f64>,
+    tz: f64,
+) -> usize {
+    let front = |x: &Point3<f64>| a.dot(&(x.coords - c)) + tz > 0.0;
+    match weights {
+        None => world.iter().map(|x| usize::from(front(x))).sum(),
+        Some(w) => world
+            .iter()
+            .zip(w)
+            .map(|(x, &w)| usize::from((w != 0.0) & front(x)))
+            .sum(),
     }
-    2 * pos > fr.n_active
 }
 
 /// S7: sorts `minima` by `f` and returns the index of the first one with more than half of the
