@@ -2,7 +2,9 @@
 //! vectors, after Lambda Twist (Mikael Persson and Klas Nordberg, "Lambda Twist: An Accurate
 //! Fast Robust Perspective Three Point (P3P) Solver", ECCV 2018).
 //!
-//! Used as the minimal solver of [`crate::ransac`]. Written here rather than taken from the
+//! Used as the minimal solver of [`crate::ransac`], and by the small-N search of the default
+//! solve (S4''', `pipeline/triples.rs`), which is why it lives with the numerical building
+//! blocks (`eopnp::p3p` re-exports it). Written here rather than taken from the
 //! `lambda-twist` crate: its current release (0.7) is built on `cv-core` 0.15 and `nalgebra`
 //! 0.21 (this crate uses nalgebra 0.35, so its poses would need converting between two
 //! nalgebra versions and pull a second copy of nalgebra into every build), it allocates
@@ -394,5 +396,5 @@ fn triangle_frame(p: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
 }
 
 #[cfg(test)]
-#[path = "../../tests/unit/robust/p3p.rs"]
+#[path = "../../tests/unit/numeric/p3p.rs"]
 mod tests;
