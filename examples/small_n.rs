@@ -33,7 +33,7 @@ fn main() {
     };
     let trials: u64 = args.get(3).map_or(200, |s| s.parse().expect("TRIALS"));
     let check = args.get(4).is_some_and(|s| s == "check");
-    let name = format!("small_n/{n}/{scene:?}");
+    let name = std::env::var("SMALL_N_NAME").unwrap_or_else(|_| format!("small_n/{n}/{scene:?}"));
     let problems: Vec<Problem> = (0..trials)
         .map(|i| {
             Problem::generate(&ProblemOptions {
