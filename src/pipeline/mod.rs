@@ -201,6 +201,9 @@ pub(crate) fn run(
     out.finish(&minima[pick], opts.refinement, reproj)
 }
 
+/// The caller's world points, normalised image points and optional weights.
+type Correspondences<'a> = (&'a [Point3<f64>], &'a [Point2<f64>], Option<&'a [f64]>);
+
 /// S4''' and S9 for at most five active points (default mode): the P3P starts (and, in planar
 /// scenes, the minimum of f from the p1 start, S4' + S6), S9 from the best few, best first; a
 /// start inside the basin of a pose already refined is skipped and a run that enters one is
@@ -211,7 +214,7 @@ fn small_n(
     prep: &Prepared,
     planar_sys: Option<&System>,
     sp: &triples::SmallProblem,
-    (world, image, weights): (&[Point3<f64>], &[Point2<f64>], Option<&[f64]>),
+    (world, image, weights): Correspondences<'_>,
     reproj: &ReprojOptions,
 ) -> Option<(Minimum, reprojection::ReprojOutcome)> {
     let (fr, sys, m45, scale) = (&prep.fr, &prep.sys, &prep.m45, prep.scale);
@@ -236,6 +239,9 @@ fn small_n(
         .take(triples::refined(sp, planar_sys.is_some()))
     {
         if found.iter().any(|f| f.near(&s.r, &s.t)) {
+            continue;
+        }
+        if best.as_ref().is_some_and(|(b, _)| !s.worth_refining(b)) {
             continue;
         }
         let o = reprojection::refine_reprojection_until(
