@@ -80,6 +80,20 @@ pub type P3pSolutions = ArrayVec<P3pPose, MAX_P3P_SOLUTIONS>;
 /// to a previous one are reported once.
 #[must_use]
 pub fn p3p(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3]) -> P3pSolutions {
+    p3p_with(world, bearing, true)
+}
+
+/// [`p3p`] without the Gauss-Newton polish of the depths: starting poses for a refinement
+/// that follows anyway (the solver's small-N starts, S4'''), about as accurate as the
+/// closed-form depths are.
+pub(crate) fn p3p_unpolished(
+    world: &[Point3<f64>; 3],
+    bearing: &[Vector3<f64>; 3],
+) -> P3pSolutions {
+    p3p_with(world, bearing, false)
+}
+
+fn p3p_with(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3], polish: bool) -> P3pSolutions {
     let mut out = P3pSolutions::new();
     let finite = world.iter().all(|p| p.coords.iter().all(|v| v.is_finite()))
         && bearing.iter().all(|b| b.iter().all(|v| v.is_finite()));
@@ -146,7 +160,11 @@ pub fn p3p(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3]) -> P3pSolution
     };
     let cw = (xs[0] + xs[1] + xs[2]) / 3.0;
     for l in lambdas {
-        let l = gauss_newton(l, [a12, a13, a23], [b12, b13, b23]);
+        let l = if polish {
+            gauss_newton(l, [a12, a13, a23], [b12, b13, b23])
+        } else {
+            l
+        };
         if !(l.iter().all(|v| v.is_finite() && *v > 0.0)) {
             continue;
         }

@@ -17,7 +17,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::frame::WorkingFrame;
 use super::nullspace::CandidateSource;
-use crate::numeric::p3p::{p3p, MAX_P3P_SOLUTIONS};
+use crate::numeric::p3p::{p3p_unpolished, MAX_P3P_SOLUTIONS};
 
 /// The largest number of active points for which the small-N search runs.
 pub(crate) const MAX_SMALL_N: usize = 5;
@@ -180,7 +180,7 @@ pub(crate) fn starts(sp: &SmallProblem, out: &mut Starts) {
     for &[i, j, k] in triples {
         let world = [sp.p[i], sp.p[j], sp.p[k]].map(Point3::from);
         let bearing = [i, j, k].map(|l| Vector3::new(sp.m[l].x, sp.m[l].y, 1.0));
-        for pose in p3p(&world, &bearing) {
+        for pose in p3p_unpolished(&world, &bearing) {
             let (in_front, cost) = sp.score(&pose.rotation, &pose.translation);
             let s = Start {
                 r: pose.rotation,
