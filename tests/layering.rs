@@ -355,6 +355,7 @@ fn stages_are_called_only_by_the_driver() {
         "frame",
         "nullspace",
         "planar",
+        "triples",
         "newton",
         "certificate",
         "select",

@@ -7,12 +7,15 @@
 //! | S3 | [`run`] (below) | which branch: non-planar, planar or both, from the planarity ratio | no |
 //! | S4 | [`nullspace`] | candidate rotations from the null space of `M` (cases 1-4, extra starts) | no |
 //! | S4' | [`planar`] | planar candidates from the 6 x 6 system of the first two columns of `R` | yes (depth signs) |
+//! | S4''' | [`triples`] | default mode, N <= 5: P3P poses of the point triples, scored by the reprojection error | yes |
 //! | S6 | [`newton`] | damped Newton on SO(3) from every start, to local minima of `f(R)` | no |
 //! | cert. | [`certificate`] | a Lagrangian dual certificate that a minimum is global (early exit) | no |
 //! | S7 | [`select`] | the minimum with the smallest `f` among those with most points in front | yes (depth signs) |
 //! | S9 or S10, S8 | [`reprojection`], [`pixel`], [`output`] | LM on the reprojection error, or with a camera with distortion (or a robust loss) LM on the pixel error through it; back to the world frame | yes |
 //!
-//! [`run`] is the only place that calls the stages. It tries a certified fast path first (the
+//! [`run`] is the only place that calls the stages. In the default mode with at most five
+//! points it searches the reprojection error directly: S4''' starts, S9 from the best of them,
+//! S8. Otherwise it tries a certified fast path first (the
 //! case-1 start through S6, the certificate and S7's depth test) and, when that does not settle
 //! the solve, the full search (S4, S4', S6 from every start, S7); either ends in S9 (or, for
 //! pixel input through a camera with distortion or with a robust [`Loss`], S10) and S8.
@@ -33,6 +36,7 @@ pub(crate) mod pixel;
 pub(crate) mod planar;
 pub(crate) mod reprojection;
 pub(crate) mod select;
+pub(crate) mod triples;
 
 pub use nullspace::CandidateSource;
 pub(crate) use nullspace::MAX_CANDIDATES;
@@ -101,6 +105,22 @@ pub(crate) fn run(
     };
     let planar_sys = if planar { fr.sums.system(true) } else { None };
     let out = prep.output(world, image, weights, pixel);
+    let early_exit = !opts.exhaustive && all.is_none();
+
+    // S4''' (default mode, at most five points, not in `solve_all` or exhaustive mode): the
+    // reprojection error searched from the P3P poses of the point triples; S9 from the best
+    // few, the best refined pose to S8 (S10 first if it applies). Without a usable start, the
+    // search below runs.
+    if early_exit && opts.refinement == Refinement::Reprojection {
+        if let Some(sp) = triples::SmallProblem::new(world, image, weights, fr, reproj.row_weights)
+        {
+            let data = (world, image, weights);
+            if let Some((m, s9)) = small_n(opts, &prep, planar_sys.as_ref(), &sp, data, reproj) {
+                return out.finish_refined(&m, reproj, &s9);
+            }
+        }
+    }
+
     let mut search = Search::new(opts, sys, m45, scale);
     let is_certified = |r: &Matrix3<f64>| {
         certificate::global_minimum(&sys.m, r, scale)
@@ -113,7 +133,6 @@ pub(crate) fn run(
     // p1) start; if the certificate proves the minimum it reaches is the global minimum of f
     // over O(3) and more than half of the points are in front of it, no other candidate can be
     // selected by S7, so the search stops here.
-    let early_exit = !opts.exhaustive && all.is_none();
     if early_exit {
         let start = if nonplanar && !planar {
             nullspace::first_start(&sys.m, probe, scale).map(|r| (r, CandidateSource::Case1))
@@ -180,6 +199,96 @@ pub(crate) fn run(
     // S7, then S9 and S8.
     let pick = select::pick(minima, world, weights, fr);
     out.finish(&minima[pick], opts.refinement, reproj)
+}
+
+/// The caller's world points, normalised image points and optional weights.
+type Correspondences<'a> = (&'a [Point3<f64>], &'a [Point2<f64>], Option<&'a [f64]>);
+
+/// S4''' and S9 for at most five active points (default mode): the P3P starts (and, in planar
+/// scenes, the minimum of f from the p1 start, S4' + S6), S9 from the best few, best first; a
+/// start inside the basin of a pose already refined is skipped and a run that enters one is
+/// abandoned. The refined pose with the most points in front, then the lowest reprojection
+/// error, with its S9 outcome; `None` if no run gives a finite pose.
+fn small_n(
+    opts: &Options,
+    prep: &Prepared,
+    planar_sys: Option<&System>,
+    sp: &triples::SmallProblem,
+    (world, image, weights): Correspondences<'_>,
+    reproj: &ReprojOptions,
+) -> Option<(Minimum, reprojection::ReprojOutcome)> {
+    let (fr, sys, m45, scale) = (&prep.fr, &prep.sys, &prep.m45, prep.scale);
+    let mut starts = triples::Starts::new();
+    triples::starts(sp, &mut starts);
+    // Planar scenes: also the minimum of f from the p1 start, which lies in the basin of the
+    // global minimum of the reprojection error in about 1 of 3,000 planar N = 4 problems
+    // where no P3P pose does.
+    if let Some(psys) = planar_sys {
+        if let Some(r0) = planar::first_start(psys, world, weights, fr, scale) {
+            let (r, it) = Search::new(opts, sys, m45, scale)
+                .refine(&r0, CandidateSource::Planar1)
+                .map_or((r0, 0), |m| (m.r, m.iterations));
+            let t = sys.translation(&r);
+            triples::add(sp, &r, &t, (CandidateSource::Planar1, it), &mut starts);
+        }
+    }
+    let mut found: ArrayVec<triples::Start, 16> = ArrayVec::new();
+    let mut best: Option<(triples::Start, reprojection::ReprojOutcome)> = None;
+    for s in starts
+        .iter()
+        .take(triples::refined(sp, planar_sys.is_some()))
+    {
+        if found.iter().any(|f| f.near(&s.r, &s.t)) {
+            continue;
+        }
+        if best.as_ref().is_some_and(|(b, _)| !s.worth_refining(b)) {
+            continue;
+        }
+        let o = reprojection::refine_reprojection_until(
+            world,
+            image,
+            weights,
+            fr,
+            &s.r,
+            &s.t,
+            reproj,
+            &mut |r, t| found.iter().any(|f| f.near(r, t)),
+        );
+        let finite = o.r.iter().chain(o.t.iter()).all(|x| x.is_finite()) && o.e.is_finite();
+        if !finite
+            || matches!(
+                o.stop,
+                reprojection::ReprojStop::SkippedZeroDepth | reprojection::ReprojStop::Abandoned
+            )
+        {
+            continue;
+        }
+        let refined = triples::Start {
+            r: o.r,
+            t: o.t,
+            in_front: s.in_front,
+            cost: o.e,
+            source: s.source,
+            iterations: s.iterations,
+        };
+        if best.as_ref().is_none_or(|(b, _)| refined.better(b)) {
+            best = Some((refined, o));
+        }
+        if !found.is_full() {
+            found.push(refined);
+        }
+    }
+    let (b, o) = best?;
+    let m = Minimum {
+        r: b.r,
+        t: b.t,
+        f: newton::cost_at(m45, &b.r),
+        source: b.source,
+        planar: b.source == CandidateSource::Planar1,
+        iterations: b.iterations,
+        cheirality: Some(2 * b.in_front > fr.n_active),
+    };
+    Some((m, o))
 }
 
 /// What every driver needs from S1 and S2: the working frame, `M` and `G`, the upper triangle

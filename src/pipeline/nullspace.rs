@@ -43,6 +43,9 @@ pub enum CandidateSource {
     ExtraStart,
     /// The caller's initial pose ([`crate::Solver::refine`]).
     Initial,
+    /// S4''': a P3P pose of three of the points (default mode, at most five points with a
+    /// non-zero weight; docs/algorithm.md S4'''), refined by S9 without S6.
+    P3p,
 }
 
 /// Upper bound on the number of candidates: 1 + 4 + 9 + 8 (S4) + 5 (S4') + 4 (S4'') = 31.

@@ -12,7 +12,7 @@ use super::newton;
 use super::nullspace::{CandidateSource, MAX_CANDIDATES};
 use super::options::Refinement;
 use super::pixel::{self, PixelInputs};
-use super::reprojection::{self, ReprojOptions};
+use super::reprojection::{self, ReprojOptions, ReprojOutcome};
 use super::select::{in_front, Minimum};
 use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
@@ -141,7 +141,35 @@ impl Output<'_> {
         mode: Refinement,
         opts: &ReprojOptions,
     ) -> Result<Solution, PnpError> {
+        self.finish_with(m, mode, opts, None)
+    }
+
+    /// [`Output::finish`] in the default mode for a pose S9 has already refined: `s9` is
+    /// S9's outcome from `m` (the small-N search runs S9 from several starts to choose among
+    /// them; it is not run again). S10, when it applies, still runs, from `s9`'s pose.
+    pub(crate) fn finish_refined(
+        &self,
+        m: &Minimum,
+        opts: &ReprojOptions,
+        s9: &ReprojOutcome,
+    ) -> Result<Solution, PnpError> {
+        self.finish_with(m, Refinement::Reprojection, opts, Some(s9))
+    }
+
+    fn finish_with(
+        &self,
+        m: &Minimum,
+        mode: Refinement,
+        opts: &ReprojOptions,
+        s9: Option<&ReprojOutcome>,
+    ) -> Result<Solution, PnpError> {
         let (mut r, mut t) = (m.r, m.t);
+        if let Some(o) = s9.filter(|_| self.pixel.is_some_and(|px| px.refine)) {
+            // S10 starts from S9's pose.
+            if o.r.iter().all(|x| x.is_finite()) && o.t.iter().all(|x| x.is_finite()) {
+                (r, t) = (o.r, o.t);
+            }
+        }
         let mut iters = 0;
         let mut converged = true;
         // What S9 (or S10) already knows at its final pose: the cost (for S9, equal to the
@@ -180,15 +208,18 @@ impl Output<'_> {
         }
         // S9 when S10 did not run: the normalised reprojection error.
         if mode == Refinement::Reprojection && s10.is_none() {
-            let out = reprojection::refine_reprojection(
-                self.world,
-                self.image,
-                self.weights,
-                self.fr,
-                &r,
-                &t,
-                opts,
-            );
+            let out = match s9 {
+                Some(o) => *o,
+                None => reprojection::refine_reprojection(
+                    self.world,
+                    self.image,
+                    self.weights,
+                    self.fr,
+                    &r,
+                    &t,
+                    opts,
+                ),
+            };
             if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
                 r = out.r;
                 t = out.t;

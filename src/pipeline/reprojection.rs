@@ -102,6 +102,9 @@ pub(crate) enum ReprojStop {
     MaxIterations,
     /// Some starting depth is zero (`|z_i| <= 1e-12 max |z|`): nothing was done.
     SkippedZeroDepth,
+    /// The caller's predicate stopped the run at an accepted iterate (the small-N search: the
+    /// iterate entered the basin of a minimum already found).
+    Abandoned,
 }
 
 impl ReprojStop {
@@ -303,7 +306,38 @@ pub(crate) fn refine_reprojection(
             wy: opts.row_weights.1,
         },
     };
-    levenberg_marquardt(&prob, fr, r_work, t_work, opts)
+    levenberg_marquardt_until(&prob, fr, r_work, t_work, opts, &mut |_, _| false)
+}
+
+/// [`refine_reprojection`], stopped ([`ReprojStop::Abandoned`]) at the first accepted iterate
+/// `(r, t)` (working frame) for which `abandon(&r, &t)` is true.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refine_reprojection_until(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    fr: &WorkingFrame,
+    r_work: &Matrix3<f64>,
+    t_work: &Vector3<f64>,
+    opts: &ReprojOptions,
+    abandon: &mut dyn FnMut(&Matrix3<f64>, &Vector3<f64>) -> bool,
+) -> ReprojOutcome {
+    let n = world
+        .len()
+        .min(image.len())
+        .min(weights.map_or(usize::MAX, <[f64]>::len));
+    let prob = Problem {
+        world: &world[..n],
+        image: &image[..n],
+        weights: weights.map(|w| &w[..n]),
+        inv_weight: 1.0 / fr.weight_unit,
+        c: fr.c,
+        metric: RowWeights {
+            wx: opts.row_weights.0,
+            wy: opts.row_weights.1,
+        },
+    };
+    levenberg_marquardt_until(&prob, fr, r_work, t_work, opts, abandon)
 }
 
 /// The Levenberg-Marquardt iteration of S9 (and S10) on the residuals of `prob`, from the
@@ -315,6 +349,19 @@ pub(super) fn levenberg_marquardt<P: Residuals>(
     r_work: &Matrix3<f64>,
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
+) -> ReprojOutcome {
+    levenberg_marquardt_until(prob, fr, r_work, t_work, opts, &mut |_, _| false)
+}
+
+/// [`levenberg_marquardt`], stopped ([`ReprojStop::Abandoned`]) at the first accepted iterate
+/// for which `abandon` is true.
+fn levenberg_marquardt_until<P: Residuals>(
+    prob: &P,
+    fr: &WorkingFrame,
+    r_work: &Matrix3<f64>,
+    t_work: &Vector3<f64>,
+    opts: &ReprojOptions,
+    abandon: &mut dyn FnMut(&Matrix3<f64>, &Vector3<f64>) -> bool,
 ) -> ReprojOutcome {
     let mut r = *r_work;
     let mut t = *t_work;
@@ -422,6 +469,10 @@ pub(super) fn levenberg_marquardt<P: Residuals>(
                 lam *= (1.0_f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 nu = 2.0;
                 prev_step = Some(step_norm);
+                if abandon(&r, &t) {
+                    stop = ReprojStop::Abandoned;
+                    break;
+                }
             }
             _ => {
                 lam *= nu;

@@ -2,5 +2,7 @@
 //! optimisation and final fit ([`ransac`]), with an adapter for rust-cv's consensus algorithms
 //! (`ransac::consensus`, feature `sample-consensus`).
 
-pub mod p3p;
+/// The P3P solver lives in `numeric` (the solver's small-N search uses it too); this is its
+/// public path.
+pub use crate::numeric::p3p;
 pub mod ransac;

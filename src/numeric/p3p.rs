@@ -2,7 +2,9 @@
 //! vectors, after Lambda Twist (Mikael Persson and Klas Nordberg, "Lambda Twist: An Accurate
 //! Fast Robust Perspective Three Point (P3P) Solver", ECCV 2018).
 //!
-//! Used as the minimal solver of [`crate::ransac`]. Written here rather than taken from the
+//! Used as the minimal solver of [`crate::ransac`], and by the small-N search of the default
+//! solve (S4''', `pipeline/triples.rs`), which is why it lives with the numerical building
+//! blocks (`eopnp::p3p` re-exports it). Written here rather than taken from the
 //! `lambda-twist` crate: its current release (0.7) is built on `cv-core` 0.15 and `nalgebra`
 //! 0.21 (this crate uses nalgebra 0.35, so its poses would need converting between two
 //! nalgebra versions and pull a second copy of nalgebra into every build), it allocates
@@ -29,6 +31,11 @@
 //! [`crate::numeric::roots::real_roots`]; every real root is tried and the most indefinite `D0` (the
 //! best-conditioned plane pair) is used; the rotation is built from orthonormal frames, so it
 //! is a rotation to rounding without a projection step.
+//!
+//! `p3p_unpolished` (crate-private: the solver's small-N starts, which S9 refines) skips the
+//! Gauss-Newton polish and takes the plane pair from the closed-form eigenvalues of `D0`
+//! (trace and principal minors, the null one taken as 0) and cross products of the rows of
+//! `D0 - s I`, with the iterative decomposition as fallback.
 //!
 //! Everything is fixed-size (no heap allocation) and every loop is bounded.
 //!
@@ -78,6 +85,20 @@ pub type P3pSolutions = ArrayVec<P3pPose, MAX_P3P_SOLUTIONS>;
 /// to a previous one are reported once.
 #[must_use]
 pub fn p3p(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3]) -> P3pSolutions {
+    p3p_with(world, bearing, true)
+}
+
+/// [`p3p`] without the Gauss-Newton polish of the depths: starting poses for a refinement
+/// that follows anyway (the solver's small-N starts, S4'''), about as accurate as the
+/// closed-form depths are.
+pub(crate) fn p3p_unpolished(
+    world: &[Point3<f64>; 3],
+    bearing: &[Vector3<f64>; 3],
+) -> P3pSolutions {
+    p3p_with(world, bearing, false)
+}
+
+fn p3p_with(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3], polish: bool) -> P3pSolutions {
     let mut out = P3pSolutions::new();
     let finite = world.iter().all(|p| p.coords.iter().all(|v| v.is_finite()))
         && bearing.iter().all(|b| b.iter().all(|v| v.is_finite()));
@@ -120,7 +141,7 @@ pub fn p3p(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3]) -> P3pSolution
     let d1 = (m12 * a23 - m23 * a12) * (s * amax);
     let d2 = (m13 * a23 - m23 * a13) * (s * amax);
 
-    let Some((e1, e2, ratio)) = degenerate_member(&d1, &d2) else {
+    let Some((e1, e2, ratio)) = degenerate_member(&d1, &d2, !polish) else {
         return out;
     };
     let sum_form = m12 + m13 + m23;
@@ -144,7 +165,11 @@ pub fn p3p(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3]) -> P3pSolution
     };
     let cw = (xs[0] + xs[1] + xs[2]) / 3.0;
     for l in lambdas {
-        let l = gauss_newton(l, [a12, a13, a23], [b12, b13, b23]);
+        let l = if polish {
+            gauss_newton(l, [a12, a13, a23], [b12, b13, b23])
+        } else {
+            l
+        };
         if !(l.iter().all(|v| v.is_finite() && *v > 0.0)) {
             continue;
         }
@@ -180,6 +205,7 @@ pub fn p3p(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3]) -> P3pSolution
 fn degenerate_member(
     d1: &Matrix3<f64>,
     d2: &Matrix3<f64>,
+    closed_form: bool,
 ) -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
     let (adj1, adj2) = (adjugate(d1), adjugate(d2));
     let c0 = d1.determinant();
@@ -197,7 +223,12 @@ fn degenerate_member(
     let roots = crate::numeric::roots::real_roots(&coeffs);
     let mut best: Option<(Vector3<f64>, Vector3<f64>, f64)> = None;
     let consider = |best: &mut Option<(Vector3<f64>, Vector3<f64>, f64)>, d0: Matrix3<f64>| {
-        if let Some(c) = plane_pair(&d0) {
+        let pair = if closed_form {
+            plane_pair_closed(&d0).or_else(|| plane_pair(&d0))
+        } else {
+            plane_pair(&d0)
+        };
+        if let Some(c) = pair {
             if best.is_none_or(|b| c.2 > b.2) {
                 *best = Some(c);
             }
@@ -255,6 +286,51 @@ fn plane_pair(d0: &Matrix3<f64>) -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
     }
     let e1 = eig.eigenvectors.column(idx[0]).into_owned();
     let e2 = eig.eigenvectors.column(idx[1]).into_owned();
+    Some((e1, e2, ratio))
+}
+
+/// [`plane_pair`] in closed form, for the unpolished starts: with the null eigenvalue taken
+/// as 0, the other two are the roots of `s^2 - tr(d0) s + m2(d0)` (`m2` the sum of the
+/// principal 2 x 2 minors), and the eigenvector of each is the largest cross product of two
+/// rows of `d0 - s I`. `None` (the caller falls back to the iterative decomposition) when the
+/// two eigenvalues are not well separated or a cross product is tiny.
+fn plane_pair_closed(d0: &Matrix3<f64>) -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
+    let tr = d0.trace();
+    let m2 = d0[(0, 0)] * d0[(1, 1)] - d0[(0, 1)] * d0[(1, 0)] + d0[(0, 0)] * d0[(2, 2)]
+        - d0[(0, 2)] * d0[(2, 0)]
+        + d0[(1, 1)] * d0[(2, 2)]
+        - d0[(1, 2)] * d0[(2, 1)];
+    let disc = tr * tr - 4.0 * m2;
+    let scale = d0.norm();
+    if !(disc > 1e-6 * scale * scale) || !disc.is_finite() {
+        return None;
+    }
+    let sq = disc.sqrt();
+    // Roots without cancellation; s1 the one of larger magnitude.
+    let big = 0.5 * (tr + tr.signum() * sq);
+    if big == 0.0 {
+        return None;
+    }
+    let (s1, s2) = (big, m2 / big);
+    let vector = |s: f64| -> Option<Vector3<f64>> {
+        let a = d0 - Matrix3::identity() * s;
+        let (r0, r1, r2) = (
+            a.row(0).transpose(),
+            a.row(1).transpose(),
+            a.row(2).transpose(),
+        );
+        let c = [r0.cross(&r1), r0.cross(&r2), r1.cross(&r2)];
+        let best = c
+            .iter()
+            .max_by(|x, y| x.norm_squared().total_cmp(&y.norm_squared()))?;
+        let n = best.norm();
+        (n > 1e-8 * scale * scale && n.is_finite()).then(|| best / n)
+    };
+    let (e1, e2) = (vector(s1)?, vector(s2)?);
+    let ratio = -s2 / s1;
+    if ratio < -1e-12 {
+        return None;
+    }
     Some((e1, e2, ratio))
 }
 
@@ -394,5 +470,5 @@ fn triangle_frame(p: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
 }
 
 #[cfg(test)]
-#[path = "../../tests/unit/robust/p3p.rs"]
+#[path = "../../tests/unit/numeric/p3p.rs"]
 mod tests;

@@ -1,0 +1,246 @@
+//! S4''' of docs/algorithm.md: the small-N starts of the default mode. At N = 4 and 5 the null
+//! space of `M` is (nearly) 4- or 3-dimensional and the algebraic search says little about
+//! where the minimum of the reprojection error lies; the poses that fit three of the points
+//! exactly (P3P, [`crate::numeric::p3p`]) usually do: with the noise of the other points
+//! small, one of the up to four poses of a triple lies in the basin of the maximum-likelihood
+//! pose.
+//!
+//! [`starts`] solves P3P on triples of the active points (all 4 at N = 4, 5 of the 10 at
+//! N = 5), scores every pose by the number of points in front of it and its reprojection error
+//! over all points ([`SmallProblem::score`], in S1's weight unit and S9's row weights), merges
+//! the poses that lie within [`SAME_START`] of each other (keeping the better one) and returns
+//! them best first. The driver runs S9 from the best [`refined`] of them and keeps the best
+//! refined pose.
+
+use arrayvec::ArrayVec;
+use nalgebra::{Matrix3, Point2, Point3, Vector3};
+
+use super::frame::WorkingFrame;
+use super::nullspace::CandidateSource;
+use crate::numeric::p3p::{p3p_unpolished, MAX_P3P_SOLUTIONS};
+
+/// The largest number of active points for which the small-N search runs.
+pub(crate) const MAX_SMALL_N: usize = 5;
+/// The triples of 4 points: all of them.
+const TRIPLES_4: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
+/// The triples of 5 points: the 5 of consecutive points, cyclically (each point in 3 of them,
+/// each pair in 1 or 2). Measured against all 10 (`examples/small_n.rs`, sigma = 2 px, 6,000
+/// problems per scene type, and 12,000 more): no minimum missed either way, with about 35 %
+/// fewer instructions per solve.
+const TRIPLES_5: [[usize; 3]; 5] = [[0, 1, 2], [1, 2, 3], [2, 3, 4], [0, 3, 4], [0, 1, 4]];
+/// The most triples used.
+const MAX_TRIPLES: usize = 5;
+/// Upper bound on the number of starts: every pose of every triple, and the driver's p1 start
+/// in planar scenes ([`add`]).
+pub(crate) const MAX_STARTS: usize = MAX_TRIPLES * MAX_P3P_SOLUTIONS + 1;
+/// Two starts whose rotations differ by less than this (Frobenius norm, ~ radians; 0.05 is
+/// about 2 degrees) and whose translations differ by less than this relative to `|t| + 1` are
+/// one start: the poses of different triples near the same minimum differ by the noise.
+const SAME_START: f64 = 0.05;
+
+/// A scored start (working frame): `x_cam / d = R P + t`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Start {
+    pub r: Matrix3<f64>,
+    pub t: Vector3<f64>,
+    /// Active points with a positive depth.
+    pub in_front: usize,
+    /// Weighted sum of squared reprojection residuals (S1's weight unit, S9's row weights);
+    /// `+inf` if a depth is zero or the sum is not finite.
+    pub cost: f64,
+    /// Where the start came from: [`CandidateSource::P3p`], or the algebraic start the driver
+    /// adds ([`add`]).
+    pub source: CandidateSource,
+    /// S6 iterations that produced it (0 for a P3P pose).
+    pub iterations: u32,
+}
+
+impl Start {
+    /// The order of the starts (and of the refined poses): more points in front first, then
+    /// the lower cost.
+    pub(crate) fn better(&self, other: &Start) -> bool {
+        self.in_front > other.in_front
+            || (self.in_front == other.in_front && self.cost < other.cost)
+    }
+}
+
+/// Radius (Frobenius norm of the rotation difference, and translation difference relative to
+/// `|t| + 1`; 0.1 is about 4 degrees) of the neighbourhood of a refined pose taken to lie in
+/// its basin: a start or an S9 iterate that comes this close is taken to converge to it
+/// (distinct minima of the reprojection error are many degrees apart; with this radius no
+/// minimum was missed in the measurements of [`refined`]).
+const IN_REFINED_BASIN: f64 = 0.1;
+
+/// A start whose cost exceeds this multiple of the best refined pose's cost (with no more
+/// points in front) is not refined. Measured (`examples/small_n.rs`, N = 4, sigma = 2 px,
+/// 18,000 general and 18,000 planar problems): the largest ratio of a start that led to a
+/// lower minimum was about 1,400 (with a cut at 1,000, 1 general problem in 6,000 missed its
+/// minimum; with 10,000 none of the 18,000 per scene type, with 3,000 none of 12,000 of them),
+/// and the cut at 10,000 saves a third of the
+/// instructions of general N = 4 solves: most of S9's work went into long runs from poor starts
+/// that end in a known basin.
+const MAX_COST_RATIO: f64 = 1e4;
+
+impl Start {
+    /// Whether this start is worth an S9 run once `best` (a refined pose) is known: more
+    /// points in front than `best`, or a cost at most [`MAX_COST_RATIO`] times its cost.
+    pub(crate) fn worth_refining(&self, best: &Start) -> bool {
+        self.in_front > best.in_front || self.cost <= MAX_COST_RATIO * best.cost
+    }
+
+    /// Whether `(r, t)` lies in the basin of this (refined) pose ([`IN_REFINED_BASIN`]).
+    pub(crate) fn near(&self, r: &Matrix3<f64>, t: &Vector3<f64>) -> bool {
+        (self.r - r).norm() <= IN_REFINED_BASIN
+            && (self.t - t).norm() <= IN_REFINED_BASIN * (self.t.norm() + 1.0)
+    }
+}
+
+/// How many of the best starts S9 refines (measured with `examples/small_n.rs`, sigma = 2 px:
+/// the fewest that never missed the minimum in 6,000 seeded problems per scene type, with
+/// margin): every distinct start at N = 4 (with 4 starts, 2 of 6,000 general problems missed
+/// it; with 6, 2 of 6,000 planar ones), 2 at N = 5 in non-planar scenes (none missed it with
+/// 1) and 4 in planar ones (with 3, 1 of 6,000 missed it).
+pub(crate) fn refined(sp: &SmallProblem, planar: bool) -> usize {
+    match (sp.p.len(), planar) {
+        (0..=4, _) => MAX_STARTS,
+        (_, false) => 2,
+        (_, true) => 4,
+    }
+}
+
+/// Up to [`MAX_STARTS`] starts (fixed capacity, no allocation).
+pub(crate) type Starts = ArrayVec<Start, MAX_STARTS>;
+
+/// The active points (weight > 0) in the working frame with their image points and weights in
+/// S1's unit.
+pub(crate) struct SmallProblem {
+    p: ArrayVec<Vector3<f64>, MAX_SMALL_N>,
+    m: ArrayVec<Point2<f64>, MAX_SMALL_N>,
+    w: ArrayVec<f64, MAX_SMALL_N>,
+    row_weights: (f64, f64),
+}
+
+impl SmallProblem {
+    /// The problem of the active points, or `None` unless there are 4 or 5 of them.
+    pub(crate) fn new(
+        world: &[Point3<f64>],
+        image: &[Point2<f64>],
+        weights: Option<&[f64]>,
+        fr: &WorkingFrame,
+        row_weights: (f64, f64),
+    ) -> Option<Self> {
+        if !(4..=MAX_SMALL_N).contains(&fr.n_active) {
+            return None;
+        }
+        let inv_weight = 1.0 / fr.weight_unit;
+        let mut sp = SmallProblem {
+            p: ArrayVec::new(),
+            m: ArrayVec::new(),
+            w: ArrayVec::new(),
+            row_weights,
+        };
+        for (i, (x, m)) in world.iter().zip(image).enumerate() {
+            let w = weights.map_or(1.0, |w| w[i]);
+            if w == 0.0 {
+                continue;
+            }
+            if sp.p.is_full() {
+                return None;
+            }
+            sp.p.push(fr.to_working(x));
+            sp.m.push(*m);
+            sp.w.push(w * inv_weight);
+        }
+        (sp.p.len() >= 4).then_some(sp)
+    }
+
+    /// Points in front of `(r, t)` and the weighted reprojection error over the active points.
+    pub(crate) fn score(&self, r: &Matrix3<f64>, t: &Vector3<f64>) -> (usize, f64) {
+        let (wx, wy) = self.row_weights;
+        let mut in_front = 0;
+        let mut e = 0.0;
+        for ((p, m), w) in self.p.iter().zip(&self.m).zip(&self.w) {
+            let c = r * p + t;
+            if c.z > 0.0 {
+                in_front += 1;
+            }
+            let (du, dv) = (m.x - c.x / c.z, m.y - c.y / c.z);
+            e += w * (wx * du * du + wy * dv * dv);
+        }
+        (in_front, if e.is_finite() { e } else { f64::INFINITY })
+    }
+}
+
+/// S4''': the P3P poses of the triples of the active points ([`TRIPLES_4`], [`TRIPLES_5`]), scored, merged within
+/// [`SAME_START`] and sorted best first ([`Start::better`]) into `out`. Degenerate triples
+/// (collinear or coincident points, parallel rays) give no pose.
+pub(crate) fn starts(sp: &SmallProblem, out: &mut Starts) {
+    let triples: &[[usize; 3]] = if sp.p.len() == 4 {
+        &TRIPLES_4
+    } else {
+        &TRIPLES_5
+    };
+    for &[i, j, k] in triples {
+        let world = [sp.p[i], sp.p[j], sp.p[k]].map(Point3::from);
+        let bearing = [i, j, k].map(|l| Vector3::new(sp.m[l].x, sp.m[l].y, 1.0));
+        for pose in p3p_unpolished(&world, &bearing) {
+            let (in_front, cost) = sp.score(&pose.rotation, &pose.translation);
+            let s = Start {
+                r: pose.rotation,
+                t: pose.translation,
+                in_front,
+                cost,
+                source: CandidateSource::P3p,
+                iterations: 0,
+            };
+            insert(out, s);
+        }
+    }
+    sort(out);
+}
+
+/// Adds the pose `(r, t)` from `source` to `out`, scored and merged as the P3P starts are,
+/// and sorts `out` again.
+pub(crate) fn add(
+    sp: &SmallProblem,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+    (source, iterations): (CandidateSource, u32),
+    out: &mut Starts,
+) {
+    let (in_front, cost) = sp.score(r, t);
+    insert(
+        out,
+        Start {
+            r: *r,
+            t: *t,
+            in_front,
+            cost,
+            source,
+            iterations,
+        },
+    );
+    sort(out);
+}
+
+/// Best first ([`Start::better`]).
+fn sort(out: &mut Starts) {
+    out.sort_by(|a, b| b.in_front.cmp(&a.in_front).then(a.cost.total_cmp(&b.cost)));
+}
+
+/// Adds `s` to `out`, or replaces the start it duplicates if `s` is better.
+fn insert(out: &mut Starts, s: Start) {
+    let scale = s.t.norm() + 1.0;
+    if let Some(o) = out
+        .iter_mut()
+        .find(|o| (o.r - s.r).norm() <= SAME_START && (o.t - s.t).norm() <= SAME_START * scale)
+    {
+        if s.better(o) {
+            *o = s;
+        }
+        return;
+    }
+    if !out.is_full() {
+        out.push(s);
+    }
+}
