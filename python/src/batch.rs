@@ -1,48 +1,41 @@
-//! `eopnp.solve_batch`, `eopnp.solve_ransac_batch` and `eopnp.problem_seed`: many independent
-//! problems on rayon's threads (the crate's `Solver::solve_batch` and `Ransac::estimate_batch`),
-//! the GIL released for the whole batch.
+//! `eopnp.solve_batch`, `eopnp.solve_ransac_batch` and `eopnp.problem_seed`: many independent problems on rayon's threads, the GIL released for the
+//! whole batch; each problem gives what the one-problem call gives (the crate's
+//! `Solver::solve_problem` and `Ransac::estimate_problem`, as `Solver::solve_batch` and
+//! `Ransac::estimate_batch` call them).
 //!
-//! Every array of the batch is converted (and its shape checked) before anything is solved: a
-//! malformed batch raises. Each problem's own failure (too few points, NaN, degenerate, no
-//! consensus, ...) is returned in its place as the exception instance that the one-problem
-//! function would raise.
+//! The serial part of a batch call, with the GIL held, is kept to what needs the interpreter:
+//! every array's type, dtype, shape and layout is checked first (a malformed batch raises,
+//! naming the problem, before anything is solved), and a C-contiguous, aligned `float64` array
+//! is held by a read-only borrow rather than copied. Each problem's task then reads its own
+//! arrays, converts them to points and solves, with the GIL released; arrays of any other
+//! layout or dtype are converted (copied) with the GIL held. Each problem's own failure (too
+//! few points, NaN, degenerate, no consensus, ...) is that problem's result: the exception
+//! instance the one-problem function would raise.
+//!
+//! `solve_batch` and `solve_ransac_batch` then create one Python result object per problem
+//! (the `Solution`s themselves are built in the tasks).
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use eopnp::batch::{problem_seed as seed_of, Problem};
 use eopnp::camera::Camera;
-use eopnp::PnpError;
+use eopnp::ransac::{Ransac, RansacSolution};
+use eopnp::{PnpError, Solution, Solver};
 use nalgebra::{Point2, Point3};
-use numpy::{PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
+use rayon::prelude::*;
 use rayon::ThreadPool;
 
 use crate::camera::PyCamera;
-use crate::convert::{points2, points3, vector};
+use crate::convert::{rows, vector};
 use crate::errors::{error, option_error, pnp_error};
 use crate::options::SolverOptions;
-use crate::ransac::{focal_arg, ransac_arg, ransac_result};
+use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
 use crate::solution::PySolution;
 use crate::solve::check_finite;
-
-/// One converted problem.
-struct Converted {
-    world: Vec<Point3<f64>>,
-    image: Vec<Point2<f64>>,
-    weights: Option<Vec<f64>>,
-    /// Index into the batch's cameras.
-    camera: Option<usize>,
-    /// The package's own check of pixel input (NaN pixels), which the library would skip.
-    rejected: Option<PnpError>,
-}
-
-/// The batch's problems and cameras, converted with the GIL held.
-struct Batch<'py> {
-    problems: Vec<Converted>,
-    cameras: Vec<Bound<'py, PyCamera>>,
-}
 
 fn problems_error(py: Python<'_>, message: String) -> PyErr {
     error(
@@ -99,32 +92,69 @@ fn cameras<'py>(
     Ok((cams, (0..n).map(Some).collect()))
 }
 
-/// The rows of a C-contiguous `float64` array of shape `(N, C)`, copied; `None` for anything
-/// else (then `convert`'s general path, with its checks and messages, reads it). The common
-/// case of a batch, without the general path's per-array overhead (the serial part of a
-/// batch call).
-fn fast_rows<const C: usize, T>(
-    obj: &Bound<'_, PyAny>,
-    f: impl Fn(&[f64; C]) -> T,
-) -> Option<Vec<T>> {
-    let a = obj.cast::<PyArray2<f64>>().ok()?;
-    if a.shape()[1] != C || !a.is_c_contiguous() {
-        return None;
-    }
-    // SAFETY: the GIL is held and the data is copied before it is released, so nothing
-    // mutates the array meanwhile (the same guarantee as a readonly borrow, without
-    // registering one).
-    let data = unsafe { a.as_slice() }.ok()?;
-    Some(
-        data.chunks_exact(C)
-            .map(|r| f(r.try_into().expect("chunks of C")))
-            .collect(),
-    )
+/// An array of a problem as the GIL-held phase leaves it: borrowed (an index into the batch's
+/// read-only borrows), or converted by the general path of `convert`.
+enum Held<T> {
+    Borrowed(usize),
+    Owned(Vec<T>),
 }
 
-/// Converts every problem (`(world, image)` or `(world, image, weights)`), raising on the first
-/// malformed one with its index in the message.
-fn convert<'py>(
+/// The read-only borrow of `obj` when it is a C-contiguous, aligned `float64` array of `ndim`
+/// dimensions whose last has `cols` entries (`None`: any); `None` for anything else (then the
+/// general path of `convert`, with its checks and messages, reads it).
+fn borrow<'py>(
+    obj: &Bound<'py, PyAny>,
+    ndim: usize,
+    cols: Option<usize>,
+) -> Option<PyReadonlyArrayDyn<'py, f64>> {
+    let a = obj.cast::<PyArrayDyn<f64>>().ok()?;
+    let shape = a.shape();
+    let fits = shape.len() == ndim
+        && cols.is_none_or(|c| shape[ndim - 1] == c)
+        && a.is_c_contiguous()
+        && a.is_aligned();
+    // A failed borrow (the array is borrowed mutably by other Rust code) takes the general
+    // path, which raises the error naming the argument.
+    fits.then(|| a.try_readonly().ok()).flatten()
+}
+
+/// One problem of a list batch, after the GIL-held phase.
+struct Item {
+    world: Held<[f64; 3]>,
+    image: Held<[f64; 2]>,
+    weights: Option<Held<f64>>,
+    /// Index into the batch's cameras.
+    camera: Option<usize>,
+}
+
+/// A list batch after the GIL-held phase: its problems, the borrows they index, the cameras.
+struct Batch<'py> {
+    items: Vec<Item>,
+    borrows: Vec<PyReadonlyArrayDyn<'py, f64>>,
+    cameras: Vec<Bound<'py, PyCamera>>,
+}
+
+/// Holds (borrows, or converts) the `(N, C)` array `obj` of a problem.
+fn hold_rows<'py, const C: usize>(
+    obj: &Bound<'py, PyAny>,
+    name: impl FnOnce() -> String,
+    borrows: &mut Vec<PyReadonlyArrayDyn<'py, f64>>,
+) -> PyResult<Held<[f64; C]>> {
+    if let Some(b) = borrow(obj, 2, Some(C)) {
+        borrows.push(b);
+        return Ok(Held::Borrowed(borrows.len() - 1));
+    }
+    let rows = rows(obj, &name(), C, |r| {
+        let mut a = [0.0; C];
+        a.copy_from_slice(r);
+        a
+    })?;
+    Ok(Held::Owned(rows))
+}
+
+/// Checks every problem (`(world, image)` or `(world, image, weights)`) and holds its arrays,
+/// raising on the first malformed one with its index in the message.
+fn gather<'py>(
     py: Python<'py>,
     problems: &Bound<'py, PyAny>,
     camera: Option<&Bound<'py, PyAny>>,
@@ -142,6 +172,7 @@ fn convert<'py>(
         .collect::<PyResult<_>>()?;
     let (cams, which) = cameras(py, camera, items.len())?;
     let mut out = Vec::with_capacity(items.len());
+    let mut borrows = Vec::with_capacity(2 * items.len());
     for (i, (item, cam)) in items.iter().zip(which).enumerate() {
         let parts: Vec<Bound<'py, PyAny>> = match item.cast::<PyTuple>() {
             Ok(t) => t.iter().collect(),
@@ -160,56 +191,111 @@ fn convert<'py>(
                 ),
             ));
         }
-        let world = match fast_rows(&parts[0], |r: &[f64; 3]| Point3::new(r[0], r[1], r[2])) {
-            Some(w) => w,
-            None => points3(&parts[0], &format!("problems[{i}] world"))?,
-        };
-        let image = match fast_rows(&parts[1], |r: &[f64; 2]| Point2::new(r[0], r[1])) {
-            Some(m) => m,
-            None => points2(&parts[1], &format!("problems[{i}] image"))?,
-        };
+        let world = hold_rows(&parts[0], || format!("problems[{i}] world"), &mut borrows)?;
+        let image = hold_rows(&parts[1], || format!("problems[{i}] image"), &mut borrows)?;
         let weights = match parts.get(2).filter(|w| !w.is_none()) {
-            Some(w) => Some(vector(w, &format!("problems[{i}] weights"), false)?),
+            Some(w) => Some(match borrow(w, 1, None) {
+                Some(b) => {
+                    borrows.push(b);
+                    Held::Borrowed(borrows.len() - 1)
+                }
+                None => Held::Owned(vector(w, &format!("problems[{i}] weights"), false)?),
+            }),
             None => None,
         };
-        let rejected = cam.and_then(|_| check_finite(&world, &image, weights.as_deref()).err());
-        out.push(Converted {
+        out.push(Item {
             world,
             image,
             weights,
             camera: cam,
-            rejected,
         });
     }
     Ok(Batch {
-        problems: out,
+        items: out,
+        borrows,
         cameras: cams,
     })
 }
 
-/// The crate's problems; a problem the package rejected is an empty placeholder (its result is
-/// replaced by the rejection), so that indices, hence RANSAC seeds, are kept.
-fn crate_problems<'a>(
-    problems: &'a [Converted],
-    cameras: &[&'a Camera],
-    focal: (f64, f64),
-) -> Vec<Problem<'a>> {
-    problems
-        .iter()
-        .map(|p| {
-            if p.rejected.is_some() {
-                return Problem::normalised(&[], &[]);
+/// One problem as its task reads it: slices of the caller's arrays (or of their converted
+/// copies) and its camera.
+#[derive(Clone, Copy)]
+struct Input<'a> {
+    world: &'a [[f64; 3]],
+    image: &'a [[f64; 2]],
+    weights: Option<&'a [f64]>,
+    camera: Option<&'a Camera>,
+}
+
+impl<'py> Batch<'py> {
+    /// The problems' inputs, borrowing from this batch.
+    fn inputs<'a>(&'a self, cameras: &[&'a Camera]) -> Vec<Input<'a>> {
+        let slice = |k: usize| -> &'a [f64] {
+            self.borrows[k]
+                .as_slice()
+                .expect("checked: C-contiguous and aligned")
+        };
+        self.items
+            .iter()
+            .map(|it| Input {
+                world: match &it.world {
+                    Held::Borrowed(k) => slice(*k).as_chunks::<3>().0,
+                    Held::Owned(v) => v,
+                },
+                image: match &it.image {
+                    Held::Borrowed(k) => slice(*k).as_chunks::<2>().0,
+                    Held::Owned(v) => v,
+                },
+                weights: it.weights.as_ref().map(|w| match w {
+                    Held::Borrowed(k) => slice(*k),
+                    Held::Owned(v) => v.as_slice(),
+                }),
+                camera: it.camera.map(|c| cameras[c]),
+            })
+            .collect()
+    }
+}
+
+/// A problem's points, read from its arrays (in its task).
+struct Points {
+    world: Vec<Point3<f64>>,
+    image: Vec<Point2<f64>>,
+}
+
+impl Input<'_> {
+    fn points(&self) -> Points {
+        Points {
+            world: self
+                .world
+                .iter()
+                .map(|r| Point3::new(r[0], r[1], r[2]))
+                .collect(),
+            image: self.image.iter().map(|r| Point2::new(r[0], r[1])).collect(),
+        }
+    }
+
+    /// The crate's problem on `pts` (normalised points with `focal`, or pixels through the
+    /// camera), after the package's own check of pixel input (a NaN pixel is rejected, as
+    /// `solve` rejects it; the library would skip it as one that cannot be undistorted).
+    fn problem<'a>(&'a self, pts: &'a Points, focal: (f64, f64)) -> Result<Problem<'a>, PnpError> {
+        let p = match self.camera {
+            Some(c) => {
+                check_finite(&pts.world, &pts.image, self.weights)?;
+                Problem::pixels(&pts.world, &pts.image, c)
             }
-            let pr = match p.camera {
-                Some(c) => Problem::pixels(&p.world, &p.image, cameras[c]),
-                None => Problem::normalised_with_focal(&p.world, &p.image, focal),
-            };
-            match &p.weights {
-                Some(w) => pr.weights(w),
-                None => pr,
-            }
+            None => Problem::normalised_with_focal(&pts.world, &pts.image, focal),
+        };
+        Ok(match self.weights {
+            Some(w) => p.weights(w),
+            None => p,
         })
-        .collect()
+    }
+
+    /// `solve` on this problem.
+    fn solve(&self, solver: &Solver) -> Result<Solution, PnpError> {
+        let pts = self.points();
+        solver.solve_problem(&self.problem(&pts, (1.0, 1.0))?)
+    }
 }
 
 /// The pools of `threads=`, by thread count.
@@ -306,15 +392,20 @@ pub(crate) fn solve_batch<'py>(
         covariance,
     }
     .solver(py)?;
-    let batch = convert(py, problems, camera)?;
+    let batch = gather(py, problems, camera)?;
     let cams: Vec<&Camera> = batch.cameras.iter().map(|c| &c.get().inner).collect();
-    let probs = crate_problems(&batch.problems, &cams, (1.0, 1.0));
-    let results = run(py, threads, || solver.solve_batch(&probs))?;
+    let inputs = batch.inputs(&cams);
+    let results = run(py, threads, || {
+        inputs
+            .par_iter()
+            .map(|p| p.solve(&solver).map(|s| PySolution::from(&s)))
+            .collect::<Vec<_>>()
+    })?;
     let out = PyList::empty(py);
-    for (p, r) in batch.problems.iter().zip(results) {
-        match (&p.rejected, &r) {
-            (Some(e), _) | (None, Err(e)) => out.append(pnp_error(py, e).into_value(py))?,
-            (None, Ok(s)) => out.append(PySolution::from(s))?,
+    for r in results {
+        match r {
+            Ok(s) => out.append(s)?,
+            Err(e) => out.append(pnp_error(py, &e).into_value(py))?,
         }
     }
     Ok(out)
@@ -385,21 +476,43 @@ pub(crate) fn solve_ransac_batch<'py>(
                 .into(),
         ));
     }
-    let batch = convert(py, problems, camera)?;
+    let batch = gather(py, problems, camera)?;
     let cams: Vec<&Camera> = batch.cameras.iter().map(|c| &c.get().inner).collect();
-    let probs = crate_problems(&batch.problems, &cams, focal.unwrap_or((1.0, 1.0)));
-    let results = run(py, threads, || ransac.estimate_batch(&solver, &probs))?;
+    let inputs = batch.inputs(&cams);
+    let results = run(py, threads, || {
+        inputs
+            .par_iter()
+            .enumerate()
+            .map(|(i, p)| estimate(&ransac, &solver, i, p, focal))
+            .collect::<Vec<_>>()
+    })?;
     let out = PyList::empty(py);
-    for (p, r) in batch.problems.iter().zip(results) {
-        match (&p.rejected, &r) {
-            (Some(e), _) | (None, Err(e)) => out.append(pnp_error(py, e).into_value(py))?,
-            (None, Ok(r)) => {
-                let cam = p.camera.map(|c| cams[c]);
-                out.append(ransac_result(py, r, &p.world, &p.image, cam, focal)?)?;
-            }
+    for r in results {
+        match r {
+            Ok((sol, r, px)) => out.append((sol, ransac_info(py, &r, px)?))?,
+            Err(e) => out.append(pnp_error(py, &e).into_value(py))?,
         }
     }
     Ok(out)
+}
+
+/// `solve_ransac` on problem `index` of a batch (seed `problem_seed(ransac.seed, index)`):
+/// the solution, the crate's result and the info's `rmse_px`.
+fn estimate(
+    ransac: &Ransac,
+    solver: &Solver,
+    index: usize,
+    p: &Input<'_>,
+    focal: Option<(f64, f64)>,
+) -> Result<(PySolution, RansacSolution, f64), PnpError> {
+    let pts = p.points();
+    let problem = p.problem(&pts, focal.unwrap_or((1.0, 1.0)))?;
+    let r = ransac
+        .seed(seed_of(ransac.seed, index))
+        .estimate_problem(solver, &problem)?;
+    let sol = PySolution::from(&r.solution);
+    let px = ransac_rmse_px(&sol, &r, &pts.world, &pts.image, p.camera, focal);
+    Ok((sol, r, px))
 }
 
 /// The RANSAC seed of problem ``index`` of a batch whose base seed is ``base``
