@@ -1,4 +1,5 @@
-//! `eopnp.solve_batch`, `eopnp.solve_ransac_batch` and `eopnp.problem_seed`: many independent problems on rayon's threads, the GIL released for the
+//! `eopnp.solve_batch`, `eopnp.solve_ransac_batch`, `eopnp.solve_batch_arrays` and
+//! `eopnp.problem_seed`: many independent problems on rayon's threads, the GIL released for the
 //! whole batch; each problem gives what the one-problem call gives (the crate's
 //! `Solver::solve_problem` and `Ransac::estimate_problem`, as `Solver::solve_batch` and
 //! `Ransac::estimate_batch` call them).
@@ -13,7 +14,9 @@
 //! instance the one-problem function would raise.
 //!
 //! `solve_batch` and `solve_ransac_batch` then create one Python result object per problem
-//! (the `Solution`s themselves are built in the tasks).
+//! (the `Solution`s themselves are built in the tasks); `solve_batch_arrays` takes stacked
+//! arrays and writes every problem's pose into arrays allocated once, from the tasks: no
+//! Python object per problem.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -23,15 +26,17 @@ use eopnp::camera::Camera;
 use eopnp::ransac::{Ransac, RansacSolution};
 use eopnp::{PnpError, Solution, Solver};
 use nalgebra::{Point2, Point3};
-use numpy::{PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyList, PyTuple};
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyList, PyModule, PyTuple};
+use rayon::iter::Either;
 use rayon::prelude::*;
 use rayon::ThreadPool;
 
 use crate::camera::PyCamera;
-use crate::convert::{rows, vector};
-use crate::errors::{error, option_error, pnp_error};
+use crate::convert::{contiguous_array, rows, shape_str, vector};
+use crate::errors::{error, option_error, pnp_error, shape_error};
 use crate::options::SolverOptions;
 use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
 use crate::solution::PySolution;
@@ -341,6 +346,10 @@ fn run<T: Send>(py: Python<'_>, threads: Option<i64>, f: impl FnOnce() -> T + Se
 /// Solves many independent problems in parallel (``solve`` on each), the GIL released for the
 /// whole batch.
 ///
+/// C-contiguous float64 arrays are read in place by the threads, with the GIL released (as
+/// numpy's own functions that release it): do not modify them from another thread during
+/// the call. Any other array-like is converted first.
+///
 /// Args:
 ///     problems: a sequence of ``(world, image)`` or ``(world, image, weights)`` tuples, as
 ///         ``solve``'s arguments (weights may be None).
@@ -409,6 +418,244 @@ pub(crate) fn solve_batch<'py>(
         }
     }
     Ok(out)
+}
+
+/// `obj` as a stacked array of `shape` (`None`: any length; the entries of `want`, known from
+/// `world`, must match), C-contiguous `float64` (converted once when it is not).
+fn stacked<'py>(
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+    shape: &[Option<usize>],
+    want: &str,
+) -> PyResult<PyReadonlyArrayDyn<'py, f64>> {
+    let a = contiguous_array(obj, name)?;
+    let got = a.shape();
+    if got.len() != shape.len()
+        || got
+            .iter()
+            .zip(shape)
+            .any(|(g, s)| s.is_some_and(|s| s != *g))
+    {
+        return Err(shape_error(
+            obj.py(),
+            name,
+            format!(
+                "{name}: expected an array of shape {want}, got shape {}",
+                shape_str(got)
+            ),
+        ));
+    }
+    a.try_readonly().map_err(|e| {
+        error(
+            obj.py(),
+            "InvalidInputError",
+            "Borrow",
+            format!("{name}: {e}"),
+            vec![],
+        )
+    })
+}
+
+/// A new C-contiguous `float64` array of `shape`, left uninitialised: the tasks write every
+/// element (`write_row`), so that the memory is first touched in parallel.
+fn output<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, PyArrayDyn<f64>> {
+    // SAFETY: every element is written before the array is returned to Python.
+    unsafe { PyArrayDyn::<f64>::new(py, shape, false) }
+}
+
+static BATCH: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
+
+/// Writes a problem's result into its rows of the output arrays (NaN where it failed).
+fn write_row(
+    res: &Result<Solution, PnpError>,
+    r: &mut [f64],
+    t: &mut [f64],
+    cost: &mut f64,
+    rmse: &mut f64,
+    ok: &mut bool,
+    cov: Option<(&mut [f64], &mut f64)>,
+) {
+    let Ok(s) = res else {
+        r.fill(f64::NAN);
+        t.fill(f64::NAN);
+        (*cost, *rmse, *ok) = (f64::NAN, f64::NAN, false);
+        if let Some((c, sigma)) = cov {
+            c.fill(f64::NAN);
+            *sigma = f64::NAN;
+        }
+        return;
+    };
+    for (k, v) in r.iter_mut().enumerate() {
+        *v = s.rotation[(k / 3, k % 3)];
+    }
+    t.copy_from_slice(s.pose.translation.vector.as_slice());
+    (*cost, *rmse, *ok) = (s.cost, s.reprojection_rmse, true);
+    if let Some((c, sigma)) = cov {
+        match &s.covariance {
+            Some(m) => {
+                for (k, v) in c.iter_mut().enumerate() {
+                    *v = m.matrix[(k / 6, k % 6)];
+                }
+                *sigma = m.sigma;
+            }
+            None => {
+                c.fill(f64::NAN);
+                *sigma = f64::NAN;
+            }
+        }
+    }
+}
+
+/// Solves a batch of problems given as stacked arrays (``solve`` on each), in parallel with the
+/// GIL released, and returns the poses as stacked arrays: the form for throughput (no Python
+/// object per problem).
+///
+/// C-contiguous float64 arrays are read in place by the threads, with the GIL released (as
+/// numpy's own functions that release it): do not modify them from another thread during
+/// the call. Any other array-like of real numbers is converted once (a copy).
+///
+/// Args:
+///     world: world points of every problem, shape (B, N, 3).
+///     image: their image points, shape (B, N, 2): normalised, or pixels with ``camera``.
+///     weights: optional non-negative weights, shape (B, N), as ``solve``'s. Problems with
+///         fewer points: pad them (any finite values) with weight 0, which ``solve`` ignores
+///         exactly as if the points were dropped; or use ``solve_batch``.
+///     camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
+///         of B ``Camera`` (pixels).
+///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
+///         exhaustive, covariance, loss: as ``solve``, for every problem.
+///     threads: as ``solve_batch``.
+///
+/// Returns:
+///     BatchResult: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost`` (B,), ``reprojection_rmse``
+///     (B,), ``ok`` (B,) bool, ``covariance`` (B, 6, 6) and ``sigma`` (B,) with
+///     ``covariance=`` (else None), and ``errors``: {index: the exception ``solve`` would
+///     raise for that problem} (its rows are NaN and ``ok`` False). Row ``i`` equals
+///     ``solve(world[i], image[i], weights[i], ...)`` exactly, whatever the thread count.
+///
+/// Raises:
+///     InvalidInputError: an array of the wrong shape (world not (B, N, 3), image not
+///         (B, N, 2) or weights not (B, N) with world's B and N), before anything is solved.
+///     InputTypeError: an array that is not real numbers.
+///     InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+#[pyfunction]
+#[pyo3(signature = (world, image, weights = None, *, camera = None, refinement = "ml",
+    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
+    reprojection_iterations = None, exhaustive = false, covariance = None, loss = None,
+    threads = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve_batch_arrays<'py>(
+    py: Python<'py>,
+    world: &Bound<'py, PyAny>,
+    image: &Bound<'py, PyAny>,
+    weights: Option<&Bound<'py, PyAny>>,
+    camera: Option<&Bound<'py, PyAny>>,
+    refinement: &str,
+    planar: &str,
+    newton_iterations: Option<i64>,
+    newton_step_tolerance: Option<f64>,
+    reprojection_iterations: Option<i64>,
+    exhaustive: bool,
+    covariance: Option<&Bound<'py, PyAny>>,
+    loss: Option<&Bound<'py, PyAny>>,
+    threads: Option<i64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let solver = SolverOptions {
+        refinement,
+        planar,
+        newton_iterations,
+        newton_step_tolerance,
+        reprojection_iterations,
+        exhaustive,
+        loss,
+        covariance,
+    }
+    .solver(py)?;
+    let w = stacked(world, "world", &[None, None, Some(3)], "(B, N, 3)")?;
+    let (b, n) = (w.shape()[0], w.shape()[1]);
+    let bn = format!("(B, N, 2) = ({b}, {n}, 2)");
+    let m = stacked(image, "image", &[Some(b), Some(n), Some(2)], &bn)?;
+    let wt = match weights.filter(|x| !x.is_none()) {
+        Some(x) => Some(stacked(
+            x,
+            "weights",
+            &[Some(b), Some(n)],
+            &format!("(B, N) = ({b}, {n})"),
+        )?),
+        None => None,
+    };
+    let (cams, which) = cameras(py, camera, b)?;
+    let cams: Vec<&Camera> = cams.iter().map(|c| &c.get().inner).collect();
+
+    let want_cov = covariance.is_some_and(|c| !c.is_none());
+    let r_out = output(py, &[b, 3, 3]);
+    let t_out = output(py, &[b, 3]);
+    let cost_out = output(py, &[b]);
+    let rmse_out = output(py, &[b]);
+    let ok_out = PyArray1::<bool>::zeros(py, b, false);
+    let cov_out = want_cov.then(|| (output(py, &[b, 6, 6]), output(py, &[b])));
+
+    let ws = w.as_slice().expect("contiguous").as_chunks::<3>().0;
+    let ms = m.as_slice().expect("contiguous").as_chunks::<2>().0;
+    let wts = wt.as_ref().map(|x| x.as_slice().expect("contiguous"));
+    let input = |i: usize| Input {
+        world: &ws[i * n..(i + 1) * n],
+        image: &ms[i * n..(i + 1) * n],
+        weights: wts.map(|x| &x[i * n..(i + 1) * n]),
+        camera: which[i].map(|c| cams[c]),
+    };
+    // SAFETY: new arrays, referenced by nothing else until they are returned.
+    let (r, t, cost, rmse, ok, cov) = unsafe {
+        (
+            r_out.as_slice_mut().expect("new array"),
+            t_out.as_slice_mut().expect("new array"),
+            cost_out.as_slice_mut().expect("new array"),
+            rmse_out.as_slice_mut().expect("new array"),
+            ok_out.as_slice_mut().expect("new array"),
+            cov_out.as_ref().map(|(c, s)| {
+                (
+                    c.as_slice_mut().expect("new array"),
+                    s.as_slice_mut().expect("new array"),
+                )
+            }),
+        )
+    };
+    let errors = run(py, threads, || {
+        let cov = match cov {
+            Some((c, s)) => Either::Left(c.par_chunks_mut(36).zip(s.par_iter_mut()).map(Some)),
+            None => Either::Right((0..b).into_par_iter().map(|_| None)),
+        };
+        r.par_chunks_mut(9)
+            .zip(t.par_chunks_mut(3))
+            .zip(cost.par_iter_mut())
+            .zip(rmse.par_iter_mut())
+            .zip(ok.par_iter_mut())
+            .zip(cov)
+            .enumerate()
+            .filter_map(|(i, (((((r, t), cost), rmse), ok), cov))| {
+                let res = input(i).solve(&solver);
+                write_row(&res, r, t, cost, rmse, ok, cov);
+                res.err().map(|e| (i, e))
+            })
+            .collect::<Vec<_>>()
+    })?;
+    drop((w, m, wt));
+
+    let errs = PyDict::new(py);
+    for (i, e) in &errors {
+        errs.set_item(*i, pnp_error(py, e).into_value(py))?;
+    }
+    let module = BATCH.get_or_try_init(py, || {
+        PyModule::import(py, "eopnp._batch").map(Bound::unbind)
+    })?;
+    let (cov, sigma) = match cov_out {
+        Some((c, s)) => (c.into_any(), s.into_any()),
+        None => (py.None().into_bound(py), py.None().into_bound(py)),
+    };
+    module
+        .bind(py)
+        .getattr("BatchResult")?
+        .call1((r_out, t_out, cost_out, rmse_out, ok_out, cov, sigma, errs))
 }
 
 /// Robust estimation of many independent problems in parallel (``solve_ransac`` on each),
