@@ -15,6 +15,12 @@ the 1-thread one. The reading of the arrays and the creation of the results are 
 batch call's time (solve_batch_arrays: the problems stacked once, before the timing, into
 (B, N, 3) and (B, N, 2) arrays).
 
+CPU time per problem: of the whole process, and of the calling thread alone. A batch call
+waits while the pool's threads solve, so the calling thread's CPU time is the serial part of
+the call (the checks, conversions and result objects with the GIL held), which no thread count
+shortens; measured as CPU time, it does not depend on the other processes of a shared machine
+as the wall times do.
+
 Reference, the machine's own limit: the Rust solve of one problem repeated in a loop inside
 the extension (eopnp._eopnp._time_solve, the GIL released, no conversion, hot caches) on one
 Python thread, and on two threads at once; the ratio of the throughputs is what two threads
@@ -85,29 +91,39 @@ def main():
     count["reference: Rust solve loop, 1 thread"] = reps
     count["reference: Rust solve loop, 2 threads"] = 2 * reps
     times = {k: [] for k in rows}
+    serial = {k: [] for k in rows}  # CPU time of the calling thread
+    cpu = {k: [] for k in rows}  # CPU time of the process (every thread)
     for k, fn in rows.items():  # warm-up (the thread pools are built once)
         fn()
     for _ in range(args.passes):
         for k, fn in rows.items():
+            c0, p0 = time.thread_time(), time.process_time()
             t0 = time.perf_counter()
             fn()
             times[k].append(time.perf_counter() - t0)
+            serial[k].append(time.thread_time() - c0)
+            cpu[k].append(time.process_time() - p0)
 
     print(
         f"eopnp {eopnp.__version__}, numpy {np.__version__}, CPython "
         f"{platform.python_version()}, {os.cpu_count()} CPUs, load average "
         f"{os.getloadavg()[0]:.2f}; N = {args.n}, median of {args.passes} passes\n"
     )
-    print("| method | problems | time (s) | problems / s | us / problem | best pass, us / problem |")
-    print("|---|---|---|---|---|---|")
+    print(
+        "| method | problems | time (s) | problems / s | us / problem | best pass, us / problem "
+        "| CPU, us / problem | of which the calling thread |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
     rate, best = {}, {}
     for k in rows:
         t = statistics.median(times[k])
         rate[k] = count[k] / t
         best[k] = count[k] / min(times[k])
+        us = 1e6 / count[k]
         print(
             f"| {k} | {count[k]} | {t:.3f} | {rate[k]:,.0f} | {1e6 / rate[k]:.2f} | "
-            f"{1e6 / best[k]:.2f} |"
+            f"{1e6 / best[k]:.2f} | {statistics.median(cpu[k]) * us:.2f} | "
+            f"{statistics.median(serial[k]) * us:.2f} |"
         )
     ratio = {
         name: rate[f"{name}, 2 threads"] / rate[f"{name}, 1 thread"]
