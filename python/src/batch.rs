@@ -110,8 +110,9 @@ enum Held<T> {
 ///
 /// Not numpy's read-only borrow (`PyReadonlyArray`): it registers each borrow in a table per
 /// base array and checks it against the others of that base, which costs O(B^2) for a batch
-/// of B views of one array (`[(W[i], I[i]) for i in range(B)]`: 8 ms for B = 2,500 and 0.6 s
-/// for B = 10,000, measured).
+/// of B views of one array (`[(W[i], I[i]) for i in range(B)]`, N = 100, 1 thread, measured
+/// on a loaded machine: 33 us per problem for B = 2,500 and 72-82 us for B = 10,000, against
+/// 18-23 us for separate arrays).
 fn borrow<'py>(
     obj: &Bound<'py, PyAny>,
     ndim: usize,

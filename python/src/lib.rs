@@ -9,7 +9,7 @@
 //!
 //! `solve_batch`, `solve_ransac_batch` and `solve_batch_arrays` (`batch`) solve one problem
 //! per rayon task (feature `rayon`) with the GIL released for the whole batch, each task
-//! reading its own problem's arrays (borrowed, not copied); `solve_batch_arrays` writes the
+//! reading its own problem's arrays (held, not copied); `solve_batch_arrays` writes the
 //! poses into stacked arrays from the tasks. `covariance=` fills `Solution.covariance`
 //! through `Solver::covariance`.
 
