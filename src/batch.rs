@@ -140,8 +140,10 @@ impl Solver {
         problems.par_iter().map(|p| self.solve_problem(p)).collect()
     }
 
-    /// One problem of a batch.
-    fn solve_problem(&self, p: &Problem<'_>) -> Result<Solution, PnpError> {
+    /// One problem of a batch: what [`Solver::solve_batch`] computes for it. For callers that
+    /// run their own parallel loop (e.g. building each problem inside its task, from memory
+    /// the task reads itself).
+    pub fn solve_problem(&self, p: &Problem<'_>) -> Result<Solution, PnpError> {
         match (p.observations, p.weights) {
             (Observations::Normalised { points, .. }, None) => self.solve(p.world, points),
             (Observations::Normalised { points, .. }, Some(w)) => {
@@ -178,8 +180,10 @@ impl Ransac {
             .collect()
     }
 
-    /// One problem of a batch, with this configuration's seed.
-    fn estimate_problem(
+    /// One problem, with this configuration's seed: problem `i` of
+    /// [`Ransac::estimate_batch`] is `ransac.seed(problem_seed(ransac.seed, i))
+    /// .estimate_problem(solver, p)`. For callers that run their own parallel loop.
+    pub fn estimate_problem(
         &self,
         solver: &Solver,
         p: &Problem<'_>,

@@ -11,6 +11,8 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> sol, info = eopnp.solve_ransac(world, pixels, camera=cam)   # info["inliers"]: bool mask
 >>> sol = eopnp.solve(world, pixels, camera=cam, covariance=1.0)  # sol.covariance: 6x6
 >>> results = eopnp.solve_batch([(world, pixels), ...], camera=cam, threads=2)
+>>> res = eopnp.solve_batch_arrays(worlds, images, threads=2)  # (B, N, 3), (B, N, 2)
+>>> res.R, res.t, res.ok, res.errors            # (B, 3, 3), (B, 3), (B,) bool, {i: exc}
 >>> sol = eopnp.solve(world, pixels, camera=cam, loss=("cauchy", 2.0))  # robust, 2 px scale
 >>> sol = eopnp.refine(world, pixels, prev_sol, camera=cam)     # tracking: from a prior pose
 
@@ -19,6 +21,7 @@ read as float64; results are new float64 arrays. Errors raise the exceptions of
 ``eopnp.PnpError``'s hierarchy (see ``eopnp._errors``). Every solve releases the GIL; the batch functions run on several threads.
 """
 
+from ._batch import BatchResult
 from ._errors import (
     CameraError,
     DegenerateError,
@@ -46,11 +49,13 @@ from ._eopnp import (
     solve,
     solve_all,
     solve_batch,
+    solve_batch_arrays,
     solve_ransac,
     solve_ransac_batch,
 )
 
 __all__ = [
+    "BatchResult",
     "Camera",
     "CameraError",
     "DegenerateError",
@@ -75,6 +80,7 @@ __all__ = [
     "solve",
     "solve_all",
     "solve_batch",
+    "solve_batch_arrays",
     "solve_ransac",
     "solve_ransac_batch",
 ]

@@ -1,4 +1,5 @@
-"""Type stubs of the eopnp package (the extension module eopnp._eopnp and eopnp._errors).
+"""Type stubs of the eopnp package (the extension module eopnp._eopnp, eopnp._errors and
+eopnp._batch).
 
 Conventions: world points are (N, 3), image points (N, 2), normalised (x/z, y/z) unless a
 ``camera`` is given (then pixels). Any array-like of real numbers is accepted (float or integer
@@ -12,6 +13,7 @@ from typing import Any, Literal, Mapping, Sequence, TypedDict, Union, final
 import numpy as np
 import numpy.typing as npt
 
+from ._batch import BatchResult as BatchResult
 from ._errors import (
     CameraError as CameraError,
     DegenerateError as DegenerateError,
@@ -404,11 +406,43 @@ def solve_batch(
     """``solve`` on many problems, ``(world, image)`` or ``(world, image, weights)`` tuples,
     in parallel (``threads``: None for rayon's default, or a count), the GIL released.
     ``camera``: one for all problems or one per problem (pixels), or None (normalised).
+    C-contiguous float64 arrays are read in place with the GIL released: do not modify them
+    from another thread during the call.
 
     Returns one entry per problem: its ``Solution``, or the exception ``solve`` would raise
     for it (an instance, not raised). Equal to ``solve`` one by one, whatever ``threads``.
     Raises InvalidInputError (InputTypeError) for a malformed batch before solving anything,
     InvalidOptionError for bad options."""
+
+def solve_batch_arrays(
+    world: _ArrayLike,
+    image: _ArrayLike,
+    weights: _ArrayLike | None = None,
+    *,
+    camera: Camera | Sequence[Camera] | None = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    covariance: _Covariance = None,
+    loss: _Loss = None,
+    threads: int | None = None,
+) -> BatchResult:
+    """``solve`` on B problems given as stacked arrays, world (B, N, 3) and image (B, N, 2)
+    (normalised, or pixels with ``camera``: one for all or one per problem), optional weights
+    (B, N), in parallel (``threads`` as ``solve_batch``), the GIL released; the throughput
+    form: no Python object per problem. Problems with fewer points: pad them with weight 0
+    (any finite values), exactly as if dropped.
+
+    Returns a ``BatchResult``: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost``, ``reprojection_rmse``,
+    ``ok`` (B,), ``covariance`` (B, 6, 6) and ``sigma`` with ``covariance=``, and ``errors``
+    {index: exception}. Row ``i`` equals ``solve(world[i], image[i], weights[i], ...)``
+    exactly, whatever ``threads``. C-contiguous float64 arrays are read in place with the GIL
+    released (do not modify them from another thread during the call); others are converted
+    once. Raises InvalidInputError (InputTypeError) for arrays of
+    the wrong shape (dtype) before solving anything, InvalidOptionError for bad options."""
 
 def solve_ransac_batch(
     problems: Sequence[_Problem],
@@ -474,6 +508,7 @@ def register_image(
     ``ransac=True`` / options) and compares it with the model's. Raises UnknownIdError."""
 
 __all__ = [
+    "BatchResult",
     "Camera",
     "CameraError",
     "DegenerateError",
@@ -498,6 +533,7 @@ __all__ = [
     "solve",
     "solve_all",
     "solve_batch",
+    "solve_batch_arrays",
     "solve_ransac",
     "solve_ransac_batch",
 ]

@@ -76,6 +76,19 @@ pub(crate) fn float_array<'py>(
     Ok(arr.cast_into::<PyArrayDyn<f64>>()?)
 }
 
+/// `obj` as a C-contiguous, aligned `float64` array that can be read as one slice: itself when
+/// it is one, otherwise one converted copy (`float_array`, then `ndarray.copy()`, C order).
+pub(crate) fn contiguous_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let arr = float_array(obj, name)?;
+    if arr.is_c_contiguous() && arr.is_aligned() {
+        return Ok(arr);
+    }
+    Ok(arr.call_method0("copy")?.cast_into::<PyArrayDyn<f64>>()?)
+}
+
 /// The rows of an `(N, C)` array, each mapped by `f`.
 pub(crate) fn rows<T>(
     obj: &Bound<'_, PyAny>,

@@ -3,13 +3,15 @@
 //! re-exports it with the exceptions of `eopnp/_errors.py`; `eopnp/__init__.pyi` has the
 //! types and the documentation.
 //!
-//! Every entry point converts its arrays to `f64` points (copies: the arrays may be mutated
-//! while the GIL is released), runs the library with the GIL released, and maps each error
+//! Every one-problem entry point converts its arrays to `f64` points (copies: the arrays may
+//! be mutated while the GIL is released), runs the library with the GIL released, and maps each error
 //! to the exception class of its `PnpError` family.
 //!
-//! `solve_batch` and `solve_ransac_batch` (`batch`) run the crate's batch API (feature
-//! `rayon`) with the GIL released for the whole batch; `covariance=` fills
-//! `Solution.covariance` through `Solver::covariance`.
+//! `solve_batch`, `solve_ransac_batch` and `solve_batch_arrays` (`batch`) solve one problem
+//! per rayon task (feature `rayon`) with the GIL released for the whole batch, each task
+//! reading its own problem's arrays (held, not copied); `solve_batch_arrays` writes the
+//! poses into stacked arrays from the tasks. `covariance=` fills `Solution.covariance`
+//! through `Solver::covariance`.
 
 use pyo3::prelude::*;
 
@@ -34,6 +36,7 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ransac::solve_ransac, m)?)?;
     m.add_function(wrap_pyfunction!(batch::solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(batch::solve_ransac_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::solve_batch_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(batch::problem_seed, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::read_colmap_model, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::register_image, m)?)?;

@@ -400,7 +400,31 @@ pub(crate) fn ransac_result<'py>(
     focal: Option<(f64, f64)>,
 ) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
     let sol = PySolution::from(&r.solution);
+    let px = ransac_rmse_px(&sol, r, w, img, cam, focal);
+    let info = ransac_info(py, r, px)?;
+    Ok((sol, info))
+}
+
+/// The info dict's `rmse_px` (no Python objects: the batch computes it in each problem's
+/// task, with the GIL released).
+pub(crate) fn ransac_rmse_px(
+    sol: &PySolution,
+    r: &RansacSolution,
+    w: &[Point3<f64>],
+    img: &[Point2<f64>],
+    cam: Option<&Camera>,
+    focal: Option<(f64, f64)>,
+) -> f64 {
     let focal = cam.map_or(focal.unwrap_or((1.0, 1.0)), Camera::intrinsics_scale);
+    rmse_px(sol, w, img, &r.inliers, cam, focal)
+}
+
+/// The info dict of `solve_ransac`, with its `rmse_px`.
+pub(crate) fn ransac_info<'py>(
+    py: Python<'py>,
+    r: &RansacSolution,
+    rmse_px: f64,
+) -> PyResult<Bound<'py, PyDict>> {
     let info = PyDict::new(py);
     info.set_item("inliers", PyArray1::from_slice(py, &r.inliers))?;
     info.set_item("num_inliers", r.num_inliers)?;
@@ -411,7 +435,7 @@ pub(crate) fn ransac_result<'py>(
     info.set_item("final_fits", r.stats.final_fits)?;
     info.set_item("cost", r.solution.cost)?;
     info.set_item("rmse", r.solution.reprojection_rmse)?;
-    info.set_item("rmse_px", rmse_px(&sol, w, img, &r.inliers, cam, focal))?;
+    info.set_item("rmse_px", rmse_px)?;
     info.set_item("micros", r.stats.micros)?;
-    Ok((sol, info))
+    Ok(info)
 }

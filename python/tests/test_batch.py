@@ -164,3 +164,16 @@ def test_batch_array_layouts(rng):
     for k, (v, g) in enumerate(zip(variants, got)):
         assert g == eopnp.solve(*v), k
     assert got[1] == got[2] == got[3] == got[5] == want
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_batch_views_of_one_array(rng, threads):
+    """Problems that are rows of stacked arrays (views of one base array, read in place)."""
+    probs = batch(rng, 30)
+    world = np.stack([w for w, _ in probs])
+    image = np.stack([i for _, i in probs])
+    weights = rng.uniform(0.5, 2.0, (30, 12))
+    views = [(world[k], image[k], weights[k] if k % 3 == 0 else None) for k in range(30)]
+    got = eopnp.solve_batch(views, threads=threads)
+    for k, (v, g) in enumerate(zip(views, got)):
+        assert g == eopnp.solve(*v), k
