@@ -289,24 +289,16 @@ pub(crate) fn refine_reprojection(
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
 ) -> ReprojOutcome {
-    debug_assert_eq!(world.len(), image.len());
-    debug_assert!(weights.is_none_or(|w| w.len() == world.len()));
-    let n = world
-        .len()
-        .min(image.len())
-        .min(weights.map_or(usize::MAX, <[f64]>::len));
-    let prob = Problem {
-        world: &world[..n],
-        image: &image[..n],
-        weights: weights.map(|w| &w[..n]),
-        inv_weight: 1.0 / fr.weight_unit,
-        c: fr.c,
-        metric: RowWeights {
-            wx: opts.row_weights.0,
-            wy: opts.row_weights.1,
-        },
-    };
-    levenberg_marquardt_until(&prob, fr, r_work, t_work, opts, &mut |_, _| false)
+    refine_reprojection_until(
+        world,
+        image,
+        weights,
+        fr,
+        r_work,
+        t_work,
+        opts,
+        &mut |_, _| false,
+    )
 }
 
 /// [`refine_reprojection`], stopped ([`ReprojStop::Abandoned`]) at the first accepted iterate
@@ -322,6 +314,8 @@ pub(crate) fn refine_reprojection_until(
     opts: &ReprojOptions,
     abandon: &mut dyn FnMut(&Matrix3<f64>, &Vector3<f64>) -> bool,
 ) -> ReprojOutcome {
+    debug_assert_eq!(world.len(), image.len());
+    debug_assert!(weights.is_none_or(|w| w.len() == world.len()));
     let n = world
         .len()
         .min(image.len())

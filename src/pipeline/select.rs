@@ -5,8 +5,8 @@
 use nalgebra::{Matrix3, Point3, Vector3};
 
 use super::frame::WorkingFrame;
-use crate::numeric::lanes::dispatched;
 use super::nullspace::CandidateSource;
+use crate::numeric::lanes::dispatched;
 
 /// A refined local minimum of f (working frame).
 #[derive(Clone, Copy, Debug)]
