@@ -62,6 +62,8 @@ impl Block {
 /// Whether the vectorised passes run their AVX2 + FMA build: the processor has both
 /// (`is_x86_feature_detected!`, a cached atomic load after the first call). Always `false`
 /// off x86-64, and in the library's unit tests inside [`with_baseline`].
+// Off x86-64 only the unit test asks (`dispatched!` compiles the baseline build alone there).
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 #[inline(always)]
 pub(crate) fn wide() -> bool {
     #[cfg(test)]
