@@ -5,6 +5,8 @@
 //! in the baseline x86-64 build, one 256-bit register in the AVX2 build that [`dispatched`]
 //! adds and picks at run time.
 
+use core::ops::ControlFlow;
+
 use nalgebra::{Point2, Point3};
 
 /// Points per block: one AVX2 register (two SSE2 registers) per quantity.
@@ -57,6 +59,38 @@ impl Block {
             self.w[l],
         )
     }
+}
+
+/// The weighted form of a pass's loop: the points with non-zero weight, in order, gathered
+/// into blocks of [`LANES`] with their weights times `scale`; `full(&block)` for each full
+/// block, in order, until it breaks. Then the last, partial block and the number of its
+/// filled lanes (0 to `LANES - 1`), which the pass adds itself. The weights must be validated
+/// (finite, non-negative). The sequence of active points, and so a pass's result to the bit,
+/// does not depend on the points of weight 0.
+#[inline(always)]
+pub(crate) fn weighted_blocks<B>(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: &[f64],
+    scale: f64,
+    mut full: impl FnMut(&Block) -> ControlFlow<B>,
+) -> ControlFlow<B, (Block, usize)> {
+    let mut blk = Block::new();
+    let mut filled = 0;
+    for ((x, m), &w) in world.iter().zip(image).zip(weights) {
+        if w == 0.0 {
+            continue;
+        }
+        let l = filled % LANES;
+        blk.set(l, x, m);
+        blk.w[l] = w * scale;
+        filled = l + 1;
+        if filled == LANES {
+            full(&blk)?;
+            filled = 0;
+        }
+    }
+    ControlFlow::Continue((blk, filled))
 }
 
 /// Whether the vectorised passes run their AVX2 + FMA build: the processor has both

@@ -22,7 +22,10 @@
 
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector2, Vector3};
 
-use crate::numeric::lanes::{dispatched, lane_sum, Block, LANES};
+use core::convert::Infallible;
+use core::ops::ControlFlow;
+
+use crate::numeric::lanes::{dispatched, lane_sum, weighted_blocks, Block, LANES};
 
 /// The weighted sums of S2 (symmetric matrices stored in full).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -278,23 +281,22 @@ fn centred_pass<const W: bool, const R: bool>(
     let (world, image) = (&world[..n], &image[..n]);
     let mut filled = 0;
     if W {
-        for ((x, m), &w) in world.iter().zip(image).zip(weights) {
-            if w <= 0.0 {
-                continue;
-            }
-            let l = filled % LANES;
-            blk.set(l, x, m);
-            blk.w[l] = w * isw;
-            filled = l + 1;
-            if filled == LANES {
+        let ControlFlow::Continue((last, n)) = weighted_blocks::<Infallible>(
+            world,
+            image,
+            weights,
+            isw,
+            #[inline(always)]
+            |full| {
                 for l in 0..LANES {
-                    let (x, m, w) = blk.point(l);
+                    let (x, m, w) = full.point(l);
                     lane::<R>(&k, x, m, w, l, &mut acc);
                 }
                 acc.flush(LANES);
-                filled = 0;
-            }
-        }
+                ControlFlow::Continue(())
+            },
+        );
+        (blk, filled) = (last, n);
     } else {
         let mut cw = world.chunks_exact(LANES);
         let mut cm = image.chunks_exact(LANES);
@@ -349,7 +351,7 @@ fn centred_sums_body(
 }
 
 /// S1/S2 fused pass: the S2 sums of `p = A Y` (`a = Some(A)`) or of `p = Y` (`a = None`),
-/// `Y = X / sx - centre`, with weights `w / sw` (points with `w <= 0` are skipped, so they give
+/// `Y = X / sx - centre`, with weights `w / sw` (points with `w = 0` are skipped, so they give
 /// bit-identical sums to removing them), plus the S1 image spread. The weights must already
 /// be validated.
 ///

@@ -16,7 +16,10 @@ use super::reprojection::{self, ReprojOptions, ReprojOutcome};
 use super::select::{in_front, Minimum};
 use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
-use crate::numeric::lanes::{dispatched, lane_sum, Block, LANES};
+use core::convert::Infallible;
+use core::ops::ControlFlow;
+
+use crate::numeric::lanes::{dispatched, lane_sum, weighted_blocks, Block, LANES};
 use crate::numeric::rotation::to_unit_quaternion;
 
 /// A camera pose and how it was found.
@@ -390,20 +393,20 @@ fn reprojection_error_body(
             }
         }
         Some(weights) => {
-            for ((x, m), &w) in world.iter().zip(image).zip(weights) {
-                if w == 0.0 {
-                    continue;
-                }
-                blk.set(filled, x, m);
-                blk.w[filled] = w * inv_weight;
-                filled += 1;
-                if filled == LANES {
+            let ControlFlow::Continue((last, n)) = weighted_blocks::<Infallible>(
+                world,
+                image,
+                weights,
+                inv_weight,
+                #[inline(always)]
+                |full| {
                     for l in 0..LANES {
-                        residual_lane(&pose, &blk, l, &mut acc);
+                        residual_lane(&pose, full, l, &mut acc);
                     }
-                    filled = 0;
-                }
-            }
+                    ControlFlow::Continue(())
+                },
+            );
+            (blk, filled) = (last, n);
         }
     }
     for l in 0..filled {

@@ -11,7 +11,9 @@
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::{Composed, Normal};
-use crate::numeric::lanes::{dispatched, lane_sum, Block, LANES};
+use core::ops::ControlFlow;
+
+use crate::numeric::lanes::{dispatched, lane_sum, weighted_blocks, Block, LANES};
 
 /// Number of sums of one pass: `E` (1), `H_rr` (6, upper triangle, row-major), `H_rt = sum K`
 /// (9, row-major, the third column negated), `H_tt` (`kx`, `ky`, `fx`, `fy`, `n22`: 5),
@@ -230,23 +232,25 @@ fn pass_body<const CHECK: bool, const HESS: bool, M: Metric>(
             }
         }
         Some(weights) => {
-            for ((x, m), &w) in world.iter().zip(image).zip(weights) {
-                if w == 0.0 {
-                    continue;
-                }
-                let l = filled % LANES;
-                blk.set(l, x, m);
-                blk.w[l] = w * k.inv_weight;
-                filled = l + 1;
-                if filled == LANES {
+            match weighted_blocks(
+                world,
+                image,
+                weights,
+                k.inv_weight,
+                #[inline(always)]
+                |full| {
                     for l in 0..LANES {
-                        lane::<CHECK, HESS, M>(k, metric, &blk, l, &mut acc);
+                        lane::<CHECK, HESS, M>(k, metric, full, l, &mut acc);
                     }
                     if flipped(&acc) {
-                        return None;
+                        ControlFlow::Break(())
+                    } else {
+                        ControlFlow::Continue(())
                     }
-                    filled = 0;
-                }
+                },
+            ) {
+                ControlFlow::Break(()) => return None,
+                ControlFlow::Continue((last, n)) => (blk, filled) = (last, n),
             }
         }
     }
