@@ -305,6 +305,19 @@ fn infinite_cost_huge_weights() {
     ));
 }
 
+/// Found by the first fuzz run of the small-N search (S4'''): four points, one triple nearly
+/// collinear (the sine of its angle about 1e-7, above P3P's degeneracy cut). The triangle's
+/// frame took its normal from a cross product of nearly parallel edges, orthogonal to the
+/// first edge only to about 1e-16 / 1e-7, and the returned rotation, the P3P pose after one
+/// LM step, was orthonormal only to 1.2e-9. Fixed: the normal is re-orthogonalised against the
+/// edge (Gram-Schmidt), so the frame is orthonormal to rounding.
+#[test]
+fn non_orthonormal_p3p_near_collinear_triple() {
+    harness::solve(include_bytes!(
+        "../fuzz/regressions/solve/non-orthonormal-p3p-near-collinear-triple"
+    ));
+}
+
 /// A binary COLMAP model with a pixel at 4.4e142 and a point at depth 1.8e-307: registration
 /// reported an infinite cost (seen while the S9 rewrite was in progress; kept as a
 /// regression input for the registration path).

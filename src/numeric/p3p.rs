@@ -456,6 +456,11 @@ fn gauss_newton(mut l: Vector3<f64>, a: [f64; 3], b: [f64; 3]) -> Vector3<f64> {
 }
 
 /// Orthonormal frame (columns) of a triangle: the first edge, the normal, their cross product.
+///
+/// The normal, a cross product of two edges, is orthogonal to the first edge only to about
+/// `eps / sin(angle)` when the triangle is nearly flat (1e-9 at an angle of 1e-7, which the
+/// degeneracy cut lets through): it is re-orthogonalised against the edge (one Gram-Schmidt
+/// step), so the frame, and the rotation built from two frames, is orthonormal to rounding.
 fn triangle_frame(p: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
     let u = p[0] - p[1];
     let n = u.cross(&(p[0] - p[2]));
@@ -464,7 +469,13 @@ fn triangle_frame(p: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
         return None;
     }
     let e1 = u / un;
-    let e2 = n / nn;
+    let n1 = n / nn;
+    let n2 = n1 - e1 * e1.dot(&n1);
+    let n2n = n2.norm();
+    if !(n2n > 0.0) {
+        return None;
+    }
+    let e2 = n2 / n2n;
     let e3 = e1.cross(&e2);
     Some(Matrix3::from_columns(&[e1, e2, e3]))
 }
