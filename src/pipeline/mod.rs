@@ -232,7 +232,8 @@ fn small_n(
             triples::add(sp, &r, &t, (CandidateSource::Planar1, it), &mut starts);
         }
     }
-    let mut found: ArrayVec<triples::Start, 16> = ArrayVec::new();
+    // Every refined pose (at most one per start, so never more than a `Starts` holds).
+    let mut found = triples::Starts::new();
     let mut best: Option<(triples::Start, reprojection::ReprojOutcome)> = None;
     for s in starts
         .iter()

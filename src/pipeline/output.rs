@@ -4,6 +4,9 @@
 //! costs, cheirality and diagnostics are filled in. The only way out of the solver: a pose that
 //! is not finite in the world frame is [`PnpError::NoSolution`], never an `Ok`.
 
+use core::convert::Infallible;
+use core::ops::ControlFlow;
+
 use arrayvec::ArrayVec;
 use nalgebra::{Isometry3, Matrix3, Point2, Point3, Translation3, Vector3};
 
@@ -16,9 +19,6 @@ use super::reprojection::{self, ReprojOptions, ReprojOutcome};
 use super::select::{in_front, Minimum};
 use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
-use core::convert::Infallible;
-use core::ops::ControlFlow;
-
 use crate::numeric::lanes::{dispatched, lane_sum, weighted_blocks, Block, LANES};
 use crate::numeric::rotation::to_unit_quaternion;
 
