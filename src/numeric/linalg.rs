@@ -7,45 +7,47 @@
 use nalgebra::{SMatrix, SVector};
 
 /// Cholesky factor `L` (lower) of a symmetric positive definite matrix, or `None` (also for a
-/// NaN entry).
+/// NaN entry). The textbook column-by-column order of operations; the rows of `L` are built in
+/// a row-major array, so that every inner product runs over two contiguous slices.
 pub(crate) fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
-    let mut l = SMatrix::<f64, D, D>::zeros();
+    let mut rows = [[0.0f64; D]; D];
     for j in 0..D {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= l[(j, k)] * l[(j, k)];
-        }
+        let (head, below) = rows.split_at_mut(j + 1);
+        let rj = &mut head[j];
+        let d = dot_down(a[(j, j)], &rj[..j], &rj[..j]);
         if !(d > 0.0) {
             return None;
         }
         let djj = d.sqrt();
-        l[(j, j)] = djj;
-        for i in j + 1..D {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= l[(i, k)] * l[(j, k)];
-            }
-            l[(i, j)] = s / djj;
+        rj[j] = djj;
+        let rj = &rj[..j];
+        for (i, ri) in (j + 1..D).zip(below.iter_mut()) {
+            ri[j] = dot_down(a[(i, j)], &ri[..j], rj) / djj;
         }
     }
-    Some(l)
+    Some(SMatrix::from_fn(|i, j| rows[i][j]))
 }
 
-/// Solves `L L^T x = b` in place.
-fn cholesky_solve<const D: usize>(l: &SMatrix<f64, D, D>, x: &mut SVector<f64, D>) {
+/// `s - x_0 y_0 - x_1 y_1 - ...`, subtracted in order.
+#[inline(always)]
+fn dot_down(s: f64, x: &[f64], y: &[f64]) -> f64 {
+    x.iter().zip(y).fold(s, |s, (a, b)| s - a * b)
+}
+
+/// Solves `L L^T x = b` in place (`L` taken by rows, as [`cholesky`] builds it).
+fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut SVector<f64, D>) {
+    let x = x.as_mut_slice();
     for i in 0..D {
-        let mut s = x[i];
-        for k in 0..i {
-            s -= l[(i, k)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
+        let (done, rest) = x.split_at_mut(i);
+        rest[0] = dot_down(rest[0], &rows[i][..i], done) / rows[i][i];
     }
     for i in (0..D).rev() {
-        let mut s = x[i];
-        for k in i + 1..D {
-            s -= l[(k, i)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
+        let (head, done) = x.split_at_mut(i + 1);
+        let s = done
+            .iter()
+            .zip(&rows[i + 1..])
+            .fold(head[i], |s, (xk, rk)| s - rk[i] * xk);
+        head[i] = s / rows[i][i];
     }
 }
 
@@ -81,10 +83,11 @@ pub(crate) fn inverse_iteration<const D: usize>(
     let kmin = (0..D)
         .min_by(|&i, &j| m[(i, i)].total_cmp(&m[(j, j)]))
         .unwrap_or(0);
+    let rows: [[f64; D]; D] = core::array::from_fn(|i| core::array::from_fn(|j| l[(i, j)]));
     let mut x = SVector::<f64, D>::from_element(1e-3);
     x[kmin] = 1.0;
     for _ in 0..INVERSE_ITERATIONS {
-        cholesky_solve(l, &mut x);
+        cholesky_solve(&rows, &mut x);
         let n = x.norm();
         if !(n > 0.0 && n.is_finite()) {
             return None;
