@@ -7,14 +7,23 @@
 use nalgebra::{SMatrix, SVector};
 
 /// Cholesky factor `L` (lower) of a symmetric positive definite matrix, or `None` (also for a
-/// NaN entry). The textbook column-by-column order of operations; the rows of `L` are built in
-/// a row-major array, so that every inner product runs over two contiguous slices.
+/// NaN entry).
 pub(crate) fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
+    let rows = cholesky_rows::<D>(|i, j| a[(i, j)])?;
+    Some(SMatrix::from_fn(|i, j| rows[i][j]))
+}
+
+/// The rows of the Cholesky factor `L` of the symmetric matrix with lower-triangle entries
+/// `a(i, j)`, `j <= i`, or `None` if a pivot is not positive (also for a NaN entry). The
+/// textbook column-by-column order of operations; `L` is row-major, so that every inner
+/// product runs over two contiguous slices.
+#[inline(always)]
+fn cholesky_rows<const D: usize>(a: impl Fn(usize, usize) -> f64) -> Option<[[f64; D]; D]> {
     let mut rows = [[0.0f64; D]; D];
     for j in 0..D {
         let (head, below) = rows.split_at_mut(j + 1);
         let rj = &mut head[j];
-        let d = dot_down(a[(j, j)], &rj[..j], &rj[..j]);
+        let d = dot_down(a(j, j), &rj[..j], &rj[..j]);
         if !(d > 0.0) {
             return None;
         }
@@ -22,10 +31,10 @@ pub(crate) fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix
         rj[j] = djj;
         let rj = &rj[..j];
         for (i, ri) in (j + 1..D).zip(below.iter_mut()) {
-            ri[j] = dot_down(a[(i, j)], &ri[..j], rj) / djj;
+            ri[j] = dot_down(a(i, j), &ri[..j], rj) / djj;
         }
     }
-    Some(SMatrix::from_fn(|i, j| rows[i][j]))
+    Some(rows)
 }
 
 /// `s - x_0 y_0 - x_1 y_1 - ...`, subtracted in order.
@@ -34,9 +43,9 @@ fn dot_down(s: f64, x: &[f64], y: &[f64]) -> f64 {
     x.iter().zip(y).fold(s, |s, (a, b)| s - a * b)
 }
 
-/// Solves `L L^T x = b` in place (`L` taken by rows, as [`cholesky`] builds it).
-fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut SVector<f64, D>) {
-    let x = x.as_mut_slice();
+/// Solves `L L^T x = b` in place (`L` by rows, as [`cholesky_rows`] gives it).
+#[inline(always)]
+fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut [f64]) {
     for i in 0..D {
         let (done, rest) = x.split_at_mut(i);
         rest[0] = dot_down(rest[0], &rows[i][..i], done) / rows[i][i];
@@ -87,7 +96,7 @@ pub(crate) fn inverse_iteration<const D: usize>(
     let mut x = SVector::<f64, D>::from_element(1e-3);
     x[kmin] = 1.0;
     for _ in 0..INVERSE_ITERATIONS {
-        cholesky_solve(&rows, &mut x);
+        cholesky_solve(&rows, x.as_mut_slice());
         let n = x.norm();
         if !(n > 0.0 && n.is_finite()) {
             return None;
@@ -279,46 +288,11 @@ fn sturm_count_below(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
 
 /// Solves `(H + lam I) delta = -g` by a 6 x 6 Cholesky factorisation; `None` if `H + lam I`
 /// is not (numerically) positive definite, including NaN entries.
-// Index loops mirror the textbook factorisation; `!(s > 0.0)` deliberately rejects NaN.
-#[allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 #[inline]
 pub(crate) fn solve_damped6(h: &[[f64; 6]; 6], lam: f64, g: &[f64; 6]) -> Option<[f64; 6]> {
-    let mut l = [[0.0; 6]; 6];
-    for j in 0..6 {
-        let mut s = h[j][j] + lam;
-        for k in 0..j {
-            s -= l[j][k] * l[j][k];
-        }
-        if !(s > 0.0) {
-            return None;
-        }
-        let ljj = s.sqrt();
-        l[j][j] = ljj;
-        for i in (j + 1)..6 {
-            let mut s = h[i][j];
-            for k in 0..j {
-                s -= l[i][k] * l[j][k];
-            }
-            l[i][j] = s / ljj;
-        }
-    }
-    // L y = -g, then L^T delta = y.
-    let mut y = [0.0; 6];
-    for i in 0..6 {
-        let mut s = -g[i];
-        for k in 0..i {
-            s -= l[i][k] * y[k];
-        }
-        y[i] = s / l[i][i];
-    }
-    let mut delta = [0.0; 6];
-    for i in (0..6).rev() {
-        let mut s = y[i];
-        for k in (i + 1)..6 {
-            s -= l[k][i] * delta[k];
-        }
-        delta[i] = s / l[i][i];
-    }
+    let l = cholesky_rows::<6>(|i, j| if i == j { h[i][i] + lam } else { h[i][j] })?;
+    let mut delta = g.map(|x| -x);
+    cholesky_solve(&l, &mut delta);
     Some(delta)
 }
 
