@@ -744,9 +744,10 @@ pub(crate) fn undistort_all(
     let fmax = fx.max(fy);
     out.rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
     // The camera unpacked and its model dispatched once, not per point.
-    camera
-        .projector()
-        .try_undistort_weighted_each(pixels, |i, undistorted| {
+    camera.projector().try_undistort_weighted_each(
+        pixels,
+        #[inline(always)]
+        |i, undistorted| {
             let Ok((m, weight)) = undistorted else {
                 return Ok(());
             };
@@ -768,7 +769,8 @@ pub(crate) fn undistort_all(
                 keep.push(uw[i]);
             }
             Ok(())
-        })?;
+        },
+    )?;
     Ok(out)
 }
 
