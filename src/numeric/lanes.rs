@@ -93,6 +93,57 @@ pub(crate) fn weighted_blocks<B>(
     ControlFlow::Continue((blk, filled))
 }
 
+/// A pass's loop over the points with or without weights: [`weighted_blocks`] or
+/// [`unweighted_blocks`], for a pass whose per-point code reads the weight from the block.
+#[inline(always)]
+pub(crate) fn blocks<B>(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    scale: f64,
+    full: impl FnMut(&Block) -> ControlFlow<B>,
+) -> ControlFlow<B, (Block, usize)> {
+    // `full` moved into one arm, not borrowed: a `&mut F` call shim is not always inlined
+    // into the AVX2 build.
+    match weights {
+        None => unweighted_blocks(world, image, full),
+        Some(w) => weighted_blocks(world, image, w, scale, full),
+    }
+}
+
+/// The unweighted form of a pass's loop ([`weighted_blocks`] without weights): every point,
+/// in order, gathered into blocks of [`LANES`] (weights 1); `full(&block)` for each full block,
+/// in order, until it breaks. Then the last, partial block and the number of its filled lanes
+/// (0 to `LANES - 1`), which the pass adds itself.
+#[inline(always)]
+pub(crate) fn unweighted_blocks<B>(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    mut full: impl FnMut(&Block) -> ControlFlow<B>,
+) -> ControlFlow<B, (Block, usize)> {
+    let mut blk = Block::new();
+    let mut cw = world.chunks_exact(LANES);
+    let mut cm = image.chunks_exact(LANES);
+    for (xs, ms) in (&mut cw).zip(&mut cm) {
+        blk.x = [
+            core::array::from_fn(|l| xs[l].x),
+            core::array::from_fn(|l| xs[l].y),
+            core::array::from_fn(|l| xs[l].z),
+        ];
+        blk.m = [
+            core::array::from_fn(|l| ms[l].x),
+            core::array::from_fn(|l| ms[l].y),
+        ];
+        full(&blk)?;
+    }
+    let mut filled = 0;
+    for (l, (x, m)) in cw.remainder().iter().zip(cm.remainder()).enumerate() {
+        blk.set(l, x, m);
+        filled = l + 1;
+    }
+    ControlFlow::Continue((blk, filled))
+}
+
 /// Whether the vectorised passes run their AVX2 + FMA build: the processor has both
 /// (`is_x86_feature_detected!`, a cached atomic load after the first call). Always `false`
 /// off x86-64, and in the library's unit tests inside [`with_baseline`].

@@ -19,7 +19,7 @@ use super::reprojection::{self, ReprojOptions, ReprojOutcome};
 use super::select::{in_front, Minimum};
 use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
-use crate::numeric::lanes::{dispatched, lane_sum, weighted_blocks, Block, LANES};
+use crate::numeric::lanes::{blocks, dispatched, lane_sum, Block, LANES};
 use crate::numeric::rotation::to_unit_quaternion;
 
 /// A camera pose and how it was found.
@@ -373,42 +373,19 @@ fn reprojection_error_body(
         [t.x, t.y, t.z],
     );
     let mut acc = [0.0; LANES];
-    let mut blk = Block::new();
-    let mut filled = 0;
-    match weights {
-        None => {
-            let mut cw = world.chunks_exact(LANES);
-            let mut cm = image.chunks_exact(LANES);
-            for (xs, ms) in (&mut cw).zip(&mut cm) {
-                for l in 0..LANES {
-                    blk.set(l, &xs[l], &ms[l]);
-                }
-                for l in 0..LANES {
-                    residual_lane(&pose, &blk, l, &mut acc);
-                }
+    let ControlFlow::Continue((blk, filled)) = blocks::<Infallible>(
+        world,
+        image,
+        weights,
+        inv_weight,
+        #[inline(always)]
+        |full| {
+            for l in 0..LANES {
+                residual_lane(&pose, full, l, &mut acc);
             }
-            for (l, (x, m)) in cw.remainder().iter().zip(cm.remainder()).enumerate() {
-                blk.set(l, x, m);
-                filled = l + 1;
-            }
-        }
-        Some(weights) => {
-            let ControlFlow::Continue((last, n)) = weighted_blocks::<Infallible>(
-                world,
-                image,
-                weights,
-                inv_weight,
-                #[inline(always)]
-                |full| {
-                    for l in 0..LANES {
-                        residual_lane(&pose, full, l, &mut acc);
-                    }
-                    ControlFlow::Continue(())
-                },
-            );
-            (blk, filled) = (last, n);
-        }
-    }
+            ControlFlow::Continue(())
+        },
+    );
     for l in 0..filled {
         residual_lane(&pose, &blk, l, &mut acc);
     }

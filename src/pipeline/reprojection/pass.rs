@@ -13,7 +13,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use super::{Composed, Normal};
 use core::ops::ControlFlow;
 
-use crate::numeric::lanes::{dispatched, lane_sum, weighted_blocks, Block, LANES};
+use crate::numeric::lanes::{blocks, dispatched, lane_sum, Block, LANES};
 
 /// Number of sums of one pass: `E` (1), `H_rr` (6, upper triangle, row-major), `H_rt = sum K`
 /// (9, row-major, the third column negated), `H_tt` (`kx`, `ky`, `fx`, `fy`, `n22`: 5),
@@ -203,57 +203,26 @@ fn pass_body<const CHECK: bool, const HESS: bool, M: Metric>(
         flipped: [0; LANES],
     };
     let flipped = |acc: &LaneSums| CHECK && acc.flipped.iter().any(|&f| f != 0);
-    let mut blk = Block::new();
-    let mut filled = 0;
-    match weights {
-        None => {
-            let mut cw = world.chunks_exact(LANES);
-            let mut cm = image.chunks_exact(LANES);
-            for (xs, ms) in (&mut cw).zip(&mut cm) {
-                blk.x = [
-                    core::array::from_fn(|l| xs[l].x),
-                    core::array::from_fn(|l| xs[l].y),
-                    core::array::from_fn(|l| xs[l].z),
-                ];
-                blk.m = [
-                    core::array::from_fn(|l| ms[l].x),
-                    core::array::from_fn(|l| ms[l].y),
-                ];
-                for l in 0..LANES {
-                    lane::<CHECK, HESS, M>(k, metric, &blk, l, &mut acc);
-                }
-                if flipped(&acc) {
-                    return None;
-                }
+    let rest = blocks(
+        world,
+        image,
+        weights,
+        k.inv_weight,
+        #[inline(always)]
+        |full| {
+            for l in 0..LANES {
+                lane::<CHECK, HESS, M>(k, metric, full, l, &mut acc);
             }
-            for (l, (x, m)) in cw.remainder().iter().zip(cm.remainder()).enumerate() {
-                blk.set(l, x, m);
-                filled = l + 1;
+            if flipped(&acc) {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
             }
-        }
-        Some(weights) => {
-            match weighted_blocks(
-                world,
-                image,
-                weights,
-                k.inv_weight,
-                #[inline(always)]
-                |full| {
-                    for l in 0..LANES {
-                        lane::<CHECK, HESS, M>(k, metric, full, l, &mut acc);
-                    }
-                    if flipped(&acc) {
-                        ControlFlow::Break(())
-                    } else {
-                        ControlFlow::Continue(())
-                    }
-                },
-            ) {
-                ControlFlow::Break(()) => return None,
-                ControlFlow::Continue((last, n)) => (blk, filled) = (last, n),
-            }
-        }
-    }
+        },
+    );
+    let ControlFlow::Continue((blk, filled)) = rest else {
+        return None;
+    };
     for l in 0..filled.min(LANES) {
         lane::<CHECK, HESS, M>(k, metric, &blk, l, &mut acc);
     }
