@@ -92,13 +92,16 @@ impl Model {
         let Some(img) = self.images.get(&image_id) else {
             return (Vec::new(), Vec::new());
         };
-        img.points2d
-            .iter()
-            .filter_map(|(px, id)| {
-                let p = self.points.get(&(*id)?)?;
-                Some((p.xyz, *px))
-            })
-            .unzip()
+        // Sized once (every observation may have a 3D point), filled in order.
+        let n = img.points2d.len();
+        let (mut world, mut pixels) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for (px, id) in &img.points2d {
+            if let Some(p) = id.and_then(|id| self.points.get(&id)) {
+                world.push(p.xyz);
+                pixels.push(*px);
+            }
+        }
+        (world, pixels)
     }
 }
 

@@ -57,13 +57,15 @@ pub(crate) fn pixel_rmse(
     t: &Vector3<f64>,
 ) -> f64 {
     let (mut s, mut k) = (0.0, 0usize);
+    // The camera unpacked once (`Camera::project` does it per call).
+    let projector = cam.projector();
     for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
         if keep.is_some_and(|m| !m[i]) {
             continue;
         }
         let p = r * x.coords + t;
-        let q = cam.project(Point2::new(p.x / p.z, p.y / p.z));
-        s += (q - px).norm_squared();
+        let (qx, qy) = projector.project(p.x / p.z, p.y / p.z);
+        s += (Point2::new(qx, qy) - px).norm_squared();
         k += 1;
     }
     if k == 0 {
