@@ -111,8 +111,8 @@ pub(crate) fn rows<T>(
     }
     // C order (the common case): one copy of the data with numpy's `to_vec`, which skips the
     // dynamic borrow bookkeeping of `readonly` (about 900 instructions per array: for the two
-    // arrays, 40 % of the call's own work at N = 10). `to_vec` also accepts Fortran order, where the rows are
-    // not contiguous: hence the check.
+    // arrays, 40 % of the call's own work at N = 10). `to_vec` also accepts Fortran order,
+    // where the rows are not contiguous: hence the check.
     if arr.is_c_contiguous() {
         if let Ok(flat) = arr.to_vec() {
             return Ok(flat.chunks_exact(cols).map(f).collect());
