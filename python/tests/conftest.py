@@ -3,6 +3,8 @@
 import math
 import os
 import pathlib
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -79,3 +81,27 @@ def cli():
     if not os.path.isfile(path):
         raise FileNotFoundError(f"EOPNP_CLI={path} does not exist")
     return path
+
+
+def assert_releases_gil(call):
+    """Runs `call()` while another Python thread ticks every millisecond, and asserts that the
+    ticker ran throughout the call (it would not while the call held the GIL)."""
+    ticks = []
+    stop = threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.001)
+
+    th = threading.Thread(target=tick)
+    th.start()
+    try:
+        start = time.perf_counter()
+        call()
+        end = time.perf_counter()
+    finally:
+        stop.set()
+        th.join()
+    during = [t for t in ticks if start < t < end]
+    assert len(during) >= 0.2 * (end - start) / 0.001 or end - start < 0.02

@@ -3,14 +3,12 @@ threads and rayon's default pool), failures in place with the exception solve ra
 shapes and dtypes raised before solving, any layout read as float64, the GIL released."""
 
 import pickle
-import threading
-import time
 
 import numpy as np
 import pytest
 
 import eopnp
-from conftest import problem
+from conftest import assert_releases_gil, problem
 
 CAM = eopnp.Camera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.05], 640, 480)
 
@@ -194,23 +192,4 @@ def test_pickle(rng):
 
 def test_releases_gil(rng):
     world, image = stacked(rng, 4000, n=50)
-    ticks = []
-    stop = threading.Event()
-
-    def tick():
-        while not stop.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.001)
-
-    th = threading.Thread(target=tick)
-    th.start()
-    try:
-        start = time.perf_counter()
-        eopnp.solve_batch_arrays(world, image, threads=1)
-        end = time.perf_counter()
-    finally:
-        stop.set()
-        th.join()
-    during = [t for t in ticks if start < t < end]
-    # The other thread ran throughout the batch (it would not while the GIL was held).
-    assert len(during) >= 0.2 * (end - start) / 0.001 or end - start < 0.02
+    assert_releases_gil(lambda: eopnp.solve_batch_arrays(world, image, threads=1))
