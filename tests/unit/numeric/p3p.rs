@@ -38,15 +38,20 @@ fn random_problem(rng: &mut Rng) -> RandomProblem {
     (r, t, world, bearing)
 }
 
-#[test]
-fn recovers_random_poses() {
+/// Over 2,000 random noise-free problems: how many times `solve` returns the true pose to
+/// `tol` (rotation Frobenius difference plus relative translation difference, the best of its
+/// solutions), and the worst such error. Every returned pose is a rotation (orthonormal, det 1,
+/// to 1e-12) with a finite translation.
+fn recovery(
+    solve: fn(&[Point3<f64>; 3], &[Vector3<f64>; 3]) -> P3pSolutions,
+    tol: f64,
+) -> (usize, usize, f64) {
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
-    let mut worst = 0.0f64;
     let trials = 2000;
-    let mut found = 0;
+    let (mut found, mut worst) = (0, 0.0f64);
     for _ in 0..trials {
         let (r, t, world, bearing) = random_problem(&mut rng);
-        let sols = p3p(&world, &bearing);
+        let sols = solve(&world, &bearing);
         let err = sols
             .iter()
             .map(|s| (s.rotation - r).norm() + (s.translation - t).norm() / t.norm())
@@ -54,12 +59,17 @@ fn recovers_random_poses() {
         for s in &sols {
             assert!((s.rotation.transpose() * s.rotation - Matrix3::identity()).norm() < 1e-12);
             assert!((s.rotation.determinant() - 1.0).abs() < 1e-12);
+            assert!(s.translation.iter().all(|v| v.is_finite()));
         }
-        if err <= 1e-9 {
-            found += 1;
-        }
+        found += usize::from(err <= tol);
         worst = worst.max(err);
     }
+    (trials, found, worst)
+}
+
+#[test]
+fn recovers_random_poses() {
+    let (trials, found, worst) = recovery(p3p, 1e-9);
     // Noise-free data: the true pose is among the solutions to ~1e-9 (rotation Frobenius
     // difference plus relative translation difference; the conditioning of random
     // triplets spreads the rounding error of ~1e-15 over a few orders of magnitude).
@@ -75,23 +85,7 @@ fn recovers_random_poses() {
 /// 1e-8 instead of the polished solver's 1e-9 (measured: worst 9e-10 here), never lost.
 #[test]
 fn unpolished_recovers_random_poses() {
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
-    let trials = 2000;
-    let (mut found, mut worst) = (0, 0.0f64);
-    for _ in 0..trials {
-        let (r, t, world, bearing) = random_problem(&mut rng);
-        let sols = p3p_unpolished(&world, &bearing);
-        let err = sols
-            .iter()
-            .map(|s| (s.rotation - r).norm() + (s.translation - t).norm() / t.norm())
-            .fold(f64::INFINITY, f64::min);
-        for s in &sols {
-            assert!((s.rotation.transpose() * s.rotation - Matrix3::identity()).norm() < 1e-12);
-            assert!(s.translation.iter().all(|v| v.is_finite()));
-        }
-        found += usize::from(err <= 1e-8);
-        worst = worst.max(err);
-    }
+    let (trials, found, worst) = recovery(p3p_unpolished, 1e-8);
     eprintln!("p3p_unpolished: {found} of {trials} recovered to 1e-8, worst {worst:e}");
     assert!(found * 1000 >= trials * 995, "found {found} of {trials}");
     assert!(worst <= 1e-6, "worst {worst:e}");
