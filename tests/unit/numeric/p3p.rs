@@ -38,14 +38,14 @@ fn random_problem(rng: &mut Rng) -> RandomProblem {
     (r, t, world, bearing)
 }
 
+/// A P3P solver: three world points and their unit bearings to the candidate poses.
+type P3pSolver = fn(&[Point3<f64>; 3], &[Vector3<f64>; 3]) -> P3pSolutions;
+
 /// Over 2,000 random noise-free problems: how many times `solve` returns the true pose to
 /// `tol` (rotation Frobenius difference plus relative translation difference, the best of its
 /// solutions), and the worst such error. Every returned pose is a rotation (orthonormal, det 1,
 /// to 1e-12) with a finite translation.
-fn recovery(
-    solve: fn(&[Point3<f64>; 3], &[Vector3<f64>; 3]) -> P3pSolutions,
-    tol: f64,
-) -> (usize, usize, f64) {
+fn recovery(solve: P3pSolver, tol: f64) -> (usize, usize, f64) {
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     let trials = 2000;
     let (mut found, mut worst) = (0, 0.0f64);
