@@ -425,9 +425,14 @@ impl<'a> Search<'a> {
     fn refine(&self, r0: &Matrix3<f64>, source: CandidateSource) -> Option<Minimum> {
         let known: ArrayVec<Matrix3<f64>, MAX_CANDIDATES> =
             self.minima.iter().map(|m| m.r).collect();
-        let refined = newton::refine_so3_until(self.m45, self.scale, r0, &self.newton, &mut |r| {
-            !self.exhaustive && known.iter().any(|k| (k - r).norm() <= IN_BASIN)
-        });
+        let refined = newton::refine_so3_until(
+            &self.sys.m,
+            self.m45,
+            self.scale,
+            r0,
+            &self.newton,
+            &mut |r| !self.exhaustive && known.iter().any(|k| (k - r).norm() <= IN_BASIN),
+        );
         if refined.stopped_early
             || !refined.f.is_finite()
             || !refined.r.iter().all(|x| x.is_finite())

@@ -7,7 +7,7 @@
 //!
 //! | symbol | meaning |
 //! |---|---|
-//! | `f, g, H_C` | local model at `R_k` from `crate::kernels::so3_local_model` |
+//! | `f, g, H_C` | local model at `R_k` (the quantities of `crate::kernels::so3_local_model`, computed by [`local_model`]) |
 //! | `H` | `H_C - 4 f I`, the exact Hessian of `F_k(s) = f(R(s) R_k)` at 0 (T3) |
 //! | `shift` | `max(0, -lambda_min(H))`, smallest eigenvalue by 3 x 3 Jacobi (T4) |
 //! | `mu` | damping: `lambda = mu * scale + shift`, `scale = trace(M)` |
@@ -25,10 +25,10 @@
 //! form, 45 entries of M); the local-model kernel runs only for a step that may be accepted.
 //! Over half of the trial steps of the N = 4 search are rejected.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, SMatrix, Vector3};
 
-use crate::kernels::so3_local_model;
 use crate::numeric::bounds::{Bound, Budget};
+use crate::numeric::lanes::dispatched;
 use crate::numeric::mat3::{cholesky3, cholesky3_solve, min_eigenvalue_sym3};
 use crate::numeric::rotation::cgr_to_rotation;
 
@@ -111,18 +111,68 @@ pub(crate) fn cost_at(m45: &[f64; 45], r: &Matrix3<f64>) -> f64 {
     2.0 * f
 }
 
-/// The local model at `r`: `(f, g, H)` with `H = H_C - 4 f I` (the exact Hessian of f).
-fn local_model(m45: &[f64; 45], r: &Matrix3<f64>) -> (f64, Vector3<f64>, Matrix3<f64>) {
-    let k = so3_local_model(m45, &row_major(r));
-    let f = k[0];
-    let g = Vector3::new(k[1], k[2], k[3]);
-    #[rustfmt::skip]
-    let hc = Matrix3::new(
-        k[4], k[5], k[6],
-        k[5], k[7], k[8],
-        k[6], k[8], k[9],
-    );
-    (f, g, hc - Matrix3::identity() * (4.0 * f))
+dispatched! {
+    /// The local model at `r`: the gradient `g` and the exact Hessian `H = H_C - 4 f I` of
+    /// `f(R(s) R)` at `s = 0` (module docs), from the full symmetric `M` (its columns, which
+    /// are its rows).
+    ///
+    /// The generated kernel `so3_local_model` defines these quantities (and `verify/` checks
+    /// it); this is the same algebra factored for 4-wide vectors, tested against the kernel
+    /// (`tests/unit/pipeline/newton.rs`). With `X = [r, vec([e1]x R), vec([e2]x R),
+    /// vec([e3]x R)]` (9 x 4, row-major `vec`, `[e]x R` the derivative of the chart),
+    /// `U = M X` and `Q = X^T U` (4 x 4): `f = Q_00`, `g_k = 4 Q_k0` and
+    /// `H_kl = 8 Q_kl + 4 (W_kl + W_lk) - 8 f delta_kl`, `W_lk = R_l . Y_k` (`R_l` the rows of
+    /// `R`, `Y_k` those of `M r` as a 3 x 3 matrix; `k, l = 1..3`). Every row of `X` and `U`
+    /// is one AVX2 register (two SSE2 registers): 630 instructions per call against the
+    /// kernel's 1,773 straight-line scalar ones (callgrind, the AVX2 build).
+    fn local_model[][](m: &[[f64; 9]; 9], r: &Matrix3<f64>) -> (Vector3<f64>, Matrix3<f64>) = local_model_body;
+}
+
+/// `acc += s v`, lane by lane.
+#[inline(always)]
+fn axpy4(acc: &mut [f64; 4], s: f64, v: &[f64; 4]) {
+    *acc = [
+        acc[0] + s * v[0],
+        acc[1] + s * v[1],
+        acc[2] + s * v[2],
+        acc[3] + s * v[3],
+    ];
+}
+
+#[inline(always)]
+fn local_model_body(m: &[[f64; 9]; 9], r: &Matrix3<f64>) -> (Vector3<f64>, Matrix3<f64>) {
+    let mut x = [[0.0; 4]; 9];
+    for j in 0..3 {
+        x[j] = [r[(0, j)], 0.0, r[(2, j)], -r[(1, j)]];
+        x[3 + j] = [r[(1, j)], -r[(2, j)], 0.0, r[(0, j)]];
+        x[6 + j] = [r[(2, j)], r[(1, j)], -r[(0, j)], 0.0];
+    }
+    // X goes through memory as whole 4-wide rows. Without this the compiler splits the rows
+    // around their constant zeros into scalar operations (measured: 2 % slower solves at
+    // N = 10 and 100, and an instruction form that valgrind cannot decode).
+    let x = *core::hint::black_box(&x);
+    let mut u = [[0.0; 4]; 9];
+    for (up, mp) in u.iter_mut().zip(m) {
+        for (&mpq, xq) in mp.iter().zip(&x) {
+            axpy4(up, mpq, xq);
+        }
+    }
+    let mut q = [[0.0; 4]; 4];
+    for (xp, up) in x.iter().zip(&u) {
+        for (qa, &xpa) in q.iter_mut().zip(xp) {
+            axpy4(qa, xpa, up);
+        }
+    }
+    let w = |l: usize, k: usize| {
+        r[(l, 0)] * u[3 * k][0] + r[(l, 1)] * u[3 * k + 1][0] + r[(l, 2)] * u[3 * k + 2][0]
+    };
+    let f = q[0][0];
+    let g = Vector3::new(4.0 * q[1][0], 4.0 * q[2][0], 4.0 * q[3][0]);
+    let h = Matrix3::from_fn(|k, l| {
+        let diag = if k == l { 8.0 * f } else { 0.0 };
+        8.0 * q[k.min(l) + 1][k.max(l) + 1] + 4.0 * (w(l, k) + w(k, l)) - diag
+    });
+    (g, h)
 }
 
 /// S6: refine the rotation `r0` to a stationary point (normally a local minimum) of
@@ -139,13 +189,18 @@ pub(crate) fn refine_so3(
     r0: &Matrix3<f64>,
     opts: &NewtonOptions,
 ) -> Refined {
-    refine_so3_until(m45, scale, r0, opts, &mut |_| false)
+    let m = SMatrix::<f64, 9, 9>::from_fn(|i, j| {
+        let (a, b) = (i.min(j), i.max(j));
+        m45[9 * a - a * (a + 1) / 2 + b]
+    });
+    refine_so3_until(&m, m45, scale, r0, opts, &mut |_| false)
 }
 
-/// As [`refine_so3`], but stops early (with `stopped_early = true`) as soon as `stop` returns
-/// true for an accepted iterate. The solver uses it to abandon a trajectory once it has entered
+/// As [`refine_so3`] (`m` is M itself, `m45` its upper triangle), but stops early (with
+/// `stopped_early = true`) as soon as `stop` returns true for an accepted iterate. The solver uses it to abandon a trajectory once it has entered
 /// the neighbourhood of a local minimum that is already known.
 pub(crate) fn refine_so3_until(
+    m: &SMatrix<f64, 9, 9>,
     m45: &[f64; 45],
     scale: f64,
     r0: &Matrix3<f64>,
@@ -159,7 +214,9 @@ pub(crate) fn refine_so3_until(
     };
     let floor = opts.accept_floor * scale;
     let mut r = *r0;
-    let (_, mut g, mut h) = local_model(m45, &r);
+    // The columns of the symmetric M are its rows.
+    let rows = &m.data.0;
+    let (mut g, mut h) = local_model(rows, &r);
     // Acceptance compares values of one evaluation order: `cost_at` throughout.
     let mut f = cost_at(m45, &r);
     let mut mu = opts.mu0;
@@ -196,7 +253,7 @@ pub(crate) fn refine_so3_until(
             let rn = cgr_to_rotation(&d) * r;
             let fnew = cost_at(m45, &rn);
             if fnew <= f + floor {
-                let (_, gnew, hnew) = local_model(m45, &rn);
+                let (gnew, hnew) = local_model(rows, &rn);
                 if fnew < f || gnew.norm() < gnorm {
                     accepted = Some((d, rn, fnew, gnew, hnew));
                     break;
