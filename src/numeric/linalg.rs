@@ -9,23 +9,32 @@ use nalgebra::{SMatrix, SVector};
 /// Cholesky factor `L` (lower) of a symmetric positive definite matrix, or `None` (also for a
 /// NaN entry).
 pub(crate) fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
+    cholesky_or_pivot(a).ok()
+}
+
+/// [`cholesky`], or the index `j` of the first pivot that is not positive: the leading
+/// `j x j` block was factored, so it is positive definite (up to the factorisation's backward
+/// error), and by Cauchy's interlacing theorem `a` has at most `D - j` eigenvalues `<= 0`.
+pub(crate) fn cholesky_or_pivot<const D: usize>(
+    a: &SMatrix<f64, D, D>,
+) -> Result<SMatrix<f64, D, D>, usize> {
     let rows = cholesky_rows::<D>(|i, j| a[(i, j)])?;
-    Some(SMatrix::from_fn(|i, j| rows[i][j]))
+    Ok(SMatrix::from_fn(|i, j| rows[i][j]))
 }
 
 /// The rows of the Cholesky factor `L` of the symmetric matrix with lower-triangle entries
-/// `a(i, j)`, `j <= i`, or `None` if a pivot is not positive (also for a NaN entry). The
-/// textbook column-by-column order of operations; `L` is row-major, so that every inner
-/// product runs over two contiguous slices.
+/// `a(i, j)`, `j <= i`, or the index of the first pivot that is not positive (also for a NaN
+/// entry). The textbook column-by-column order of operations; `L` is row-major, so that every
+/// inner product runs over two contiguous slices.
 #[inline(always)]
-fn cholesky_rows<const D: usize>(a: impl Fn(usize, usize) -> f64) -> Option<[[f64; D]; D]> {
+fn cholesky_rows<const D: usize>(a: impl Fn(usize, usize) -> f64) -> Result<[[f64; D]; D], usize> {
     let mut rows = [[0.0f64; D]; D];
     for j in 0..D {
         let (head, below) = rows.split_at_mut(j + 1);
         let rj = &mut head[j];
         let d = dot_down(a(j, j), &rj[..j], &rj[..j]);
         if !(d > 0.0) {
-            return None;
+            return Err(j);
         }
         let djj = d.sqrt();
         rj[j] = djj;
@@ -34,7 +43,7 @@ fn cholesky_rows<const D: usize>(a: impl Fn(usize, usize) -> f64) -> Option<[[f6
             ri[j] = dot_down(a(i, j), &ri[..j], rj) / djj;
         }
     }
-    Some(rows)
+    Ok(rows)
 }
 
 /// `s - x_0 y_0 - x_1 y_1 - ...`, subtracted in order.
@@ -64,15 +73,19 @@ fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut [f64]) {
 /// vector only seeds a Newton refinement (S6), so a few steps suffice.
 const INVERSE_ITERATIONS: usize = 4;
 
+/// The shift of [`smallest_eigenvector`]'s factorisation, relative to `scale`.
+pub(crate) const EIGENVECTOR_SHIFT: f64 = 1e-12;
+
 /// Unit eigenvector of the smallest eigenvalue of the symmetric positive semidefinite `m`
 /// (approximately: [`INVERSE_ITERATIONS`] steps of inverse iteration on `m + delta I`,
-/// `delta = 1e-12 scale`), or `None` if the factorisation fails or the input is not finite.
+/// `delta = EIGENVECTOR_SHIFT scale`), or `None` if the factorisation fails or the input is
+/// not finite.
 pub(crate) fn smallest_eigenvector<const D: usize>(
     m: &SMatrix<f64, D, D>,
     scale: f64,
 ) -> Option<SVector<f64, D>> {
     let mut a = *m;
-    let delta = 1e-12 * scale;
+    let delta = EIGENVECTOR_SHIFT * scale;
     for i in 0..D {
         a[(i, i)] += delta;
     }
@@ -292,7 +305,7 @@ fn sturm_count_below(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
 // S9's loop, the same code measured 300 to 620 instructions per call from build to build).
 #[inline(never)]
 pub(crate) fn solve_damped6(h: &[[f64; 6]; 6], lam: f64, g: &[f64; 6]) -> Option<[f64; 6]> {
-    let l = cholesky_rows::<6>(|i, j| if i == j { h[i][i] + lam } else { h[i][j] })?;
+    let l = cholesky_rows::<6>(|i, j| if i == j { h[i][i] + lam } else { h[i][j] }).ok()?;
     let mut delta = g.map(|x| -x);
     cholesky_solve(&l, &mut delta);
     Some(delta)

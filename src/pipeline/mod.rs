@@ -134,19 +134,24 @@ pub(crate) fn run(
     // over O(3) and more than half of the points are in front of it, no other candidate can be
     // selected by S7, so the search stops here.
     if early_exit {
+        // The case-1 start comes with a bound below the spectrum of M (its factorisation),
+        // which certifies an exact fit without the dual certificate.
         let start = if nonplanar && !planar {
-            nullspace::first_start(&sys.m, probe, scale).map(|r| (r, CandidateSource::Case1))
+            nullspace::first_start(&sys.m, probe, scale)
+                .map(|(r, sigma)| (r, CandidateSource::Case1, Some(sigma)))
         } else if planar && !nonplanar {
             planar_sys.as_ref().and_then(|sp| {
                 planar::first_start(sp, world, weights, fr, scale)
-                    .map(|r| (r, CandidateSource::Planar1))
+                    .map(|r| (r, CandidateSource::Planar1, None))
             })
         } else {
             None
         };
-        if let Some((r0, source)) = start {
+        if let Some((r0, source, sigma)) = start {
             if let Some(mut m) = search.refine(&r0, source) {
-                if is_certified(&m.r) && select::in_front(world, weights, fr, &m.r, &m.t) {
+                let bound = sigma.is_some_and(|s| certificate::below_spectral_bound(m.f, s, scale));
+                if (bound || is_certified(&m.r)) && select::in_front(world, weights, fr, &m.r, &m.t)
+                {
                     m.cheirality = Some(true);
                     return out.finish(&m, opts.refinement, reproj);
                 }

@@ -5,6 +5,7 @@ fn random_orthogonal(next: &mut impl FnMut() -> f64) -> SMatrix<f64, 9, 9> {
     SMatrix::<f64, 9, 9>::from_fn(|_, _| next()).qr().q()
 }
 
+/// Also the bound the solver's probe takes from a failed Cholesky factorisation.
 #[test]
 fn ldlt_inertia_agrees_with_the_sturm_count_on_semidefinite_matrices() {
     // The solver's use: M positive semidefinite, tau = 1e-10 trace(M), k eigenvalues at or
@@ -36,6 +37,12 @@ fn ldlt_inertia_agrees_with_the_sturm_count_on_semidefinite_matrices() {
                 continue;
             }
             let exact = lam.iter().filter(|&&l| l < tau).count();
+            // The probe's shortcut: a factorisation of M - tau I that fails at pivot j bounds
+            // the count by 9 - j (interlacing); one that succeeds proves it 0.
+            match cholesky_or_pivot(&(m - SMatrix::<f64, 9, 9>::identity() * tau)) {
+                Ok(_) => assert_eq!(exact, 0, "k {k} trial {trial}"),
+                Err(j) => assert!(exact >= 1 && exact <= 9 - j, "k {k} trial {trial}: {j}"),
+            }
             assert_eq!(sturm_count_below(&m, tau), exact, "k {k} trial {trial}");
             if let Some(c) = inertia_ldlt(&m, tau) {
                 assert_eq!(c, exact, "ldlt: k {k} trial {trial}");
