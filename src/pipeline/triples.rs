@@ -1,5 +1,5 @@
 //! S4''' of docs/algorithm.md: the small-N starts of the default mode. At N = 4 and 5 the null
-//! space of `M` is (nearly) 4- or 3-dimensional and the algebraic search says little about
+//! space of `M` is (nearly) 4- or 2-dimensional and the algebraic search says little about
 //! where the minimum of the reprojection error lies; the poses that fit three of the points
 //! exactly (P3P, [`crate::numeric::p3p`]) usually do: with the noise of the other points
 //! small, one of the up to four poses of a triple lies in the basin of the maximum-likelihood
