@@ -21,9 +21,10 @@
 //! consecutive undamped Newton steps (H positive definite, mu <= mu0), with
 //! `|d_k| < |d_k-1| / 10`: saves the last, confirming iteration), or at `max_iterations`.
 //! Every loop is bounded: at most `max_iterations` outer iterations, each with at most
-//! `bounds::NEWTON_MAX_DAMPING_STEPS` trial steps. A trial step first evaluates only `f'` (the quadratic
-//! form, 45 entries of M); the local-model kernel runs only for a step that may be accepted.
-//! Over half of the trial steps of the N = 4 search are rejected.
+//! `bounds::NEWTON_MAX_DAMPING_STEPS` trial steps. A trial step first evaluates only `f'` (the
+//! quadratic form, 45 entries of M); the local model runs for a step within the rounding floor
+//! (to compare gradients) and at an accepted iterate the iteration goes on from, never at the
+//! one it stops at. Over half of the trial steps of the N = 4 search are rejected.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
@@ -216,7 +217,9 @@ pub(crate) fn refine_so3_until(
     let mut r = *r0;
     // The columns of the symmetric M are its rows.
     let rows = &m.data.0;
-    let (mut g, mut h) = local_model(rows, &r);
+    // The local model at `r`, when the acceptance test has already computed it; otherwise it
+    // is computed when the next iteration needs it (never at the iterate the loop stops at).
+    let mut model = None;
     // Acceptance compares values of one evaluation order: `cost_at` throughout.
     let mut f = cost_at(m45, &r);
     let mut mu = opts.mu0;
@@ -226,6 +229,7 @@ pub(crate) fn refine_so3_until(
     let mut d_prev = f64::INFINITY;
     for it in 0..opts.max_iterations {
         iterations = it + 1;
+        let (g, h) = model.take().unwrap_or_else(|| local_model(rows, &r));
         // shift = max(0, -lambda_min(H)); a successful Cholesky of H proves lambda_min > 0
         // (shift 0), so the eigenvalue is only computed for an indefinite H.
         let shift = if cholesky3(&h).is_some() {
@@ -252,23 +256,27 @@ pub(crate) fn refine_so3_until(
             let d = -cholesky3_solve(&l, &g);
             let rn = cgr_to_rotation(&d) * r;
             let fnew = cost_at(m45, &rn);
+            if fnew < f {
+                accepted = Some((d, rn, fnew, None));
+                break;
+            }
             if fnew <= f + floor {
+                // Within the rounding floor the step must reduce the gradient.
                 let (gnew, hnew) = local_model(rows, &rn);
-                if fnew < f || gnew.norm() < gnorm {
-                    accepted = Some((d, rn, fnew, gnew, hnew));
+                if gnew.norm() < gnorm {
+                    accepted = Some((d, rn, fnew, Some((gnew, hnew))));
                     break;
                 }
             }
             mu *= 10.0;
         }
-        let Some((d, rn, fnew, gnew, hnew)) = accepted else {
+        let Some((d, rn, fnew, at_rn)) = accepted else {
             hit_limit = false;
             break;
         };
         r = rn;
         f = fnew;
-        g = gnew;
-        h = hnew;
+        model = at_rn;
         // A Newton step: H positive definite and no damping escalation in this iteration.
         let newton_step = shift == 0.0 && mu <= opts.mu0;
         mu = (mu / 10.0).max(1e-15);

@@ -107,7 +107,14 @@ fn certified_minima_are_global_and_least_squares_adds_certificates() {
 fn spectral_bound_certifies_exact_fits() {
     use crate::pipeline::nullspace;
     let mut rng = Pcg64::seed_from_u64(7);
-    for (n, noise) in [(6, 0.0), (10, 0.0), (100, 0.0), (6, 2.0), (10, 2.0), (100, 0.5)] {
+    for (n, noise) in [
+        (6, 0.0),
+        (10, 0.0),
+        (100, 0.0),
+        (6, 2.0),
+        (10, 2.0),
+        (100, 0.5),
+    ] {
         for trial in 0..20 {
             let m = system_with_noise(&mut rng, n, -2.0, noise);
             let scale = m.trace();
