@@ -198,8 +198,9 @@ pub(crate) fn refine_so3(
 }
 
 /// As [`refine_so3`] (`m` is M itself, `m45` its upper triangle), but stops early (with
-/// `stopped_early = true`) as soon as `stop` returns true for an accepted iterate. The solver uses it to abandon a trajectory once it has entered
-/// the neighbourhood of a local minimum that is already known.
+/// `stopped_early = true`) as soon as `stop` returns true for an accepted iterate. The solver
+/// uses it to abandon a trajectory once it has entered the neighbourhood of a local minimum
+/// that is already known.
 pub(crate) fn refine_so3_until(
     m: &SMatrix<f64, 9, 9>,
     m45: &[f64; 45],
