@@ -1,8 +1,10 @@
 //! `Solver::solve_pixels_weighted`: all weights 1 is exactly `solve_pixels`, a weight of 0 is
 //! the same as dropping the point, and bad weights are reported with the correspondence's own
-//! index, also when a pixel before it cannot be undistorted.
+//! index, also when a pixel before it cannot be undistorted. A pixel that cannot be undistorted
+//! is the same as the correspondence removed, for the solve and for RANSAC's inlier mask.
 
 use eopnp::camera::Camera;
+use eopnp::ransac::Ransac;
 use eopnp::{InputKind, PnpError, Solver};
 use nalgebra::{Point2, Point3, Rotation3, Vector2, Vector3};
 
@@ -111,4 +113,48 @@ fn bad_weights_keep_their_index() {
         .solve_pixels_weighted(&world, &pixels, &cam, &weights)
         .unwrap();
     assert_eq!((sol.used, sol.skipped), (11, 1));
+}
+
+#[test]
+fn pixels_left_out_are_the_correspondences_removed() {
+    let cam = camera();
+    let (world, pixels) = problem(&cam);
+    let weights: Vec<f64> = (0..world.len()).map(|i| 0.5 + 0.1 * i as f64).collect();
+    let keep = |i: &usize| *i != 3 && *i != 8;
+    let pick = |v: &[Point2<f64>]| -> Vec<Point2<f64>> {
+        (0..v.len()).filter(keep).map(|i| v[i]).collect()
+    };
+    let (world_kept, pixels_kept): (Vec<Point3<f64>>, Vec<Point2<f64>>) = (
+        (0..12).filter(keep).map(|i| world[i]).collect(),
+        pick(&pixels),
+    );
+    let weights_kept: Vec<f64> = (0..12).filter(keep).map(|i| weights[i]).collect();
+    let mut with_bad = pixels.clone();
+    with_bad[3] = Point2::new(f64::NAN, 1.0);
+    with_bad[8] = Point2::new(2.0, f64::INFINITY);
+
+    let solver = Solver::default();
+    let sol = solver
+        .solve_pixels_weighted(&world, &with_bad, &cam, &weights)
+        .unwrap();
+    let reference = solver
+        .solve_pixels_weighted(&world_kept, &pixels_kept, &cam, &weights_kept)
+        .unwrap();
+    assert_eq!((sol.used, sol.skipped), (10, 2));
+    assert_eq!(sol.pose, reference.pose);
+    assert_eq!(sol.cost, reference.cost);
+
+    let ransac = Ransac::default().seed(7);
+    let est = ransac
+        .estimate_pixels(&solver, &cam, &world, &with_bad)
+        .unwrap();
+    let est_ref = ransac
+        .estimate_pixels(&solver, &cam, &world_kept, &pixels_kept)
+        .unwrap();
+    assert_eq!(est.solution.pose, est_ref.solution.pose);
+    assert_eq!(est.inliers.len(), 12);
+    assert!(!est.inliers[3] && !est.inliers[8]);
+    let mask: Vec<bool> = (0..12).filter(keep).map(|i| est.inliers[i]).collect();
+    assert_eq!(mask, est_ref.inliers);
+    assert_eq!(est.num_inliers, est_ref.num_inliers);
 }
