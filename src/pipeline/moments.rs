@@ -560,6 +560,21 @@ pub(crate) fn m_upper(m: &SMatrix<f64, 9, 9>) -> [f64; 45] {
     out
 }
 
+/// The symmetric 9 x 9 matrix of an upper triangle in [`m_upper`]'s order.
+#[cfg(any(test, eopnp_bench))]
+pub(crate) fn m_symmetric(m45: &[f64; 45]) -> SMatrix<f64, 9, 9> {
+    let mut m = SMatrix::<f64, 9, 9>::zeros();
+    let mut k = 0;
+    for i in 0..9 {
+        for j in i..9 {
+            m[(i, j)] = m45[k];
+            m[(j, i)] = m45[k];
+            k += 1;
+        }
+    }
+    m
+}
+
 #[cfg(test)]
 #[path = "../../tests/unit/pipeline/moments.rs"]
 pub(crate) mod tests;

@@ -190,10 +190,7 @@ pub(crate) fn refine_so3(
     r0: &Matrix3<f64>,
     opts: &NewtonOptions,
 ) -> Refined {
-    let m = SMatrix::<f64, 9, 9>::from_fn(|i, j| {
-        let (a, b) = (i.min(j), i.max(j));
-        m45[9 * a - a * (a + 1) / 2 + b]
-    });
+    let m = crate::pipeline::moments::m_symmetric(m45);
     refine_so3_until(&m, m45, scale, r0, opts, &mut |_| false)
 }
 

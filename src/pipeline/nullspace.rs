@@ -79,8 +79,11 @@ pub(crate) struct Probe {
     /// The Cholesky factor of `M - tau I` when it exists (no eigenvalue below `tau`); the
     /// case-1 inverse iteration reuses it.
     shifted: Option<SMatrix<f64, 9, 9>>,
-    /// `tau`.
-    tau: f64,
+}
+
+/// The probe's shift `tau = DEGENERATE_EIG trace(M) (1 + eps)`.
+fn probe_shift(scale: f64) -> f64 {
+    DEGENERATE_EIG * scale * (1.0 + f64::EPSILON)
 }
 
 /// A Cholesky factorisation of `M - tau I` proves that no eigenvalue is below `tau` (the
@@ -91,7 +94,7 @@ pub(crate) struct Probe {
 /// dimension 1, 4 and 2: the factorisation fails at pivot 8, 5 and 7). The inertia count runs
 /// otherwise.
 pub(crate) fn probe(m: &SMatrix<f64, 9, 9>, scale: f64) -> Probe {
-    let tau = DEGENERATE_EIG * scale * (1.0 + f64::EPSILON);
+    let tau = probe_shift(scale);
     let shifted = linalg::cholesky_or_pivot(&(m - SMatrix::<f64, 9, 9>::identity() * tau));
     let degenerate = match shifted {
         Ok(_) => false,
@@ -100,25 +103,23 @@ pub(crate) fn probe(m: &SMatrix<f64, 9, 9>, scale: f64) -> Probe {
     Probe {
         degenerate,
         shifted: shifted.ok(),
-        tau,
     }
 }
 
 /// The case-1 start of the certified fast path: the rotation nearest to the eigenvector of the
 /// smallest eigenvalue of `M`, by inverse iteration with the factor of `M - sigma I` (the
-/// probe's, `sigma = tau`, or else `sigma = -delta`, `delta = EIGENVECTOR_SHIFT trace(M)`),
-/// and `sigma`, below which the factorisation proves no eigenvalue of `M` lies.
+/// probe's, `sigma = tau`, or else [`linalg::cholesky_shifted_up`]'s), and `sigma`, below which
+/// the factorisation proves no eigenvalue of `M` lies.
 pub(crate) fn first_start(
     m: &SMatrix<f64, 9, 9>,
     probe: &Probe,
     scale: f64,
 ) -> Option<(Matrix3<f64>, f64)> {
     let (v1, sigma) = match &probe.shifted {
-        Some(l) => (linalg::inverse_iteration(m, l)?, probe.tau),
+        Some(l) => (linalg::inverse_iteration(m, l)?, probe_shift(scale)),
         None => {
-            let delta = linalg::EIGENVECTOR_SHIFT * scale;
-            let l = linalg::cholesky(&(m + SMatrix::<f64, 9, 9>::identity() * delta))?;
-            (linalg::inverse_iteration(m, &l)?, -delta)
+            let (l, sigma) = linalg::cholesky_shifted_up(m, scale)?;
+            (linalg::inverse_iteration(m, &l)?, sigma)
         }
     };
     Some((candidate_to_rotation(&v1.into())?, sigma))

@@ -1,7 +1,7 @@
 use super::*;
 use crate::numeric::rotation::{exp_so3, rotation_error_deg};
 use crate::pipeline::frame::working_frame;
-use crate::pipeline::moments::{m_upper, tests::accumulate};
+use crate::pipeline::moments::{m_symmetric, m_upper, tests::accumulate};
 use nalgebra::{Point2, Point3, SMatrix};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
@@ -39,19 +39,6 @@ fn problem(rng: &mut Pcg64, n: usize, noise: f64, r_true: &Matrix3<f64>) -> ([f6
         .system(false)
         .unwrap();
     (m_upper(&sys.m), sys.trace)
-}
-
-fn full(m45: &[f64; 45]) -> SMatrix<f64, 9, 9> {
-    let mut m = SMatrix::<f64, 9, 9>::zeros();
-    let mut k = 0;
-    for i in 0..9 {
-        for j in i..9 {
-            m[(i, j)] = m45[k];
-            m[(j, i)] = m45[k];
-            k += 1;
-        }
-    }
-    m
 }
 
 fn cost(m: &SMatrix<f64, 9, 9>, r: &Matrix3<f64>) -> f64 {
@@ -126,7 +113,7 @@ fn matches_python_reference() {
         })
         .collect();
     assert_eq!(expected.len(), 4);
-    let trace = full(&m45).trace();
+    let trace = m_symmetric(&m45).trace();
     let starts = [
         Vector3::new(1.0, 1.0, 1.0),
         Vector3::new(1.0, -1.0, -1.0),
@@ -188,7 +175,7 @@ fn converges_to_stationary_point_and_never_increases() {
         let n = 4 + trial % 8;
         let r_true = exp_so3(&(rand_unit(&mut rng) * rng.random_range(0.0..3.1)));
         let (m45, trace) = problem(&mut rng, n, 0.005, &r_true);
-        let m = full(&m45);
+        let m = m_symmetric(&m45);
         let r0 = exp_so3(&(rand_unit(&mut rng) * rng.random_range(0.0..3.1)));
         let opts = NewtonOptions::default();
         let out = refine_so3(&m45, trace, &r0, &opts);
@@ -314,7 +301,7 @@ fn local_model_matches_the_generated_kernel() {
             } else {
                 away * r_true
             };
-            let m = full(&m45);
+            let m = m_symmetric(&m45);
             let r9: [f64; 9] = std::array::from_fn(|a| r[(a / 3, a % 3)]);
             let k = crate::kernels::so3_local_model(&m45, &r9);
             let g_ref = Vector3::new(k[1], k[2], k[3]);
