@@ -748,7 +748,7 @@ pub(crate) fn undistort_all(
         pixels,
         #[inline(always)]
         |i, undistorted| {
-            let Ok((m, weight)) = undistorted else {
+            let Some((m, weight)) = undistorted else {
                 return Ok(());
             };
             let weight = user_weights.map_or(weight, |uw| uw[i] * weight);

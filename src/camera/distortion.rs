@@ -13,7 +13,9 @@
 //! quotient of the rational models and the tilt are written here.
 
 use crate::kernels as k;
-use crate::numeric::bounds::{Bound, Budget};
+use crate::numeric::bounds::{limit, Bound, Budget};
+use crate::numeric::lanes::{dispatched, LANES};
+use nalgebra::Point2;
 
 /// Newton stops when the step is below this (relative to `max(1, |x|)`).
 const STEP_TOL: f64 = 1e-14;
@@ -25,6 +27,11 @@ const RESIDUAL_TOL: f64 = 1e-13;
 pub(super) trait Lens: Copy {
     /// Whether the map is the identity (no Newton iteration needed to invert it).
     const IDENTITY: bool = false;
+    /// Whether the map is radial, `(u, v) -> (u, v) (1 + g(u^2 + v^2))`: then it maps each ray
+    /// from the centre onto itself, `apply(r, 0)` is `((r (1 + g), 0), [d/dr, 0, 0, 1 + g],
+    /// 1 + g)`, and Newton's iteration from the distorted point stays on its ray
+    /// ([`radial_undistortion`]).
+    const RADIAL: bool = false;
 
     /// `(u, v) + D(u, v)` (then the tilt, if any), its Jacobian `[[a, b], [c, d]]` row-major,
     /// and the radial factor `1 + g(r2)` (positive where the point is not mirrored through the
@@ -47,12 +54,14 @@ impl Lens for NoDistortion {
 
 /// A polynomial model: its coefficients, the input of its generated kernel.
 macro_rules! polynomial_lens {
-    ($(#[$doc:meta])* $name:ident, $n:literal, $kernel:path) => {
+    ($(#[$doc:meta])* $name:ident, $n:literal, $kernel:path, radial: $radial:literal) => {
         $(#[$doc])*
         #[derive(Clone, Copy, Debug)]
         pub(super) struct $name(pub [f64; $n]);
 
         impl Lens for $name {
+            const RADIAL: bool = $radial;
+
             #[inline]
             fn apply(&self, u: f64, v: f64) -> ([f64; 2], [f64; 4], f64) {
                 let [xd, yd, j00, j01, j10, j11, radial] = $kernel(&[u, v], &self.0);
@@ -66,25 +75,29 @@ polynomial_lens!(
     /// `SIMPLE_RADIAL`, `SIMPLE_RADIAL_FISHEYE`: `[k]`.
     SimpleRadial,
     1,
-    k::distortion_simple_radial
+    k::distortion_simple_radial,
+    radial: true
 );
 polynomial_lens!(
     /// `RADIAL`, `RADIAL_FISHEYE`: `[k1, k2]`.
     Radial,
     2,
-    k::distortion_radial
+    k::distortion_radial,
+    radial: true
 );
 polynomial_lens!(
     /// `OPENCV`: `[k1, k2, p1, p2]`.
     OpenCv,
     4,
-    k::distortion_opencv
+    k::distortion_opencv,
+    radial: false
 );
 polynomial_lens!(
     /// `OPENCV_FISHEYE` (on the equidistant point): `[k1, k2, k3, k4]`.
     Fisheye,
     4,
-    k::distortion_fisheye
+    k::distortion_fisheye,
+    radial: true
 );
 
 /// The rational model from its generated pieces `[n, d, n_u, n_v, d_u, d_v, t, J_t]`:
@@ -272,4 +285,136 @@ pub(super) fn iterative_undistortion<L: Lens>(d: &L, x0: (f64, f64)) -> Option<(
             return ok.then_some(((u, v), det));
         }
     }
+}
+
+/// The outcome of [`radial_undistortion`] for one point.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct RadialLane {
+    /// The undistorted point.
+    pub u: f64,
+    pub v: f64,
+    /// `det J` of the distortion at it.
+    pub det: f64,
+    /// Converged; if not, [`iterative_undistortion`] decides (it fails, or succeeds where the
+    /// lanes gave up early: a negligible step).
+    pub ok: bool,
+}
+
+/// [`iterative_undistortion`] of a radial map (`L::RADIAL`) for up to [`GROUP`] points `x0`
+/// at once (the first `n`): Newton's iteration from `x0` stays on the ray of `x0`, so with
+/// `(u, v) = r x0 / |x0|` it is Newton's iteration on the undistorted radius `r`, `r -> r -
+/// (r (1 + g) - |x0|) / (d/dr)` (the generated kernel evaluated at `(r, 0)`), with the same trust region (`|step| <= max(0.1 r, 0.1)`), the same
+/// convergence check at every iterate (`|r (1 + g) - |x0||` is the length of the residual
+/// `(u, v) + D(u, v) - x0`, and `det J = (d/dr) (1 + g)` at the point), and at most as many
+/// steps: the same iterates in exact arithmetic. The points run in lockstep, each frozen
+/// when its check passes; a point whose iteration would stop otherwise (a failed step, a
+/// negligible step without convergence, the iteration bound) is left to
+/// [`iterative_undistortion`] (`ok = false`), which fails where this would.
+#[inline(always)]
+pub(super) fn radial_undistortion<L: Lens>(
+    d: &L,
+    x0: &[[f64; 2]; GROUP],
+    n: usize,
+) -> [RadialLane; GROUP] {
+    const RADIUS: f64 = 0.1; // iterative_undistortion's trust region
+    let mut rd = [0.0; GROUP];
+    let mut scale2 = [0.0; GROUP];
+    for l in 0..GROUP {
+        let r2 = x0[l][0] * x0[l][0] + x0[l][1] * x0[l][1];
+        rd[l] = r2.sqrt();
+        scale2[l] = if r2 > 1.0 { r2 } else { 1.0 };
+    }
+    let mut r = rd;
+    // Per lane: still iterating; converged (with det J there). Bitwise `&`, not `&&`, and
+    // selects instead of branches, so that the lanes run as one packed iteration.
+    let mut live = [false; GROUP];
+    let mut ok = [false; GROUP];
+    let mut det_out = [0.0; GROUP];
+    for a in live.iter_mut().take(n) {
+        *a = true;
+    }
+    let mut steps = limit(Bound::Undistort) + 1;
+    while steps > 0 && live.iter().any(|&a| a) {
+        steps -= 1;
+        let last = steps == 0;
+        for l in 0..GROUP {
+            let ([xr, _], j, radial) = d.apply(r[l], 0.0);
+            let f = xr - rd[l];
+            let det = j[0] * j[3] - j[1] * j[2];
+            let conv =
+                (f * f <= RESIDUAL_TOL * RESIDUAL_TOL * scale2[l]) & (det > 0.0) & (radial > 0.0);
+            let finite = (det.abs() < f64::INFINITY) & (f.abs() < f64::INFINITY);
+            let can_step = !last & finite & (det != 0.0);
+            // The step along the ray, clamped to the trust region.
+            let st = f / j[0];
+            // radius max(0.1 |r|, 0.1) (iterative_undistortion compares squares).
+            let x = RADIUS * r[l].abs();
+            let c = if x > RADIUS { x } else { RADIUS };
+            let clamped = if st > 0.0 { c } else { -c };
+            let st = if st.abs() > c { clamped } else { st };
+            let r_new = r[l] - st;
+            let x = r_new * r_new;
+            let negligible = st * st <= STEP_TOL * STEP_TOL * (if x > 1.0 { x } else { 1.0 });
+            let done = live[l] & conv;
+            ok[l] |= done;
+            det_out[l] = if done { det } else { det_out[l] };
+            let stepping = live[l] & !conv & can_step & !negligible;
+            r[l] = if stepping { r_new } else { r[l] };
+            live[l] = stepping;
+        }
+    }
+    let mut out = [RadialLane::default(); GROUP];
+    for l in 0..GROUP {
+        // (u, v) = r x0 / |x0| (x0 itself at the centre, where r = 0).
+        let s = if rd[l] > 0.0 { r[l] / rd[l] } else { 1.0 };
+        let (u, v) = (x0[l][0] * s, x0[l][1] * s);
+        out[l] = RadialLane {
+            u,
+            v,
+            det: det_out[l],
+            ok: ok[l] && u.is_finite() && v.is_finite(),
+        };
+    }
+    out
+}
+
+/// Points iterated in lockstep by [`radial_undistortion`]: several packed registers, so that
+/// the serial Newton iterations (a division each) of different points overlap. Measured on
+/// the bundled model (`solve_pixels` per image, best of 3 interleaved runs): sixteen points
+/// 2-5 % faster than eight, eight 1-6 % faster than four.
+pub(super) const GROUP: usize = 4 * LANES;
+
+/// Points per call of [`radial_chunk`].
+pub(super) const RADIAL_CHUNK: usize = 64;
+
+dispatched! {
+    /// [`radial_undistortion`] of the pixels `px` (at most [`RADIAL_CHUNK`]) of a camera with
+    /// focal lengths `focal` and principal point `centre`, [`GROUP`] at a time; entry `i` of
+    /// the result is pixel `i`'s. Built for the processor
+    /// ([`crate::numeric::lanes::dispatched`]).
+    pub(super) fn radial_chunk[L: Lens][L](
+        lens: &L,
+        focal: (f64, f64),
+        centre: (f64, f64),
+        px: &[Point2<f64>],
+    ) -> [RadialLane; RADIAL_CHUNK] = radial_chunk_body;
+}
+
+#[inline(always)]
+fn radial_chunk_body<L: Lens>(
+    lens: &L,
+    focal: (f64, f64),
+    centre: (f64, f64),
+    px: &[Point2<f64>],
+) -> [RadialLane; RADIAL_CHUNK] {
+    let mut out = [RadialLane::default(); RADIAL_CHUNK];
+    let px = &px[..px.len().min(RADIAL_CHUNK)];
+    for (block, res) in px.chunks(GROUP).zip(out.chunks_exact_mut(GROUP)) {
+        let mut x0 = [[0.0; 2]; GROUP];
+        for (x, p) in x0.iter_mut().zip(block) {
+            *x = [(p.x - centre.0) / focal.0, (p.y - centre.1) / focal.1];
+        }
+        res.copy_from_slice(&radial_undistortion(lens, &x0, block.len()));
+    }
+    out
 }

@@ -53,7 +53,9 @@
 //! thin-prism terms to `D` and then applies OpenCV's projective tilt. [`Camera::undistort`]
 //! inverts the distortion (and the tilt) by Newton's method with an analytic Jacobian, a trust
 //! region (as COLMAP) and at most [`UNDISTORT_MAX_ITERATIONS`] iterations; a pixel whose
-//! undistortion does not converge is an error, never a silently wrong point.
+//! undistortion does not converge is an error, never a silently wrong point. For the radial
+//! models the pixel path of the solver runs the same iteration along each pixel's ray, sixteen
+//! pixels at a time (`distortion::radial_undistortion`, docs/algorithm.md S9).
 
 use nalgebra::Point2;
 
@@ -62,8 +64,8 @@ mod model;
 mod opencv;
 
 use distortion::{
-    iterative_undistortion, tilt_matrix, with_lens, Distortion, Fisheye, FullOpenCv, Lens,
-    NoDistortion, OpenCv, Radial, SimpleRadial, ThinPrismTilted,
+    iterative_undistortion, radial_chunk, tilt_matrix, with_lens, Distortion, Fisheye, FullOpenCv,
+    Lens, NoDistortion, OpenCv, Radial, SimpleRadial, ThinPrismTilted, RADIAL_CHUNK,
 };
 pub use model::{CameraError, CameraModel, SUPPORTED_MODELS};
 
@@ -500,18 +502,47 @@ impl Projector {
     }
 
     /// Every pixel through [`Projector::undistort_weighted`] with the model dispatched once:
-    /// `each(i, result)` for pixel `i`, in order; stops at the first error `each` returns.
+    /// `each(i, Some((point, weight)))` for pixel `i`, in order, or `each(i, None)` if it has
+    /// no undistorted point (any error of `undistort_weighted`); stops at the first error
+    /// `each` returns.
     pub(crate) fn try_undistort_weighted_each<E>(
         &self,
         pixels: &[Point2<f64>],
-        mut each: impl FnMut(usize, Result<(Point2<f64>, f64), CameraError>) -> Result<(), E>,
+        mut each: impl FnMut(usize, Option<(Point2<f64>, f64)>) -> Result<(), E>,
     ) -> Result<(), E> {
-        with_lens!(self.distortion, l => {
+        with_lens!(self.distortion, l => self.undistort_weighted_each_with(l, pixels, &mut each))
+    }
+
+    /// [`Projector::try_undistort_weighted_each`] for one lens. A radial lens
+    /// ([`Lens::RADIAL`]) undistorts its pixels sixteen at a time along their rays
+    /// (`radial_chunk`: the same iterates in exact arithmetic), and a pixel whose iteration
+    /// it leaves undecided goes through [`Projector::undistort_weighted_with`].
+    #[inline(always)]
+    fn undistort_weighted_each_with<L: Lens, E>(
+        &self,
+        lens: L,
+        pixels: &[Point2<f64>],
+        each: &mut impl FnMut(usize, Option<(Point2<f64>, f64)>) -> Result<(), E>,
+    ) -> Result<(), E> {
+        if !L::RADIAL {
             for (i, px) in pixels.iter().enumerate() {
-                each(i, self.undistort_weighted_with(l, *px))?;
+                each(i, self.undistort_weighted_with(lens, *px).ok())?;
             }
-            Ok(())
-        })
+            return Ok(());
+        }
+        for (c, chunk) in pixels.chunks(RADIAL_CHUNK).enumerate() {
+            let lanes = radial_chunk(&lens, self.focal, self.centre, chunk);
+            for (j, (px, lane)) in chunk.iter().zip(&lanes).enumerate() {
+                let result = if lane.ok {
+                    self.finish_undistortion(*px, (lane.u, lane.v), lane.det)
+                        .and_then(|(n, det)| weight_of(*px, n, det))
+                } else {
+                    self.undistort_weighted_with(lens, *px)
+                };
+                each(c * RADIAL_CHUNK + j, result.ok())?;
+            }
+        }
+        Ok(())
     }
 
     /// [`Projector::undistort_weighted`] for one lens: the weight `|det J| / (fx fy)` of
@@ -526,14 +557,7 @@ impl Projector {
         pixel: Point2<f64>,
     ) -> Result<(Point2<f64>, f64), CameraError> {
         let (n, det) = self.undistort_with(lens, pixel)?;
-        let w = det.abs();
-        if w.is_finite() {
-            Ok((n, w))
-        } else {
-            Err(CameraError::OutOfRange {
-                pixel: (pixel.x, pixel.y),
-            })
-        }
+        weight_of(pixel, n, det)
     }
 
     /// [`Projector::undistort`] for one lens; the second value is `det J / (fx fy)`, `J` the
@@ -550,13 +574,25 @@ impl Projector {
         let (fx, fy) = self.focal;
         let (cx, cy) = self.centre;
         let x0 = ((pixel.x - cx) / fx, (pixel.y - cy) / fy);
-        let ((u, v), det) = if L::IDENTITY {
+        let (uv, det) = if L::IDENTITY {
             (x0, 1.0)
         } else {
             iterative_undistortion(&lens, x0).ok_or(CameraError::NoConvergence {
                 pixel: (pixel.x, pixel.y),
             })?
         };
+        self.finish_undistortion(pixel, uv, det)
+    }
+
+    /// The end of [`Projector::undistort_with`] from the undistorted point `(u, v)` of the
+    /// lens (the equidistant point for the fisheye models) and `det J` of its distortion.
+    #[inline(always)]
+    fn finish_undistortion(
+        &self,
+        pixel: Point2<f64>,
+        (u, v): (f64, f64),
+        det: f64,
+    ) -> Result<(Point2<f64>, f64), CameraError> {
         if !(u.is_finite() && v.is_finite()) {
             return Err(CameraError::OutOfRange {
                 pixel: (pixel.x, pixel.y),
@@ -580,6 +616,24 @@ impl Projector {
         } else {
             Ok((Point2::new(u, v), det))
         }
+    }
+}
+
+/// The result of [`Camera::undistort_weighted`] from that of [`Camera::undistort`]: the
+/// weight `|det J|`, or [`CameraError::OutOfRange`] if it is not finite.
+#[inline(always)]
+fn weight_of(
+    pixel: Point2<f64>,
+    n: Point2<f64>,
+    det: f64,
+) -> Result<(Point2<f64>, f64), CameraError> {
+    let w = det.abs();
+    if w.is_finite() {
+        Ok((n, w))
+    } else {
+        Err(CameraError::OutOfRange {
+            pixel: (pixel.x, pixel.y),
+        })
     }
 }
 

@@ -293,3 +293,119 @@ fn non_invertible_region_is_an_error() {
     // Inside the fold: fine.
     assert!(cam.undistort(Point2::new(1500.0, 1000.0)).is_ok());
 }
+
+/// The radial models' lockstep undistortion (`radial_chunk`, used by `solve_pixels` through
+/// `try_undistort_weighted_each`) against the one-pixel iteration (`Camera::undistort_weighted`):
+/// every pixel gets the same outcome (no point, or the same point and weight to rounding),
+/// over strong distortion with folds (pixels beyond them have no preimage), the image centre,
+/// far-out and non-finite pixels, and with the iteration bound lowered so that the lanes give
+/// up and the one-pixel iteration decides.
+#[test]
+fn radial_lanes_match_the_one_pixel_iteration() {
+    use crate::numeric::bounds::{hook, Bound};
+    use rand::{Rng, SeedableRng};
+    let (w, h) = (2000, 1600);
+    let models: Vec<(&str, Vec<f64>)> = vec![
+        ("SIMPLE_RADIAL", vec![1000.0, 1000.0, 800.0, 0.0577095]),
+        ("SIMPLE_RADIAL", vec![1000.0, 1000.0, 800.0, -0.3]),
+        ("SIMPLE_RADIAL", vec![1000.0, 1000.0, 800.0, 0.3]),
+        ("RADIAL", vec![1000.0, 1000.0, 800.0, -0.3, 0.1]),
+        ("RADIAL", vec![1000.0, 1000.0, 800.0, -0.5, 0.05]),
+        ("RADIAL", vec![1000.0, 1000.0, 800.0, 0.1, -0.05]),
+        ("SIMPLE_RADIAL_FISHEYE", vec![500.0, 1000.0, 800.0, 0.03]),
+        ("RADIAL_FISHEYE", vec![500.0, 1000.0, 800.0, -0.2, 0.01]),
+        (
+            "OPENCV_FISHEYE",
+            vec![500.0, 502.0, 1000.0, 800.0, 0.05, -0.01, 0.002, -0.0005],
+        ),
+        (
+            "OPENCV_FISHEYE",
+            vec![400.0, 400.0, 1000.0, 800.0, -0.3, 0.2, -0.1, 0.02],
+        ),
+    ];
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(0x5AD1A1);
+    let (mut agreed_ok, mut agreed_err) = (0, 0);
+    for (name, params) in models {
+        let cam = Camera::from_colmap(name, w, h, params.clone()).unwrap();
+        let proj = cam.projector();
+        let mut pixels: Vec<Point2<f64>> = (0..3000)
+            .map(|k| {
+                // Most in the image, one in five out to three image half-widths from the
+                // centre (past every fold here).
+                let reach = if k % 5 == 0 { 3000.0 } else { 1000.0 };
+                Point2::new(
+                    1000.0 + rng.random_range(-reach..reach),
+                    800.0 + rng.random_range(-reach..reach),
+                )
+            })
+            .collect();
+        pixels.extend([
+            Point2::new(1000.0, 800.0),
+            Point2::new(1000.0 + 1e-300, 800.0),
+            Point2::new(1e200, 800.0),
+            Point2::new(f64::NAN, 800.0),
+            Point2::new(f64::INFINITY, 800.0),
+        ]);
+        for limit in [None, Some(1), Some(2)] {
+            let run = || {
+                let mut got = Vec::new();
+                proj.try_undistort_weighted_each(&pixels, |i, r| {
+                    got.push((i, r));
+                    Ok::<(), ()>(())
+                })
+                .unwrap();
+                let want: Vec<_> = pixels
+                    .iter()
+                    .map(|p| cam.undistort_weighted(*p).ok())
+                    .collect();
+                (got, want)
+            };
+            let (got, want) = match limit {
+                None => run(),
+                Some(l) => hook::with_limit(Bound::Undistort, l, run).0,
+            };
+            assert_eq!(got.len(), pixels.len());
+            for ((i, g), wnt) in got.into_iter().zip(want) {
+                let ctx = format!("{name} {params:?} limit {limit:?} pixel {:?}", pixels[i]);
+                match (g, wnt) {
+                    (Some((a, wa)), Some((b, wb))) => {
+                        // Rounding, amplified (fisheye models) by r = tan(theta) near 90
+                        // degrees off axis: dr / dtheta = 1 + r^2.
+                        let scale = 1.0 + b.coords.norm();
+                        assert!((a - b).norm() <= 1e-12 * scale * scale, "{ctx}: {a} vs {b}");
+                        assert!(
+                            (wa - wb).abs() <= 1e-12 * scale * wb.abs(),
+                            "{ctx}: weight {wa} vs {wb}"
+                        );
+                        agreed_ok += 1;
+                    }
+                    (None, None) => agreed_err += 1,
+                    (a, b) => panic!("{ctx}: lanes {a:?}, one pixel {b:?}"),
+                }
+            }
+        }
+    }
+    // Both outcomes are exercised in quantity (not a test that cannot fail).
+    assert!(
+        agreed_ok > 15_000 && agreed_err > 5_000,
+        "{agreed_ok} / {agreed_err}"
+    );
+    // And the lanes decide in-image pixels themselves (the one-pixel iteration is only their
+    // fallback): a chunk of them all converges.
+    let lens = distortion::SimpleRadial([0.0577095]);
+    let px: Vec<Point2<f64>> = (0..distortion::RADIAL_CHUNK)
+        .map(|k| Point2::new(50.0 + 30.0 * k as f64, 1500.0 - 20.0 * k as f64))
+        .collect();
+    let lanes = distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), &px);
+    assert!(lanes.iter().all(|l| l.ok));
+    // The baseline and AVX2 builds agree to the bit.
+    let base = crate::numeric::lanes::with_baseline(|| {
+        distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), &px)
+    });
+    for (a, b) in lanes.iter().zip(&base) {
+        assert_eq!(
+            (a.u.to_bits(), a.v.to_bits(), a.det.to_bits()),
+            (b.u.to_bits(), b.v.to_bits(), b.det.to_bits())
+        );
+    }
+}
