@@ -49,7 +49,8 @@
 //! For a perspective model, a normalised point `(u, v)` is distorted to
 //! `(u, v) + D(u, v)` and then mapped to pixels by the focal lengths and principal point.
 //! Fisheye models first map `(u, v)` to `theta / r (u, v)` (`r = |(u, v)|`, `theta = atan r`,
-//! the equidistant projection) and distort that. `OPENCV_THIN_PRISM_TILTED` adds the
+//! the equidistant projection; `atan` is `numeric::atan::atan_nonneg`, within a few ulp of
+//! `f64::atan` and free of calls, so that the per-point loops stay packed) and distort that. `OPENCV_THIN_PRISM_TILTED` adds the
 //! thin-prism terms to `D` and then applies OpenCV's projective tilt. [`Camera::undistort`]
 //! inverts the distortion (and the tilt) by Newton's method with an analytic Jacobian, a trust
 //! region (as COLMAP) and at most [`UNDISTORT_MAX_ITERATIONS`] iterations; a pixel whose
@@ -58,6 +59,8 @@
 //! pixels at a time (`distortion::radial_undistortion`, docs/algorithm.md S9).
 
 use nalgebra::Point2;
+
+use crate::numeric::atan::atan_nonneg;
 
 mod distortion;
 mod model;
@@ -377,7 +380,7 @@ fn project_one<L: Lens, const FISHEYE: bool>(
     if FISHEYE {
         let r = (x * x + y * y).sqrt();
         if r > f64::EPSILON {
-            let s = r.atan() / r;
+            let s = atan_nonneg(r) / r;
             u *= s;
             v *= s;
         }
@@ -415,7 +418,7 @@ impl<L: Lens, const FISHEYE: bool> Project for LensProjection<L, FISHEYE> {
             let r2 = x * x + y * y;
             let r = r2.sqrt();
             if r > 1e-8 {
-                let at = r.atan();
+                let at = atan_nonneg(r);
                 let s = at / r;
                 // ds/dr = (r / (1 + r^2) - atan r) / r^2; d(s x)/dx = s + x^2 s'(r) / r.
                 let q = (r / (1.0 + r2) - at) / (r2 * r);

@@ -1,8 +1,9 @@
 //! Numerical building blocks, each with hard iteration bounds and no allocation: the bounds
 //! themselves, small dense linear algebra (3 x 3 in [`mat3`], 9 x 9 in [`linalg`]), real
-//! polynomial roots, rotations, the P3P minimal solver, and the lane layout of the vectorised
-//! O(N) passes. Nothing here knows about the PnP problem's stages.
+//! polynomial roots, rotations, the P3P minimal solver, an arctangent that packs ([`atan`]),
+//! and the lane layout of the vectorised O(N) passes. Nothing here knows about the PnP problem's stages.
 
+pub(crate) mod atan;
 pub(crate) mod bounds;
 pub(crate) mod lanes;
 pub(crate) mod linalg;
