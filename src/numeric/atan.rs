@@ -7,8 +7,9 @@
 //! `tan(pi/8) = 0.414`; there the Taylor series `sum (-1)^n y^(2n+1) / (2n + 1)` (21 terms:
 //! the first omitted one is below `2^-56` of the sum) by Horner's rule. Every path is computed
 //! and the result selected. Accuracy: within 2.3 ulp of the exact value over 60,000 arguments
-//! from `1e-8` to `1e8` (checked against 120-bit arithmetic), and within 4 ulp of `f64::atan`
-//! everywhere (`tests/unit/numeric/atan.rs`).
+//! from `1e-8` to `1e8` (these operations transcribed to numpy, against mpmath at 120 bits),
+//! and within 4 ulp of `f64::atan` over 200,000 arguments from `1e-300` to `1e300` and the
+//! break points (`tests/unit/numeric/atan.rs`).
 
 /// `pi / 2` as the sum of two doubles (the nearest double, and the rest).
 const PIO2_HI: f64 = core::f64::consts::FRAC_PI_2;
