@@ -15,6 +15,7 @@
 use crate::kernels as k;
 use crate::numeric::bounds::{limit, Bound, Budget};
 use crate::numeric::lanes::{dispatched, LANES};
+use crate::numeric::trig::tan_quadrant;
 use nalgebra::Point2;
 
 /// Newton stops when the step is below this (relative to `max(1, |x|)`).
@@ -290,10 +291,12 @@ pub(super) fn iterative_undistortion<L: Lens>(d: &L, x0: (f64, f64)) -> Option<(
 /// The outcome of [`radial_undistortion`] for one point.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct RadialLane {
-    /// The undistorted point.
+    /// The undistorted point (for the fisheye models, through the inverse equidistant map:
+    /// the normalised point).
     pub u: f64,
     pub v: f64,
-    /// `det J` of the distortion at it.
+    /// `det J` of the distortion at it (for the fisheye models, times that of the equidistant
+    /// map: as [`super::Projector::undistort`]'s).
     pub det: f64,
     /// Converged; if not, [`iterative_undistortion`] decides (it fails, or succeeds where the
     /// lanes gave up early: a negligible step).
@@ -315,6 +318,7 @@ pub(super) fn radial_undistortion<L: Lens>(
     d: &L,
     x0: &[[f64; 2]; GROUP],
     n: usize,
+    fisheye: bool,
 ) -> [RadialLane; GROUP] {
     const RADIUS: f64 = 0.1; // iterative_undistortion's trust region
     let mut rd = [0.0; GROUP];
@@ -367,13 +371,27 @@ pub(super) fn radial_undistortion<L: Lens>(
     for l in 0..GROUP {
         // (u, v) = r x0 / |x0| (x0 itself at the centre, where r = 0).
         let s = if rd[l] > 0.0 { r[l] / rd[l] } else { 1.0 };
-        let (u, v) = (x0[l][0] * s, x0[l][1] * s);
-        out[l] = RadialLane {
-            u,
-            v,
-            det: det_out[l],
-            ok: ok[l] && u.is_finite() && v.is_finite(),
-        };
+        let (mut u, mut v, mut det) = (x0[l][0] * s, x0[l][1] * s, det_out[l]);
+        let mut ok = ok[l] & (u.abs() < f64::INFINITY) & (v.abs() < f64::INFINITY);
+        if fisheye {
+            // The equidistant map's inverse, as Projector::finish_undistortion: theta =
+            // |(u, v)| = |r|, the normalised radius tan(theta), the determinant divided by
+            // s (1 + tan^2) with s = tan(theta) / theta. Beyond the hemisphere: left to the
+            // one-pixel path, which reports it.
+            let theta = r[l].abs();
+            ok &= theta < core::f64::consts::FRAC_PI_2;
+            let t = tan_quadrant(if ok { theta } else { 0.0 });
+            let moved = theta > f64::EPSILON;
+            let s = if moved { t / theta } else { 1.0 };
+            u *= s;
+            v *= s;
+            det = if moved {
+                det / (s * (1.0 + t * t))
+            } else {
+                det
+            };
+        }
+        out[l] = RadialLane { u, v, det, ok };
     }
     out
 }
@@ -396,6 +414,7 @@ dispatched! {
         lens: &L,
         focal: (f64, f64),
         centre: (f64, f64),
+        fisheye: bool,
         px: &[Point2<f64>],
     ) -> [RadialLane; RADIAL_CHUNK] = radial_chunk_body;
 }
@@ -405,6 +424,7 @@ fn radial_chunk_body<L: Lens>(
     lens: &L,
     focal: (f64, f64),
     centre: (f64, f64),
+    fisheye: bool,
     px: &[Point2<f64>],
 ) -> [RadialLane; RADIAL_CHUNK] {
     let mut out = [RadialLane::default(); RADIAL_CHUNK];
@@ -414,7 +434,7 @@ fn radial_chunk_body<L: Lens>(
         for (x, p) in x0.iter_mut().zip(block) {
             *x = [(p.x - centre.0) / focal.0, (p.y - centre.1) / focal.1];
         }
-        res.copy_from_slice(&radial_undistortion(lens, &x0, block.len()));
+        res.copy_from_slice(&radial_undistortion(lens, &x0, block.len(), fisheye));
     }
     out
 }

@@ -49,7 +49,7 @@
 //! For a perspective model, a normalised point `(u, v)` is distorted to
 //! `(u, v) + D(u, v)` and then mapped to pixels by the focal lengths and principal point.
 //! Fisheye models first map `(u, v)` to `theta / r (u, v)` (`r = |(u, v)|`, `theta = atan r`,
-//! the equidistant projection; `atan` is `numeric::atan::atan_nonneg`, within a few ulp of
+//! the equidistant projection; `atan` is `numeric::trig::atan_nonneg`, within a few ulp of
 //! `f64::atan` and free of calls, so that the per-point loops stay packed) and distort that. `OPENCV_THIN_PRISM_TILTED` adds the
 //! thin-prism terms to `D` and then applies OpenCV's projective tilt. [`Camera::undistort`]
 //! inverts the distortion (and the tilt) by Newton's method with an analytic Jacobian, a trust
@@ -60,7 +60,7 @@
 
 use nalgebra::Point2;
 
-use crate::numeric::atan::atan_nonneg;
+use crate::numeric::trig::{atan_nonneg, tan_quadrant};
 
 mod distortion;
 mod model;
@@ -534,11 +534,10 @@ impl Projector {
             return Ok(());
         }
         for (c, chunk) in pixels.chunks(RADIAL_CHUNK).enumerate() {
-            let lanes = radial_chunk(&lens, self.focal, self.centre, chunk);
+            let lanes = radial_chunk(&lens, self.focal, self.centre, self.fisheye, chunk);
             for (j, (px, lane)) in chunk.iter().zip(&lanes).enumerate() {
                 let result = if lane.ok {
-                    self.finish_undistortion(*px, (lane.u, lane.v), lane.det)
-                        .and_then(|(n, det)| weight_of(*px, n, det))
+                    weight_of(*px, Point2::new(lane.u, lane.v), lane.det)
                 } else {
                     self.undistort_weighted_with(lens, *px)
                 };
@@ -613,7 +612,7 @@ impl Projector {
             });
         }
         if theta > f64::EPSILON {
-            let r = theta.tan();
+            let r = tan_quadrant(theta);
             let s = r / theta;
             Ok((Point2::new(u * s, v * s), det / (s * (1.0 + r * r))))
         } else {

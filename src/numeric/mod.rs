@@ -1,9 +1,8 @@
 //! Numerical building blocks, each with hard iteration bounds and no allocation: the bounds
 //! themselves, small dense linear algebra (3 x 3 in [`mat3`], 9 x 9 in [`linalg`]), real
-//! polynomial roots, rotations, the P3P minimal solver, an arctangent that packs ([`atan`]),
+//! polynomial roots, rotations, the P3P minimal solver, an arctangent and a tangent that pack ([`trig`]),
 //! and the lane layout of the vectorised O(N) passes. Nothing here knows about the PnP problem's stages.
 
-pub(crate) mod atan;
 pub(crate) mod bounds;
 pub(crate) mod lanes;
 pub(crate) mod linalg;
@@ -11,3 +10,4 @@ pub(crate) mod mat3;
 pub mod p3p;
 pub mod roots;
 pub(crate) mod rotation;
+pub(crate) mod trig;

@@ -396,13 +396,24 @@ fn radial_lanes_match_the_one_pixel_iteration() {
     let px: Vec<Point2<f64>> = (0..distortion::RADIAL_CHUNK)
         .map(|k| Point2::new(50.0 + 30.0 * k as f64, 1500.0 - 20.0 * k as f64))
         .collect();
-    let lanes = distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), &px);
+    let lanes = distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), false, &px);
     assert!(lanes.iter().all(|l| l.ok));
-    // The baseline and AVX2 builds agree to the bit.
-    let base = crate::numeric::lanes::with_baseline(|| {
-        distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), &px)
-    });
-    for (a, b) in lanes.iter().zip(&base) {
+    // The baseline and AVX2 builds agree to the bit (a perspective and a fisheye lens).
+    let fisheye = distortion::Fisheye([0.05, -0.01, 0.002, -0.0005]);
+    let chunks = || {
+        (
+            distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), false, &px),
+            distortion::radial_chunk(&fisheye, (1000.0, 1000.0), (1000.0, 800.0), true, &px),
+        )
+    };
+    let (wide, base) = (chunks(), crate::numeric::lanes::with_baseline(chunks));
+    assert!(wide.1.iter().all(|l| l.ok));
+    for (a, b) in wide
+        .0
+        .iter()
+        .chain(&wide.1)
+        .zip(base.0.iter().chain(&base.1))
+    {
         assert_eq!(
             (a.u.to_bits(), a.v.to_bits(), a.det.to_bits()),
             (b.u.to_bits(), b.v.to_bits(), b.det.to_bits())

@@ -56,3 +56,38 @@ fn atan_special_values() {
     assert!(ulps(atan_nonneg(1.0), core::f64::consts::FRAC_PI_4) <= 1);
     assert!(atan_nonneg(f64::NAN).is_nan());
 }
+
+#[test]
+fn tan_is_within_four_ulp_of_std() {
+    let mut s = 0x2545_F491_4F6C_DD1D_u64;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let half_pi = core::f64::consts::FRAC_PI_2;
+    let mut args: Vec<f64> = (0..200_000)
+        .map(|k| match k % 3 {
+            0 => half_pi * next(),
+            // Near pi/2 (large tangents) and near 0.
+            1 => half_pi - 10f64.powf(-16.0 * next()),
+            _ => 10f64.powf(-300.0 * next()),
+        })
+        .filter(|t| (0.0..half_pi).contains(t))
+        .collect();
+    let mut t = core::f64::consts::FRAC_PI_4;
+    for _ in 0..8 {
+        args.push(t);
+        t = f64::from_bits(t.to_bits() + 1);
+    }
+    args.extend([0.0, f64::from_bits(half_pi.to_bits() - 1)]);
+    let mut worst = 0;
+    for x in args {
+        let (a, b) = (tan_quadrant(x), x.tan());
+        let u = ulps(a, b);
+        assert!(u <= 4, "tan({x:e}) = {a:e}, std {b:e}: {u} ulp");
+        worst = worst.max(u);
+    }
+    assert!(worst >= 1, "{worst}");
+}

@@ -1,0 +1,102 @@
+//! The arctangent of a non-negative number and the tangent of an angle in `[0, pi/2)`, in
+//! straight-line arithmetic (no branch, no call), so that a loop over packed lanes that needs
+//! them stays packed: the fisheye models' equidistant map `theta = atan(r)`, evaluated per
+//! point in every pass of the pixel-space refinement, and its inverse `r = tan(theta)` in the
+//! undistortion.
+//!
+//! [`atan_nonneg`]: `atan(x) = pi/2 - atan(1/x)` above 1; then, above `tan(pi/8)`, one
+//! halving of the angle, `atan(y) = 2 atan(y / (1 + sqrt(1 + y^2)))`, which brings the
+//! argument to at most `tan(pi/8) = 0.414`; there the Taylor series `sum (-1)^n y^(2n+1) / (2n + 1)` (21 terms:
+//! the first omitted one is below `2^-56` of the sum) by Horner's rule. Every path is computed
+//! and the result selected. Accuracy: within 2.3 ulp of the exact value over 60,000 arguments
+//! from `1e-8` to `1e8` (these operations transcribed to numpy, against mpmath at 120 bits),
+//! and within 4 ulp of `f64::atan` over 200,000 arguments from `1e-300` to `1e300` and the
+//! break points (`tests/unit/numeric/trig.rs`).
+//!
+//! [`tan_quadrant`]: above `pi/4`, `tan(theta) = cos(a) / sin(a)` with `a = pi/2 - theta`
+//! (exact in two doubles: `pi/2`'s high part minus `theta` is exact there); below,
+//! `sin(a) / cos(a)` with `a = theta`; `sin` and `cos` of `a <= pi/4` by 10 terms each of
+//! their Taylor series (the first omitted ones below `2^-60`). Within 4 ulp of `f64::tan`
+//! (tested).
+
+/// `pi / 2` as the sum of two doubles (the nearest double, and the rest).
+const PIO2_HI: f64 = core::f64::consts::FRAC_PI_2;
+const PIO2_LO: f64 = 6.123_233_995_736_766e-17;
+/// `tan(pi / 8)`: above it the angle is halved once.
+const TAN_PI_8: f64 = 0.414_213_562_373_095_1;
+/// Terms of the Taylor series.
+const TERMS: usize = 21;
+
+/// `atan(x)` for `x >= 0` (`+inf` gives `pi / 2`, NaN gives NaN); see the module documentation.
+#[inline(always)]
+pub(crate) fn atan_nonneg(x: f64) -> f64 {
+    let big = x > 1.0;
+    let y = if big { 1.0 / x } else { x };
+    let halve = y > TAN_PI_8;
+    let h = y / (1.0 + (1.0 + y * y).sqrt());
+    let y = if halve { h } else { y };
+    let z = y * y;
+    let mut p = 0.0;
+    let mut n = TERMS;
+    while n > 0 {
+        n -= 1;
+        let c = 1.0 / (2 * n + 1) as f64;
+        p = p * z + if n.is_multiple_of(2) { c } else { -c };
+    }
+    let a = y * p;
+    let a = if halve { 2.0 * a } else { a };
+    if big {
+        (PIO2_HI - a) + PIO2_LO
+    } else {
+        a
+    }
+}
+
+/// Terms of the Taylor series of `sin` and `cos` in [`tan_quadrant`].
+const SINCOS_TERMS: usize = 10;
+
+/// `tan(theta)` for `0 <= theta < pi/2` (the caller checks the range; see the module
+/// documentation).
+#[inline(always)]
+pub(crate) fn tan_quadrant(theta: f64) -> f64 {
+    let big = theta > core::f64::consts::FRAC_PI_4;
+    let a = if big {
+        (PIO2_HI - theta) + PIO2_LO
+    } else {
+        theta
+    };
+    let z = a * a;
+    // sin(a) / a and cos(a) by Horner's rule from the last term: (-1)^k z^k / (2k + 1)! and
+    // (-1)^k z^k / (2k)!.
+    let (mut s, mut c) = (0.0, 0.0);
+    let mut k = SINCOS_TERMS;
+    while k > 0 {
+        k -= 1;
+        let (fs, fc) = (factorial(2 * k + 1), factorial(2 * k));
+        let sign = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
+        s = s * z + sign / fs;
+        c = c * z + sign / fc;
+    }
+    let s = a * s;
+    if big {
+        c / s
+    } else {
+        s / c
+    }
+}
+
+/// `n!` as a double (exact up to `22!`).
+#[inline(always)]
+const fn factorial(n: usize) -> f64 {
+    let mut f = 1.0;
+    let mut k = 2;
+    while k <= n {
+        f *= k as f64;
+        k += 1;
+    }
+    f
+}
+
+#[cfg(test)]
+#[path = "../../tests/unit/numeric/trig.rs"]
+mod tests;
