@@ -306,10 +306,12 @@ pub(super) struct RadialLane {
 /// [`iterative_undistortion`] of a radial map (`L::RADIAL`) for up to [`GROUP`] points `x0`
 /// at once (the first `n`): Newton's iteration from `x0` stays on the ray of `x0`, so with
 /// `(u, v) = r x0 / |x0|` it is Newton's iteration on the undistorted radius `r`, `r -> r -
-/// (r (1 + g) - |x0|) / (d/dr)` (the generated kernel evaluated at `(r, 0)`), with the same trust region (`|step| <= max(0.1 r, 0.1)`), the same
-/// convergence check at every iterate (`|r (1 + g) - |x0||` is the length of the residual
-/// `(u, v) + D(u, v) - x0`, and `det J = (d/dr) (1 + g)` at the point), and at most as many
-/// steps: the same iterates in exact arithmetic. The points run in lockstep, each frozen
+/// (r (1 + g) - |x0|) / (d/dr)` (the generated kernel evaluated at `(r, 0)`), with the same
+/// trust region (`|step| <= max(0.1 |r|, 0.1)`), the same convergence check at every iterate
+/// (`|r (1 + g) - |x0||` is the length of the residual `(u, v) + D(u, v) - x0`, and
+/// `det J = (d/dr) (1 + g)` at the point), and at most as many steps: the same iterates in
+/// exact arithmetic. With `fisheye`, a converged point then goes through the inverse
+/// equidistant map as in [`super::Projector::undistort`]. The points run in lockstep, each frozen
 /// when its check passes; a point whose iteration would stop otherwise (a failed step, a
 /// negligible step without convergence, the iteration bound) is left to
 /// [`iterative_undistortion`] (`ok = false`), which fails where this would.
@@ -374,7 +376,7 @@ pub(super) fn radial_undistortion<L: Lens>(
         let (mut u, mut v, mut det) = (x0[l][0] * s, x0[l][1] * s, det_out[l]);
         let mut ok = ok[l] & (u.abs() < f64::INFINITY) & (v.abs() < f64::INFINITY);
         if fisheye {
-            // The equidistant map's inverse, as Projector::finish_undistortion: theta =
+            // The equidistant map's inverse, as Projector::undistort_with: theta =
             // |(u, v)| = |r|, the normalised radius tan(theta), the determinant divided by
             // s (1 + tan^2) with s = tan(theta) / theta. Beyond the hemisphere: left to the
             // one-pixel path, which reports it.

@@ -50,10 +50,11 @@
 //! `(u, v) + D(u, v)` and then mapped to pixels by the focal lengths and principal point.
 //! Fisheye models first map `(u, v)` to `theta / r (u, v)` (`r = |(u, v)|`, `theta = atan r`,
 //! the equidistant projection; `atan` is `numeric::trig::atan_nonneg`, within a few ulp of
-//! `f64::atan` and free of calls, so that the per-point loops stay packed) and distort that. `OPENCV_THIN_PRISM_TILTED` adds the
-//! thin-prism terms to `D` and then applies OpenCV's projective tilt. [`Camera::undistort`]
-//! inverts the distortion (and the tilt) by Newton's method with an analytic Jacobian, a trust
-//! region (as COLMAP) and at most [`UNDISTORT_MAX_ITERATIONS`] iterations; a pixel whose
+//! `f64::atan` and free of calls, so that the per-point loops stay packed) and distort that.
+//! `OPENCV_THIN_PRISM_TILTED` adds the thin-prism terms to `D` and then applies OpenCV's
+//! projective tilt. [`Camera::undistort`] inverts the distortion (and the tilt) by Newton's
+//! method with an analytic Jacobian, a trust region (as COLMAP) and at most
+//! [`UNDISTORT_MAX_ITERATIONS`] iterations; a pixel whose
 //! undistortion does not converge is an error, never a silently wrong point. For the radial
 //! models the pixel path of the solver runs the same iteration along each pixel's ray, sixteen
 //! pixels at a time (`distortion::radial_undistortion`, docs/algorithm.md S9).
@@ -583,18 +584,7 @@ impl Projector {
                 pixel: (pixel.x, pixel.y),
             })?
         };
-        self.finish_undistortion(pixel, uv, det)
-    }
-
-    /// The end of [`Projector::undistort_with`] from the undistorted point `(u, v)` of the
-    /// lens (the equidistant point for the fisheye models) and `det J` of its distortion.
-    #[inline(always)]
-    fn finish_undistortion(
-        &self,
-        pixel: Point2<f64>,
-        (u, v): (f64, f64),
-        det: f64,
-    ) -> Result<(Point2<f64>, f64), CameraError> {
+        let (u, v) = uv;
         if !(u.is_finite() && v.is_finite()) {
             return Err(CameraError::OutOfRange {
                 pixel: (pixel.x, pixel.y),
