@@ -304,7 +304,7 @@ pub(super) struct RadialLane {
 }
 
 /// [`iterative_undistortion`] of a radial map (`L::RADIAL`) for up to [`GROUP`] points `x0`
-/// at once (the first `n`): Newton's iteration from `x0` stays on the ray of `x0`, so with
+/// at once (the first `n`), into `out`: Newton's iteration from `x0` stays on the ray of `x0`, so with
 /// `(u, v) = r x0 / |x0|` it is Newton's iteration on the undistorted radius `r`, `r -> r -
 /// (r (1 + g) - |x0|) / (d/dr)` (the generated kernel evaluated at `(r, 0)`), with the same
 /// trust region (`|step| <= max(0.1 |r|, 0.1)`), the same convergence check at every iterate
@@ -321,7 +321,8 @@ pub(super) fn radial_undistortion<L: Lens>(
     x0: &[[f64; 2]; GROUP],
     n: usize,
     fisheye: bool,
-) -> [RadialLane; GROUP] {
+    out: &mut [RadialLane; GROUP],
+) {
     const RADIUS: f64 = 0.1; // iterative_undistortion's trust region
     let mut rd = [0.0; GROUP];
     let mut scale2 = [0.0; GROUP];
@@ -369,7 +370,6 @@ pub(super) fn radial_undistortion<L: Lens>(
             live[l] = stepping;
         }
     }
-    let mut out = [RadialLane::default(); GROUP];
     for l in 0..GROUP {
         // (u, v) = r x0 / |x0| (x0 itself at the centre, where r = 0).
         let s = if rd[l] > 0.0 { r[l] / rd[l] } else { 1.0 };
@@ -395,7 +395,6 @@ pub(super) fn radial_undistortion<L: Lens>(
         }
         out[l] = RadialLane { u, v, det, ok };
     }
-    out
 }
 
 /// Points iterated in lockstep by [`radial_undistortion`]: several packed registers, so that
@@ -410,7 +409,7 @@ pub(super) const RADIAL_CHUNK: usize = 64;
 dispatched! {
     /// [`radial_undistortion`] of the pixels `px` (at most [`RADIAL_CHUNK`]) of a camera with
     /// focal lengths `focal` and principal point `centre`, [`GROUP`] at a time; entry `i` of
-    /// the result is pixel `i`'s. Built for the processor
+    /// `out` is pixel `i`'s. Built for the processor
     /// ([`crate::numeric::lanes::dispatched`]).
     pub(super) fn radial_chunk[L: Lens][L](
         lens: &L,
@@ -418,7 +417,8 @@ dispatched! {
         centre: (f64, f64),
         fisheye: bool,
         px: &[Point2<f64>],
-    ) -> [RadialLane; RADIAL_CHUNK] = radial_chunk_body;
+        out: &mut [RadialLane; RADIAL_CHUNK],
+    ) -> () = radial_chunk_body;
 }
 
 #[inline(always)]
@@ -428,15 +428,15 @@ fn radial_chunk_body<L: Lens>(
     centre: (f64, f64),
     fisheye: bool,
     px: &[Point2<f64>],
-) -> [RadialLane; RADIAL_CHUNK] {
-    let mut out = [RadialLane::default(); RADIAL_CHUNK];
+    out: &mut [RadialLane; RADIAL_CHUNK],
+) {
     let px = &px[..px.len().min(RADIAL_CHUNK)];
     for (block, res) in px.chunks(GROUP).zip(out.chunks_exact_mut(GROUP)) {
         let mut x0 = [[0.0; 2]; GROUP];
         for (x, p) in x0.iter_mut().zip(block) {
             *x = [(p.x - centre.0) / focal.0, (p.y - centre.1) / focal.1];
         }
-        res.copy_from_slice(&radial_undistortion(lens, &x0, block.len(), fisheye));
+        let res: &mut [RadialLane; GROUP] = res.try_into().expect("chunks of GROUP");
+        radial_undistortion(lens, &x0, block.len(), fisheye, res);
     }
-    out
 }

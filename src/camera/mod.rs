@@ -69,7 +69,7 @@ mod opencv;
 
 use distortion::{
     iterative_undistortion, radial_chunk, tilt_matrix, with_lens, Distortion, Fisheye, FullOpenCv,
-    Lens, NoDistortion, OpenCv, Radial, SimpleRadial, ThinPrismTilted, RADIAL_CHUNK,
+    Lens, NoDistortion, OpenCv, Radial, RadialLane, SimpleRadial, ThinPrismTilted, RADIAL_CHUNK,
 };
 pub use model::{CameraError, CameraModel, SUPPORTED_MODELS};
 
@@ -534,8 +534,16 @@ impl Projector {
             }
             return Ok(());
         }
+        let mut lanes = [RadialLane::default(); RADIAL_CHUNK];
         for (c, chunk) in pixels.chunks(RADIAL_CHUNK).enumerate() {
-            let lanes = radial_chunk(&lens, self.focal, self.centre, self.fisheye, chunk);
+            radial_chunk(
+                &lens,
+                self.focal,
+                self.centre,
+                self.fisheye,
+                chunk,
+                &mut lanes,
+            );
             for (j, (px, lane)) in chunk.iter().zip(&lanes).enumerate() {
                 let result = if lane.ok {
                     weight_of(*px, Point2::new(lane.u, lane.v), lane.det)

@@ -24,8 +24,8 @@ const PIO2_HI: f64 = core::f64::consts::FRAC_PI_2;
 const PIO2_LO: f64 = 6.123_233_995_736_766e-17;
 /// `tan(pi / 8)`: above it the angle is halved once.
 const TAN_PI_8: f64 = 0.414_213_562_373_095_1;
-/// Terms of the Taylor series.
-const TERMS: usize = 21;
+/// The Taylor coefficients of `atan(y) / y` in `z = y^2`: `(-1)^n / (2n + 1)`, 21 terms.
+const ATAN_COEFFS: [f64; 21] = series(1, false);
 
 /// `atan(x)` for `x >= 0` (`+inf` gives `pi / 2`, NaN gives NaN); see the module documentation.
 #[inline(always)]
@@ -36,13 +36,7 @@ pub(crate) fn atan_nonneg(x: f64) -> f64 {
     let h = y / (1.0 + (1.0 + y * y).sqrt());
     let y = if halve { h } else { y };
     let z = y * y;
-    let mut p = 0.0;
-    let mut n = TERMS;
-    while n > 0 {
-        n -= 1;
-        let c = 1.0 / (2 * n + 1) as f64;
-        p = p * z + if n.is_multiple_of(2) { c } else { -c };
-    }
+    let p = ATAN_COEFFS.iter().rev().fold(0.0, |p, &c| p * z + c);
     let a = y * p;
     let a = if halve { 2.0 * a } else { a };
     if big {
@@ -52,8 +46,10 @@ pub(crate) fn atan_nonneg(x: f64) -> f64 {
     }
 }
 
-/// Terms of the Taylor series of `sin` and `cos` in [`tan_quadrant`].
-const SINCOS_TERMS: usize = 10;
+/// The Taylor coefficients of `sin(a) / a` and `cos(a)` in `z = a^2`, 10 terms each:
+/// `(-1)^k / (2k + 1)!` and `(-1)^k / (2k)!`.
+const SIN_COEFFS: [f64; 10] = series(1, true);
+const COS_COEFFS: [f64; 10] = series(0, true);
 
 /// `tan(theta)` for `0 <= theta < pi/2` (the caller checks the range; see the module
 /// documentation).
@@ -66,18 +62,9 @@ pub(crate) fn tan_quadrant(theta: f64) -> f64 {
         theta
     };
     let z = a * a;
-    // sin(a) / a and cos(a) by Horner's rule from the last term: (-1)^k z^k / (2k + 1)! and
-    // (-1)^k z^k / (2k)!.
-    let (mut s, mut c) = (0.0, 0.0);
-    let mut k = SINCOS_TERMS;
-    while k > 0 {
-        k -= 1;
-        let (fs, fc) = (factorial(2 * k + 1), factorial(2 * k));
-        let sign = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
-        s = s * z + sign / fs;
-        c = c * z + sign / fc;
-    }
-    let s = a * s;
+    // sin(a) and cos(a) by Horner's rule from the last term.
+    let s = a * SIN_COEFFS.iter().rev().fold(0.0, |p, &k| p * z + k);
+    let c = COS_COEFFS.iter().rev().fold(0.0, |p, &k| p * z + k);
     if big {
         c / s
     } else {
@@ -85,8 +72,21 @@ pub(crate) fn tan_quadrant(theta: f64) -> f64 {
     }
 }
 
+/// `(-1)^n / d(n)` for `n = 0..N`, with `d(n) = 2n + odd`, or its factorial: evaluated at
+/// compile time.
+const fn series<const N: usize>(odd: usize, factorial_of: bool) -> [f64; N] {
+    let mut out = [0.0; N];
+    let mut n = 0;
+    while n < N {
+        let d = 2 * n + odd;
+        let d = if factorial_of { factorial(d) } else { d as f64 };
+        out[n] = if n % 2 == 0 { 1.0 / d } else { -1.0 / d };
+        n += 1;
+    }
+    out
+}
+
 /// `n!` as a double (exact up to `22!`).
-#[inline(always)]
 const fn factorial(n: usize) -> f64 {
     let mut f = 1.0;
     let mut k = 2;

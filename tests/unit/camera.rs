@@ -396,14 +396,25 @@ fn radial_lanes_match_the_one_pixel_iteration() {
     let px: Vec<Point2<f64>> = (0..distortion::RADIAL_CHUNK)
         .map(|k| Point2::new(50.0 + 30.0 * k as f64, 1500.0 - 20.0 * k as f64))
         .collect();
-    let lanes = distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), false, &px);
+    let chunk = |fill: &dyn Fn(&mut [distortion::RadialLane; distortion::RADIAL_CHUNK])| {
+        let mut out = [distortion::RadialLane::default(); distortion::RADIAL_CHUNK];
+        fill(&mut out);
+        out
+    };
+    let lanes = chunk(&|o| {
+        distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), false, &px, o)
+    });
     assert!(lanes.iter().all(|l| l.ok));
     // The baseline and AVX2 builds agree to the bit (a perspective and a fisheye lens).
     let fisheye = distortion::Fisheye([0.05, -0.01, 0.002, -0.0005]);
     let chunks = || {
         (
-            distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), false, &px),
-            distortion::radial_chunk(&fisheye, (1000.0, 1000.0), (1000.0, 800.0), true, &px),
+            chunk(&|o| {
+                distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), false, &px, o)
+            }),
+            chunk(&|o| {
+                distortion::radial_chunk(&fisheye, (1000.0, 1000.0), (1000.0, 800.0), true, &px, o)
+            }),
         )
     };
     let (wide, base) = (chunks(), crate::numeric::lanes::with_baseline(chunks));
