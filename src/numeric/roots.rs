@@ -42,6 +42,12 @@
 //! root. Double roots thus come out with (near) full relative precision, not the `sqrt(eps)` of a
 //! companion-matrix eigenvalue solver.
 //!
+//! A cubic (the P3P solver's, once per triple of points) skips the two lowest levels: the
+//! roots of its quadratic `p'` come in closed form (Kahan's discriminant; the vertex as a
+//! double root where `p'` is negligible, which is what bracketing either side of it decides),
+//! and `p` is bracketed between them with straight-line evaluations, from the inflection point
+//! when `p` is monotone (259 -> 169 ns per call in `verify`'s timing test).
+//!
 //! Degrees 1-4 also go through this method in [`real_roots`]: every root ends bracketed, with a
 //! value below Horner's error bound, a sub-ulp Newton step or a sign change between adjacent
 //! floats, i.e. a backward error of at most a few `n eps` (the verification tests check

@@ -9,7 +9,7 @@ use crate::numeric::bounds::ROOT_POLISH_STEPS;
 /// Real roots of `a x^2 + b x + c` (a != 0) in closed form (Kahan's accurate discriminant, the
 /// cancellation-free pair `q/a`, `c/q`). A slightly negative discriminant whose vertex value is
 /// negligible gives the double root.
-fn quadratic_closed(p: &Poly, out: &mut Roots) {
+pub(super) fn quadratic_closed(p: &Poly, out: &mut Roots) {
     let (c, b, a) = (p.c[0], p.c[1], p.c[2]);
     let bb = b * b;
     let bb_err = b.mul_add(b, -bb);

@@ -2,8 +2,82 @@
 //! bracket those of the one below, each root found by safeguarded Halley/Newton steps with
 //! bisection (see the module documentation of [`super`]).
 
+use super::closed::quadratic_closed;
 use super::{sgn, Poly, Roots, EPS, MAX_DEGREE};
 use crate::numeric::bounds::{Bound, Budget};
+
+/// What the bracketing needs of a polynomial: its degree, leading coefficient and Horner
+/// evaluations. [`Poly`] (any degree, loops over its coefficients) and [`Cubic`] (degree 3,
+/// straight-line) implement it, so the cubic of the P3P solver runs the same method without
+/// the loops.
+trait Horner {
+    fn degree(&self) -> usize;
+    fn lead(&self) -> f64;
+    fn eval(&self, x: f64) -> f64;
+    /// (p(x), p'(x), p''(x) / 2, sum |c_i| |x|^i).
+    fn eval_d2_abs(&self, x: f64) -> (f64, f64, f64, f64);
+    /// [`Poly::negligible_with`].
+    #[inline]
+    fn negligible_with(&self, f: f64, s: f64) -> bool {
+        f.abs() <= 2.0 * self.degree() as f64 * EPS * s
+    }
+}
+
+impl Horner for Poly {
+    #[inline]
+    fn degree(&self) -> usize {
+        self.n
+    }
+    #[inline]
+    fn lead(&self) -> f64 {
+        self.c[self.n]
+    }
+    #[inline]
+    fn eval(&self, x: f64) -> f64 {
+        Poly::eval(self, x)
+    }
+    #[inline]
+    fn eval_d2_abs(&self, x: f64) -> (f64, f64, f64, f64) {
+        Poly::eval_d2_abs(self, x)
+    }
+}
+
+/// A cubic `c[0] + c[1] x + c[2] x^2 + c[3] x^3` (`c[3] != 0`), evaluated in straight-line
+/// code: the same Horner chains as [`Poly`]'s, in the same order, so the same values.
+#[derive(Clone, Copy)]
+struct Cubic([f64; 4]);
+
+impl Horner for Cubic {
+    #[inline]
+    fn degree(&self) -> usize {
+        3
+    }
+    #[inline]
+    fn lead(&self) -> f64 {
+        self.0[3]
+    }
+    #[inline]
+    fn eval(&self, x: f64) -> f64 {
+        let c = &self.0;
+        ((c[3] * x + c[2]) * x + c[1]) * x + c[0]
+    }
+    #[inline]
+    fn eval_d2_abs(&self, x: f64) -> (f64, f64, f64, f64) {
+        let c = &self.0;
+        let ax = x.abs();
+        // Poly::eval_d2_abs unrolled for n = 3 (h starts at 0, d at 0).
+        let p2 = c[3] * x + c[2];
+        let d2 = c[3];
+        let p1 = p2 * x + c[1];
+        let d1 = d2 * x + p2;
+        let h1 = d2;
+        let p0 = p1 * x + c[0];
+        let d0 = d1 * x + p1;
+        let h0 = h1 * x + d1;
+        let s = ((c[3].abs() * ax + c[2].abs()) * ax + c[1].abs()) * ax + c[0].abs();
+        (p0, d0, h0, s)
+    }
+}
 
 /// The next trial point strictly inside (lo, hi): 0 if the bracket straddles it, the geometric
 /// mean if it spans more than a factor 2 on one side of 0, else the midpoint.
@@ -33,7 +107,7 @@ fn split(lo: f64, hi: f64) -> f64 {
 /// with the smallest |q|. Stops when |q(x)| <= eps sum |c_i| |x|^i (below Horner's error bound:
 /// further iterations only chase rounding noise), when a step is below half an ulp, or when
 /// lo and hi are adjacent floats.
-fn bracket(q: &Poly, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f64 {
+fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f64 {
     let mut x = if x0 > lo && x0 < hi {
         x0
     } else {
@@ -103,10 +177,13 @@ fn bracket(q: &Poly, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f64 {
 /// Real roots of `q` given the sorted real roots `crit` of `q'` (all inside +-bound).
 /// Returns the roots (ascending) and, for each critical point, nothing: callers that need to
 /// know whether a critical point is a root test it again.
-fn roots_between(q: &Poly, crit: &[f64], bound: f64) -> Roots {
+///
+/// `start` (NaN for none) is the starting guess when `q'` has no real root: `q` is monotone
+/// and has one root, found from there (else from the split of the root bound).
+fn roots_between<P: Horner>(q: &P, crit: &[f64], bound: f64, start: f64) -> Roots {
     let mut out = Roots::default();
-    let lead = sgn(q.c[q.n]);
-    let s_minf = if q.n & 1 == 0 { lead } else { -lead };
+    let lead = sgn(q.lead());
+    let s_minf = if q.degree() & 1 == 0 { lead } else { -lead };
     let s_pinf = lead;
     let mut prev_x = -bound;
     let mut prev_s = s_minf;
@@ -141,7 +218,12 @@ fn roots_between(q: &Poly, crit: &[f64], bound: f64) -> Roots {
         prev_f = f;
     }
     if !prev_zero && s_pinf != prev_s {
-        out.push(bracket(q, prev_x, bound, prev_s, prev_x + prev_reach));
+        let x0 = if crit.is_empty() {
+            start
+        } else {
+            prev_x + prev_reach
+        };
+        out.push(bracket(q, prev_x, bound, prev_s, x0));
     }
     out
 }
@@ -156,24 +238,38 @@ pub(super) fn solve_prepared(p: &Poly, zero_root: bool, imag_tol: f64) -> Roots 
         return out;
     }
     let n = p.n;
-    // Derivative sequence d[k] = p^(k), k = 0..n-1 (d[n-1] is linear).
-    let mut d = [*p; MAX_DEGREE];
-    for k in 1..n {
-        d[k] = d[k - 1].derivative();
-    }
     let bound = p.root_bound();
-    // Roots of the linear level.
-    let lin = &d[n - 1];
-    let mut cur = Roots::default();
-    cur.push(-lin.c[0] / lin.c[1]);
-    let mut crit = Roots::default(); // roots of p' once the loop is done
-    for k in (0..n - 1).rev() {
-        crit = cur;
-        cur = roots_between(&d[k], crit.as_slice(), bound);
-    }
-    out = cur;
-    if n == 1 {
-        crit = Roots::default();
+    let mut crit = Roots::default(); // roots of p'
+    if n == 3 {
+        // The cubic (P3P's, once per triple of points): the roots of the quadratic p' in
+        // closed form (Kahan's discriminant; the vertex, a double root, when p' is negligible
+        // there: what bracketing either side of it decides, to a few ulps), then p's roots
+        // bracketed between them by straight-line evaluations.
+        quadratic_closed(&p.derivative(), &mut crit);
+        crit.sort_dedup();
+        // Without critical points the cubic is monotone: Halley's iteration from its
+        // inflection point (the root of p'') converges without bisecting from 0.
+        let inflection = -p.c[2] / (3.0 * p.c[3]);
+        let cubic = Cubic([p.c[0], p.c[1], p.c[2], p.c[3]]);
+        out = roots_between(&cubic, crit.as_slice(), bound, inflection);
+    } else {
+        // Derivative sequence d[k] = p^(k), k = 0..n-1 (d[n-1] is linear).
+        let mut d = [*p; MAX_DEGREE];
+        for k in 1..n {
+            d[k] = d[k - 1].derivative();
+        }
+        // Roots of the linear level.
+        let lin = &d[n - 1];
+        let mut cur = Roots::default();
+        cur.push(-lin.c[0] / lin.c[1]);
+        for k in (0..n - 1).rev() {
+            crit = cur;
+            cur = roots_between(&d[k], crit.as_slice(), bound, f64::NAN);
+        }
+        out = cur;
+        if n == 1 {
+            crit = Roots::default();
+        }
     }
     // The exact zero root first, so that the capacity can only ever cut near-real extras.
     if zero_root {
