@@ -132,19 +132,41 @@ fn p3p_with(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3], polish: bool)
     let b12 = -2.0 * y[0].dot(&y[1]);
     let b13 = -2.0 * y[0].dot(&y[2]);
     let b23 = -2.0 * y[1].dot(&y[2]);
-    // Quadratic forms L^T M_ij L = l_i^2 + l_j^2 + b_ij l_i l_j.
-    let m12 = Matrix3::new(1.0, 0.5 * b12, 0.0, 0.5 * b12, 1.0, 0.0, 0.0, 0.0, 0.0);
-    let m13 = Matrix3::new(1.0, 0.0, 0.5 * b13, 0.0, 0.0, 0.0, 0.5 * b13, 0.0, 1.0);
-    let m23 = Matrix3::new(0.0, 0.0, 0.0, 0.0, 1.0, 0.5 * b23, 0.0, 0.5 * b23, 1.0);
-    // Scale-free conics (divide by amax^2 to keep the numbers O(1)).
-    let s = 1.0 / (amax * amax);
-    let d1 = (m12 * a23 - m23 * a12) * (s * amax);
-    let d2 = (m13 * a23 - m23 * a13) * (s * amax);
+    // Quadratic forms L^T M_ij L = l_i^2 + l_j^2 + b_ij l_i l_j, with h_ij = b_ij / 2 off the
+    // diagonal: M12 = [[1, h12, 0], [h12, 1, 0], [0, 0, 0]], M13 and M23 alike. The conics
+    // D1 = a23 M12 - a12 M23 and D2 = a23 M13 - a13 M23, scale-free (divided by amax to keep
+    // the numbers O(1)), entry by entry.
+    let (h12, h13, h23) = (0.5 * b12, 0.5 * b13, 0.5 * b23);
+    let k = 1.0 / amax;
+    let (ka12, ka13, ka23) = (a12 * k, a13 * k, a23 * k);
+    let d1 = Matrix3::new(
+        ka23,
+        ka23 * h12,
+        0.0,
+        ka23 * h12,
+        ka23 - ka12,
+        -ka12 * h23,
+        0.0,
+        -ka12 * h23,
+        -ka12,
+    );
+    let d2 = Matrix3::new(
+        ka23,
+        0.0,
+        ka23 * h13,
+        0.0,
+        -ka13,
+        -ka13 * h23,
+        ka23 * h13,
+        -ka13 * h23,
+        ka23 - ka13,
+    );
 
     let Some((e1, e2, ratio)) = degenerate_member(&d1, &d2, !polish) else {
         return out;
     };
-    let sum_form = m12 + m13 + m23;
+    // M12 + M13 + M23.
+    let sum_form = Matrix3::new(2.0, h12, h13, h12, 2.0, h23, h13, h23, 2.0);
     let asum = a12 + a13 + a23;
     let twist = ratio.max(0.0).sqrt();
     let mut lambdas: ArrayVec<Vector3<f64>, 4> = ArrayVec::new();
@@ -207,10 +229,12 @@ fn degenerate_member(
     d2: &Matrix3<f64>,
     closed_form: bool,
 ) -> Option<(Vector3<f64>, Vector3<f64>, f64)> {
+    // det(D1 + g D2) = det D1 + tr(adj(D1) D2) g + tr(D1 adj(D2)) g^2 + det D2 g^3; the
+    // matrices are symmetric, so tr(A B) is the sum of the entrywise products.
     let (adj1, adj2) = (adjugate(d1), adjugate(d2));
     let c0 = d1.determinant();
-    let c1 = (adj1 * d2).trace();
-    let c2 = (d1 * adj2).trace();
+    let c1 = adj1.component_mul(d2).sum();
+    let c2 = d1.component_mul(&adj2).sum();
     let c3 = d2.determinant();
     // det(D1 + g D2) = c0 + c1 g + c2 g^2 + c3 g^3; with |c3| < |c0| solve the reversed
     // polynomial det(m D1 + D2) instead, so a root near infinity (D2 singular) is found as m ~ 0.
