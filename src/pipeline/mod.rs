@@ -211,8 +211,9 @@ type Correspondences<'a> = (&'a [Point3<f64>], &'a [Point2<f64>], Option<&'a [f6
 
 /// S4''' and S9 for at most five active points (default mode): the P3P starts (and, in planar
 /// scenes, the minimum of f from the p1 start, S4' + S6), S9 from the best few, best first; a
-/// start inside the basin of a pose already refined is skipped and a run that enters one is
-/// abandoned. The refined pose with the most points in front, then the lowest reprojection
+/// start inside the basin of a pose already refined is skipped, and a run is abandoned when it
+/// enters one or when its model says it cannot end below the best refined cost
+/// ([`triples::cannot_reach`]). The refined pose with the most points in front, then the lowest reprojection
 /// error, with its S9 outcome; `None` if no run gives a finite pose.
 fn small_n(
     opts: &Options,
@@ -250,6 +251,10 @@ fn small_n(
         if best.as_ref().is_some_and(|(b, _)| !s.worth_refining(b)) {
             continue;
         }
+        // The cost a run must end below to be picked, unless it has more points in front.
+        let to_beat = best
+            .as_ref()
+            .and_then(|(b, _)| (s.in_front <= b.in_front).then_some(b.cost));
         let o = reprojection::refine_reprojection_until(
             world,
             image,
@@ -258,7 +263,12 @@ fn small_n(
             &s.r,
             &s.t,
             reproj,
-            &mut |r, t| found.iter().any(|f| f.near(r, t)),
+            &mut |c| match c {
+                reprojection::Checkpoint::Accepted(r, t) => found.iter().any(|f| f.near(r, t)),
+                reprojection::Checkpoint::Step { e, pred } => {
+                    to_beat.is_some_and(|b| triples::cannot_reach(e, pred, b))
+                }
+            },
         );
         let finite = o.r.iter().chain(o.t.iter()).all(|x| x.is_finite()) && o.e.is_finite();
         if !finite

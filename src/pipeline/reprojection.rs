@@ -102,8 +102,9 @@ pub(crate) enum ReprojStop {
     MaxIterations,
     /// Some starting depth is zero (`|z_i| <= 1e-12 max |z|`): nothing was done.
     SkippedZeroDepth,
-    /// The caller's predicate stopped the run at an accepted iterate (the small-N search: the
-    /// iterate entered the basin of a minimum already found).
+    /// The caller's predicate stopped the run at a [`Checkpoint`] (the small-N search: the
+    /// iterate entered the basin of a minimum already found, or the next step's predicted
+    /// decrease says the run cannot end below the best pose found).
     Abandoned,
 }
 
@@ -289,20 +290,22 @@ pub(crate) fn refine_reprojection(
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
 ) -> ReprojOutcome {
-    refine_reprojection_until(
-        world,
-        image,
-        weights,
-        fr,
-        r_work,
-        t_work,
-        opts,
-        &mut |_, _| false,
-    )
+    refine_reprojection_until(world, image, weights, fr, r_work, t_work, opts, &mut |_| {
+        false
+    })
 }
 
-/// [`refine_reprojection`], stopped ([`ReprojStop::Abandoned`]) at the first accepted iterate
-/// `(r, t)` (working frame) for which `abandon(&r, &t)` is true.
+/// Where a run of S9 asks its caller whether to go on ([`refine_reprojection_until`]).
+pub(crate) enum Checkpoint<'a> {
+    /// An accepted iterate `(r, t)` (working frame).
+    Accepted(&'a Matrix3<f64>, &'a Vector3<f64>),
+    /// The first step tried from an iterate of cost `e`: the damped Gauss-Newton model
+    /// predicts that it lowers the cost by `pred`.
+    Step { e: f64, pred: f64 },
+}
+
+/// [`refine_reprojection`], stopped ([`ReprojStop::Abandoned`]) at the first [`Checkpoint`]
+/// for which `abandon` is true (a step is then not evaluated).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine_reprojection_until(
     world: &[Point3<f64>],
@@ -312,7 +315,7 @@ pub(crate) fn refine_reprojection_until(
     r_work: &Matrix3<f64>,
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
-    abandon: &mut dyn FnMut(&Matrix3<f64>, &Vector3<f64>) -> bool,
+    abandon: &mut dyn FnMut(Checkpoint<'_>) -> bool,
 ) -> ReprojOutcome {
     debug_assert_eq!(world.len(), image.len());
     debug_assert!(weights.is_none_or(|w| w.len() == world.len()));
@@ -344,10 +347,10 @@ pub(super) fn levenberg_marquardt<P: Residuals>(
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
 ) -> ReprojOutcome {
-    levenberg_marquardt_until(prob, fr, r_work, t_work, opts, &mut |_, _| false)
+    levenberg_marquardt_until(prob, fr, r_work, t_work, opts, &mut |_| false)
 }
 
-/// [`levenberg_marquardt`], stopped ([`ReprojStop::Abandoned`]) at the first accepted iterate
+/// [`levenberg_marquardt`], stopped ([`ReprojStop::Abandoned`]) at the first [`Checkpoint`]
 /// for which `abandon` is true.
 fn levenberg_marquardt_until<P: Residuals>(
     prob: &P,
@@ -355,7 +358,7 @@ fn levenberg_marquardt_until<P: Residuals>(
     r_work: &Matrix3<f64>,
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
-    abandon: &mut dyn FnMut(&Matrix3<f64>, &Vector3<f64>) -> bool,
+    abandon: &mut dyn FnMut(Checkpoint<'_>) -> bool,
 ) -> ReprojOutcome {
     let mut r = *r_work;
     let mut t = *t_work;
@@ -421,6 +424,12 @@ fn levenberg_marquardt_until<P: Residuals>(
             }
         }
         let pred = -(2.0 * g_d + d_h_d);
+        // The first step from this iterate (not one shrunk by a rejection): the caller may
+        // stop a run that the model says cannot go where it needs to.
+        if (it == 1 || prev_step.is_some()) && abandon(Checkpoint::Step { e: nrm.e, pred }) {
+            stop = ReprojStop::Abandoned;
+            break;
+        }
 
         // A tiny step after which the next one would be below xtol, and that cannot flip a
         // depth sign, ends the run unverified (module docs).
@@ -463,7 +472,7 @@ fn levenberg_marquardt_until<P: Residuals>(
                 lam *= (1.0_f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 nu = 2.0;
                 prev_step = Some(step_norm);
-                if abandon(&r, &t) {
+                if abandon(Checkpoint::Accepted(&r, &t)) {
                     stop = ReprojStop::Abandoned;
                     break;
                 }
