@@ -337,17 +337,21 @@ fn plane_pair_closed(d0: &Matrix3<f64>) -> Option<(Vector3<f64>, Vector3<f64>, f
     }
     let (s1, s2) = (big, m2 / big);
     let vector = |s: f64| -> Option<Vector3<f64>> {
-        let a = d0 - Matrix3::identity() * s;
-        let (r0, r1, r2) = (
-            a.row(0).transpose(),
-            a.row(1).transpose(),
-            a.row(2).transpose(),
-        );
-        let c = [r0.cross(&r1), r0.cross(&r2), r1.cross(&r2)];
-        let best = c
-            .iter()
-            .max_by(|x, y| x.norm_squared().total_cmp(&y.norm_squared()))?;
-        let n = best.norm();
+        // The rows of d0 - s I (d0 is symmetric: its columns).
+        let r0 = Vector3::new(d0[(0, 0)] - s, d0[(1, 0)], d0[(2, 0)]);
+        let r1 = Vector3::new(d0[(0, 1)], d0[(1, 1)] - s, d0[(2, 1)]);
+        let r2 = Vector3::new(d0[(0, 2)], d0[(1, 2)], d0[(2, 2)] - s);
+        let (c0, c1, c2) = (r0.cross(&r1), r0.cross(&r2), r1.cross(&r2));
+        let (n0, n1, n2) = (c0.norm_squared(), c1.norm_squared(), c2.norm_squared());
+        // The largest (the last of equal ones).
+        let (best, nb) = if n2 >= n1 && n2 >= n0 {
+            (c2, n2)
+        } else if n1 >= n0 {
+            (c1, n1)
+        } else {
+            (c0, n0)
+        };
+        let n = nb.sqrt();
         (n > 1e-8 * scale * scale && n.is_finite()).then(|| best / n)
     };
     let (e1, e2) = (vector(s1)?, vector(s2)?);
