@@ -254,9 +254,10 @@ fn sort(out: &mut Starts) {
 /// Adds `s` to `out`, or replaces the start it duplicates if `s` is better.
 fn insert(out: &mut Starts, s: Start) {
     let scale = s.t.norm() + 1.0;
+    // The translations first: three differences tell most distinct starts apart.
     if let Some(o) = out
         .iter_mut()
-        .find(|o| (o.r - s.r).norm() <= SAME_START && (o.t - s.t).norm() <= SAME_START * scale)
+        .find(|o| (o.t - s.t).norm() <= SAME_START * scale && (o.r - s.r).norm() <= SAME_START)
     {
         if s.better(o) {
             *o = s;
