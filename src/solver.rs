@@ -1,6 +1,8 @@
 //! The public entry points: [`Solver`] (the options, as a builder) and [`solve`]. Every solve
 //! runs the stages of [`crate::pipeline`].
 
+use std::borrow::Cow;
+
 use nalgebra::{Isometry3, Matrix3, Point2, Point3};
 
 use crate::camera::{Camera, Projector};
@@ -432,9 +434,9 @@ impl Solver {
             Some(&px),
             (&r, &t),
         )?;
-        sol.skipped = world.len() - u.used.len();
+        sol.skipped = world.len() - u.image.len();
         // The covariance through the camera with the caller's weights, as `Solver::pixels`.
-        let weight = |k: usize| user_weights.map_or(1.0, |uw| uw[u.used[k]]);
+        let weight = |k: usize| user_weights.map_or(1.0, |uw| uw[u.index(k)]);
         Ok(self.with_covariance(sol, &u.world, &u.image, &weight, Metric::Camera(camera)))
     }
 
@@ -477,7 +479,11 @@ impl Solver {
 
     /// S10's inputs for pixel input through `camera` (the used correspondences of `u`): it
     /// runs for a camera with distortion or a robust loss.
-    pub(crate) fn camera_loss<'a>(&self, u: &'a Undistorted, camera: &Camera) -> PixelInputs<'a> {
+    pub(crate) fn camera_loss<'a>(
+        &self,
+        u: &'a Undistorted<'_>,
+        camera: &Camera,
+    ) -> PixelInputs<'a> {
         PixelInputs {
             pixels: &u.pixels,
             weights: u.user_weights.as_deref(),
@@ -609,10 +615,10 @@ impl Solver {
             u.rows,
             Some(&px),
         )?;
-        sol.skipped = world.len() - u.used.len();
+        sol.skipped = world.len() - u.image.len();
         // The covariance through the camera: the caller's weights, not the first-order
         // distortion weights of the solve.
-        let weight = |k: usize| user_weights.map_or(1.0, |uw| uw[u.used[k]]);
+        let weight = |k: usize| user_weights.map_or(1.0, |uw| uw[u.index(k)]);
         Ok(self.with_covariance(sol, &u.world, &u.image, &weight, Metric::Camera(camera)))
     }
 
@@ -672,38 +678,48 @@ pub fn solve(world: &[Point3<f64>], image: &[Point2<f64>]) -> Result<Solution, P
     Solver::default().solve(world, image)
 }
 
-/// Pixel correspondences made ready for the solvers by [`undistort_all`].
-pub(crate) struct Undistorted {
+/// Pixel correspondences made ready for the solvers by [`undistort_all`]. When every pixel
+/// could be undistorted (the usual case) the world points, pixels and caller's weights are the
+/// caller's slices, borrowed; otherwise copies of the kept ones.
+pub(crate) struct Undistorted<'a> {
     /// The world points of the correspondences whose pixel could be undistorted.
-    pub world: Vec<Point3<f64>>,
+    pub world: Cow<'a, [Point3<f64>]>,
     /// Their normalised image points.
     pub image: Vec<Point2<f64>>,
     /// Their weights: `|det J_i| / (fx fy)` times the caller's weight; `None` when they are
     /// all exactly 1 (a camera without distortion and no weights from the caller), so that the
     /// solve takes its unweighted path.
     pub weights: Option<Vec<f64>>,
-    /// Their indices in the caller's slices.
-    pub used: Vec<usize>,
+    /// Their indices in the caller's slices, or `None` when every correspondence is kept.
+    pub used: Option<Vec<usize>>,
     /// Their pixels.
-    pub pixels: Vec<Point2<f64>>,
+    pub pixels: Cow<'a, [Point2<f64>]>,
     /// Their weights given by the caller (`None`: all 1).
-    pub user_weights: Option<Vec<f64>>,
+    pub user_weights: Option<Cow<'a, [f64]>>,
     /// The residual row weights `(fx^2, fy^2) / max(fx, fy)^2`.
     pub rows: (f64, f64),
     /// The camera's focal lengths `(fx, fy)`, pixels.
     pub focal: (f64, f64),
 }
 
+impl Undistorted<'_> {
+    /// The index in the caller's slices of kept correspondence `k`.
+    pub fn index(&self, k: usize) -> usize {
+        self.used.as_ref().map_or(k, |u| u[k])
+    }
+}
+
 /// Undistorts pixel correspondences (the pixel-input path of [`Solver`] and of
 /// [`crate::ransac::Ransac`]): checks the lengths and the caller's weights (their errors carry
 /// the correspondence's index), then keeps every correspondence whose pixel can be
-/// undistorted. Buffers are sized once.
-pub(crate) fn undistort_all(
-    world: &[Point3<f64>],
-    pixels: &[Point2<f64>],
+/// undistorted. Buffers are sized once; the world points, pixels and caller's weights are
+/// copied only from the first pixel that cannot be undistorted on.
+pub(crate) fn undistort_all<'a>(
+    world: &'a [Point3<f64>],
+    pixels: &'a [Point2<f64>],
     camera: &Camera,
-    user_weights: Option<&[f64]>,
-) -> Result<Undistorted, PnpError> {
+    user_weights: Option<&'a [f64]>,
+) -> Result<Undistorted<'a>, PnpError> {
     if world.len() != pixels.len() {
         return Err(PnpError::LengthMismatch {
             world: world.len(),
@@ -730,25 +746,43 @@ pub(crate) fn undistort_all(
         }
     }
     let n = world.len();
-    let mut out = Undistorted {
-        world: Vec::with_capacity(n),
-        image: Vec::with_capacity(n),
-        weights: (camera.has_distortion() || user_weights.is_some()).then(|| Vec::with_capacity(n)),
-        used: Vec::with_capacity(n),
-        pixels: Vec::with_capacity(n),
-        user_weights: user_weights.map(|_| Vec::with_capacity(n)),
-        rows: (1.0, 1.0),
-        focal: camera.intrinsics_scale(),
-    };
-    let (fx, fy) = out.focal;
+    let focal = camera.intrinsics_scale();
+    let (fx, fy) = focal;
     let fmax = fx.max(fy);
-    out.rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
+    let rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
+    let mut image = Vec::with_capacity(n);
+    let mut weights =
+        (camera.has_distortion() || user_weights.is_some()).then(|| Vec::with_capacity(n));
+    // The copies of the kept correspondences, made at the first pixel left out.
+    struct Kept {
+        world: Vec<Point3<f64>>,
+        pixels: Vec<Point2<f64>>,
+        used: Vec<usize>,
+        user_weights: Option<Vec<f64>>,
+    }
+    let mut kept: Option<Kept> = None;
     // The camera unpacked and its model dispatched once, not per point.
     camera.projector().try_undistort_weighted_each(
         pixels,
         #[inline(always)]
         |i, undistorted| {
             let Some((m, weight)) = undistorted else {
+                if kept.is_none() {
+                    // Everything before `i` was kept: copied into buffers of capacity `n`.
+                    fn prefix<T: Copy>(s: &[T], len: usize, n: usize) -> Vec<T> {
+                        let mut v = Vec::with_capacity(n);
+                        v.extend_from_slice(&s[..len]);
+                        v
+                    }
+                    let mut used = Vec::with_capacity(n);
+                    used.extend(0..i);
+                    kept = Some(Kept {
+                        world: prefix(world, i, n),
+                        pixels: prefix(pixels, i, n),
+                        used,
+                        user_weights: user_weights.map(|uw| prefix(uw, i, n)),
+                    });
+                }
                 return Ok(());
             };
             let weight = user_weights.map_or(weight, |uw| uw[i] * weight);
@@ -758,20 +792,43 @@ pub(crate) fn undistort_all(
                     input: InputKind::Weight,
                 });
             }
-            if let Some(keep) = out.weights.as_mut() {
+            if let Some(keep) = weights.as_mut() {
                 keep.push(weight);
             }
-            out.world.push(world[i]);
-            out.image.push(m);
-            out.used.push(i);
-            out.pixels.push(pixels[i]);
-            if let (Some(uw), Some(keep)) = (user_weights, out.user_weights.as_mut()) {
-                keep.push(uw[i]);
+            image.push(m);
+            if let Some(k) = kept.as_mut() {
+                k.world.push(world[i]);
+                k.used.push(i);
+                k.pixels.push(pixels[i]);
+                if let (Some(uw), Some(keep)) = (user_weights, k.user_weights.as_mut()) {
+                    keep.push(uw[i]);
+                }
             }
             Ok(())
         },
     )?;
-    Ok(out)
+    Ok(match kept {
+        None => Undistorted {
+            world: Cow::Borrowed(world),
+            image,
+            weights,
+            used: None,
+            pixels: Cow::Borrowed(pixels),
+            user_weights: user_weights.map(Cow::Borrowed),
+            rows,
+            focal,
+        },
+        Some(k) => Undistorted {
+            world: Cow::Owned(k.world),
+            image,
+            weights,
+            used: Some(k.used),
+            pixels: Cow::Owned(k.pixels),
+            user_weights: k.user_weights.map(Cow::Owned),
+            rows,
+            focal,
+        },
+    })
 }
 
 /// The rotation of a finite initial pose, or [`PnpError::InvalidOption`] (`"initial"`).

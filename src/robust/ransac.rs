@@ -539,15 +539,15 @@ impl Ransac {
             u.weights.as_deref(),
             Some(px),
         )?;
-        if u.used.len() != world.len() {
+        if let Some(used) = &u.used {
             let mut full = vec![false; world.len()];
-            for (k, &i) in u.used.iter().enumerate() {
+            for (k, &i) in used.iter().enumerate() {
                 full[i] = sol.inliers[k];
             }
             sol.inliers = full;
             sol.stats.inlier_ratio = sol.num_inliers as f64 / world.len() as f64;
         }
-        sol.solution.skipped = world.len() - u.used.len();
+        sol.solution.skipped = world.len() - u.image.len();
         sol.stats.micros = start.elapsed().as_secs_f64() * 1e6;
         Ok(sol)
     }
