@@ -17,6 +17,7 @@
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 use crate::numeric::mat3::{pow2_scale, svd3};
+use crate::numeric::trig;
 
 /// `[a]x`, the cross-product matrix of `a`.
 #[rustfmt::skip]
@@ -51,8 +52,10 @@ pub(crate) fn cgr_to_rotation(s: &Vector3<f64>) -> Matrix3<f64> {
 
 /// Exponential map of so(3) (Rodrigues): the rotation by angle `|w|` about `w / |w|`.
 ///
-/// Evaluated through the unit quaternion `(cos(t/2), sin(t/2) w / t)`, `t = |w|`, with a
-/// Taylor branch for `sin(t/2) / t` below `t = 1e-4` (truncation error < 1e-27).
+/// Evaluated through the unit quaternion `(cos(t/2), sin(t/2) w / t)`, `t = |w|`; below
+/// `t/2 = 1/4` (every step of the refinements but the first from a poor start) `sin(t/2) /
+/// (t/2)` and `cos(t/2)` come from their Taylor series ([`trig::sinc_cos_small`], within 1
+/// ulp), above from libm.
 pub(crate) fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
     // Euler-Rodrigues form: q = (cos(t/2), sin(t/2) w / t), R = (q0^2 - v'v) I + 2 v v' + 2 q0 [v]x.
     // This is orthonormal to rounding even at large angles (the I + a K + b K^2 form loses
@@ -61,13 +64,12 @@ pub(crate) fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
     let t = t2.sqrt();
     let h = 0.5 * t;
     // sin(h) / t = 0.5 sin(h) / h.
-    let k = if t < 1e-4 {
-        let h2 = h * h;
-        0.5 * (1.0 - h2 / 6.0 + h2 * h2 / 120.0)
+    let (k, q0) = if h <= trig::SMALL_ANGLE {
+        let (sinc, cos) = trig::sinc_cos_small(h);
+        (0.5 * sinc, cos)
     } else {
-        0.5 * h.sin() / h
+        (0.5 * h.sin() / h, h.cos())
     };
-    let q0 = h.cos();
     let v = w * k;
     Matrix3::identity() * (q0 * q0 - v.norm_squared())
         + v * v.transpose() * 2.0

@@ -89,3 +89,28 @@ fn tan_is_within_four_ulp_of_std() {
     }
     assert!(worst >= 1, "{worst}");
 }
+
+#[test]
+fn sinc_cos_small_is_within_one_ulp_of_std() {
+    let mut next = uniform(0x2545_F491_4F6C_DD1D);
+    let mut args: Vec<f64> = (0..100_000).map(|_| SMALL_ANGLE * next()).collect();
+    // Tiny angles, and the ends of the range.
+    args.extend((1..40).map(|k| 10f64.powi(-k)));
+    args.extend([0.0, SMALL_ANGLE, f64::from_bits(SMALL_ANGLE.to_bits() - 1)]);
+    let (mut worst_s, mut worst_c) = (0, 0);
+    for a in args {
+        for a in [a, -a] {
+            let (s, c) = sinc_cos_small(a);
+            let s_std = if a == 0.0 { 1.0 } else { a.sin() / a };
+            let (us, uc) = (ulps(s, s_std), ulps(c, a.cos()));
+            assert!(
+                us <= 1 && uc <= 1,
+                "a = {a:e}: sin(a)/a {s:e} vs {s_std:e}, cos {c:e} vs {:e}",
+                a.cos()
+            );
+            worst_s = worst_s.max(us);
+            worst_c = worst_c.max(uc);
+        }
+    }
+    assert!(worst_s + worst_c >= 1, "not the identity of std's");
+}
