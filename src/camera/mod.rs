@@ -349,6 +349,8 @@ impl Camera {
 /// A projection from normalised points to pixels with its Jacobian: what the per-point loop of
 /// the pixel-space refinement (S10) is generic over.
 pub(crate) trait Project {
+    /// The pixel of the normalised point `(x, y)`.
+    fn project(&self, x: f64, y: f64) -> (f64, f64);
     /// The pixel of the normalised point `(x, y)` and the Jacobian `d pixel / d (x, y)`,
     /// row-major.
     fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]);
@@ -411,6 +413,11 @@ macro_rules! with_lens_projection {
 }
 
 impl<L: Lens, const FISHEYE: bool> Project for LensProjection<L, FISHEYE> {
+    #[inline(always)]
+    fn project(&self, x: f64, y: f64) -> (f64, f64) {
+        project_one(self, x, y)
+    }
+
     #[inline(always)]
     fn project_with_jacobian(&self, x: f64, y: f64) -> ((f64, f64), [f64; 4]) {
         let (fx, fy) = self.focal;

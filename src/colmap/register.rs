@@ -6,7 +6,7 @@ use std::time::Instant;
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::model::{Model, RegisterError};
-use crate::camera::Camera;
+use crate::camera::{Camera, Project, ProjectionJob};
 use crate::ransac::{Ransac, RansacStats};
 use crate::{Solution, Solver};
 
@@ -56,22 +56,44 @@ pub(crate) fn pixel_rmse(
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
 ) -> f64 {
-    let (mut s, mut k) = (0.0, 0usize);
-    // The camera unpacked once (`Camera::project` does it per call).
-    let projector = cam.projector();
-    for (i, (x, px)) in world.iter().zip(pixels).enumerate() {
-        if keep.is_some_and(|m| !m[i]) {
-            continue;
+    // The camera unpacked and its model dispatched once, not per point.
+    cam.projector().with_projection(Rmse {
+        world,
+        pixels,
+        keep,
+        r,
+        t,
+    })
+}
+
+/// [`pixel_rmse`]'s loop, for one lens model.
+struct Rmse<'a> {
+    world: &'a [Point3<f64>],
+    pixels: &'a [Point2<f64>],
+    keep: Option<&'a [bool]>,
+    r: &'a Matrix3<f64>,
+    t: &'a Vector3<f64>,
+}
+
+impl ProjectionJob for Rmse<'_> {
+    type Output = f64;
+
+    fn run<P: Project + Copy>(self, projection: P) -> f64 {
+        let (mut s, mut k) = (0.0, 0usize);
+        for (i, (x, px)) in self.world.iter().zip(self.pixels).enumerate() {
+            if self.keep.is_some_and(|m| !m[i]) {
+                continue;
+            }
+            let p = self.r * x.coords + self.t;
+            let (qx, qy) = projection.project(p.x / p.z, p.y / p.z);
+            s += (Point2::new(qx, qy) - px).norm_squared();
+            k += 1;
         }
-        let p = r * x.coords + t;
-        let (qx, qy) = projector.project(p.x / p.z, p.y / p.z);
-        s += (Point2::new(qx, qy) - px).norm_squared();
-        k += 1;
-    }
-    if k == 0 {
-        f64::NAN
-    } else {
-        (s / k as f64).sqrt()
+        if k == 0 {
+            f64::NAN
+        } else {
+            (s / k as f64).sqrt()
+        }
     }
 }
 
