@@ -48,6 +48,36 @@ fn bundled_model_has_the_expected_content() {
     }
 }
 
+/// `Model::correspondences` reads the points through a table indexed by id when the ids are
+/// small next to the image's observation count (the bundled model) and through the map
+/// otherwise: the same points with ids spread out (times 1,000, plus 7) give the same
+/// correspondences.
+#[test]
+fn correspondences_are_the_same_with_sparse_point_ids() {
+    let m = text_model();
+    let mut sparse = m.clone();
+    let spread = |id: u64| id * 1000 + 7;
+    sparse.points = m
+        .points
+        .iter()
+        .map(|(id, p)| {
+            let mut p = p.clone();
+            p.id = spread(*id);
+            (spread(*id), p)
+        })
+        .collect();
+    for img in sparse.images.values_mut() {
+        for (_, id) in &mut img.points2d {
+            *id = id.map(spread);
+        }
+    }
+    for id in m.images.keys() {
+        let dense = m.correspondences(*id);
+        assert!(!dense.0.is_empty());
+        assert_eq!(dense, sparse.correspondences(*id), "image {id}");
+    }
+}
+
 /// Default mode (reprojection refinement, pixel-weighted): every image, all correspondences,
 /// against COLMAP's bundle-adjusted pose. The bounds are the README's claims:
 /// 0.01 degrees (max column angle) and 0.05 % translation. (Measured: <= 0.0010 degrees and
