@@ -200,7 +200,7 @@ impl Output<'_> {
                     iters = out.iterations;
                     converged = out.stop.converged();
                     let rmse = if po.weight_sum > 0.0 {
-                        (po.squared / po.weight_sum).sqrt() / px.scale
+                        po.squared_scale * (po.squared / po.weight_sum).sqrt() / px.scale
                     } else {
                         f64::INFINITY
                     };

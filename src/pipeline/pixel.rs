@@ -29,9 +29,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use super::frame::{WorkingFrame, MIN_UNIT};
 use super::options::Loss;
 use super::reprojection::pass::{LaneMetric, Metric};
-use super::reprojection::{
-    levenberg_marquardt, Composed, Problem, ReprojOptions, ReprojOutcome, Residuals,
-};
+use super::reprojection::{levenberg_marquardt, Composed, Problem, ReprojOptions, ReprojOutcome};
 use crate::camera::{Project, ProjectionJob, Projector};
 use crate::numeric::mat3::pow2_scale;
 
@@ -59,8 +57,12 @@ pub(crate) struct PixelOutcome {
     /// The weight unit: `out.e * unit` is the caller's cost.
     pub unit: f64,
     /// `sum_i w_i |e_i|^2 / unit` at the returned pose (the plain squared error, also for a
-    /// robust loss).
+    /// robust loss), divided by `squared_scale^2`.
     pub squared: f64,
+    /// A power of two: with a robust loss, the largest residual component's (so that the sum
+    /// cannot overflow while every residual is finite: a robust loss grows slowly enough to
+    /// refine residuals whose squares overflow); 1 with the squared loss, whose cost is the sum.
+    pub squared_scale: f64,
     /// `sum_i w_i / unit` over the points of non-zero weight.
     pub weight_sum: f64,
 }
@@ -113,31 +115,77 @@ struct Job<'a> {
 }
 
 impl ProjectionJob for Job<'_> {
-    type Output = (ReprojOutcome, f64);
+    /// The refinement, the plain squared error at its pose and that error's scale (see
+    /// [`PixelOutcome::squared_scale`]).
+    type Output = (ReprojOutcome, f64, f64);
 
-    fn run<P: Project + Copy>(self, projection: P) -> (ReprojOutcome, f64) {
+    fn run<P: Project + Copy>(self, projection: P) -> (ReprojOutcome, f64, f64) {
         let fr = self.fr;
-        let squared = self.problem(CameraMetric::<P, false> {
-            projection,
-            loss: Loss::Squared,
-        });
         if self.px.loss == Loss::Squared {
+            let squared = self.problem(CameraMetric::<P, false> {
+                projection,
+                loss: Loss::Squared,
+            });
             let out = levenberg_marquardt(&squared, fr, self.r_work, self.t_work, self.opts);
-            return (out, out.e);
+            return (out, out.e, 1.0);
         }
         let robust = self.problem(CameraMetric::<P, true> {
             projection,
             loss: self.px.loss,
         });
         let out = levenberg_marquardt(&robust, fr, self.r_work, self.t_work, self.opts);
-        // The plain squared error at the pose (for the RMS residual).
+        // The plain squared error at the pose (for the RMS residual), scaled.
         let pose = Composed::new(&out.r, &fr.rw, fr.d, &out.t);
-        let e = squared.accumulate(&pose, None).map_or(f64::NAN, |n| n.e);
-        (out, e)
+        let (e, scale) = self.scaled_squared_error(projection, &pose);
+        (out, e, scale)
     }
 }
 
 impl<'a> Job<'a> {
+    /// `(sum_i w_i |e_i / s|^2 / unit, s)` at `pose`, `s` the power of two of the largest
+    /// residual component (1 if all are 0): two passes over the points, the first for `s`.
+    /// Non-finite if a residual is (a point at depth 0).
+    fn scaled_squared_error<P: Project + Copy>(
+        &self,
+        projection: P,
+        pose: &Composed,
+    ) -> (f64, f64) {
+        let residual = |k: usize| {
+            let x = self.world[k].coords - self.fr.c;
+            let p = pose.a * x + pose.t;
+            let (px, py) = projection.project(p.x / p.z, p.y / p.z);
+            let m = self.px.pixels[k];
+            (m.x - px, m.y - py)
+        };
+        let weight = |k: usize| self.px.weights.map_or(1.0, |w| w[k] * self.inv_weight);
+        let n = self.world.len().min(self.px.pixels.len());
+        let mut largest = 0.0f64;
+        for k in 0..n {
+            if weight(k) > 0.0 {
+                let (ex, ey) = residual(k);
+                largest = largest.max(ex.abs()).max(ey.abs());
+            }
+        }
+        if !largest.is_finite() {
+            return (f64::INFINITY, 1.0);
+        }
+        let s = if largest > 0.0 {
+            pow2_scale(largest)
+        } else {
+            1.0
+        };
+        let mut sum = 0.0;
+        for k in 0..n {
+            let w = weight(k);
+            if w > 0.0 {
+                let (ex, ey) = residual(k);
+                let (ex, ey) = (ex / s, ey / s);
+                sum += w * (ex * ex + ey * ey);
+            }
+        }
+        (sum, s)
+    }
+
     /// The refinement problem of these observations under `metric`.
     fn problem<M>(&self, metric: M) -> Problem<'a, M> {
         Problem {
@@ -183,11 +231,12 @@ pub(crate) fn refine_pixels(
         opts,
         inv_weight: 1.0 / unit,
     };
-    let (out, squared) = px.projector.with_projection(job);
+    let (out, squared, squared_scale) = px.projector.with_projection(job);
     PixelOutcome {
         out,
         unit,
         squared,
+        squared_scale,
         weight_sum,
     }
 }
