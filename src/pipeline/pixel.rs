@@ -144,7 +144,7 @@ impl ProjectionJob for Job<'_> {
 impl<'a> Job<'a> {
     /// `(sum_i w_i |e_i / s|^2 / unit, s)` at `pose`, `s` the power of two of the largest
     /// residual component (1 if all are 0): two passes over the points, the first for `s`.
-    /// Non-finite if a residual is (a point at depth 0).
+    /// `(+inf, 1)` if a residual is not finite (a point at depth 0).
     fn scaled_squared_error<P: Project + Copy>(
         &self,
         projection: P,
@@ -163,11 +163,12 @@ impl<'a> Job<'a> {
         for k in 0..n {
             if weight(k) > 0.0 {
                 let (ex, ey) = residual(k);
+                if !(ex.is_finite() && ey.is_finite()) {
+                    // A point at depth 0 (or a NaN): the RMS residual is +inf, never NaN.
+                    return (f64::INFINITY, 1.0);
+                }
                 largest = largest.max(ex.abs()).max(ey.abs());
             }
-        }
-        if !largest.is_finite() {
-            return (f64::INFINITY, 1.0);
         }
         let s = if largest > 0.0 {
             pow2_scale(largest)
