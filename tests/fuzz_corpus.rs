@@ -321,8 +321,8 @@ fn non_orthonormal_p3p_near_collinear_triple() {
 /// Normalised input with image coordinates up to 1e150 and the Huber loss (10,000 points):
 /// the robust refinement (S10) is fine, but the RMS residual, from the plain sum of squared
 /// residuals, overflowed to +inf after a refinement (the harness allows +inf only for a pose
-/// that was not refined). Fixed: the sum for the RMS residual is scaled by the power of two of
-/// the largest residual component (`pixel::Job::scaled_squared_error`).
+/// that was not refined). Fixed: the sum for the RMS residual is kept scaled by a power of two
+/// above the largest residual component (`pixel::Job::scaled_squared_error`).
 #[test]
 fn infinite_rmse_robust_loss_huge_residuals() {
     harness::solve(include_bytes!(

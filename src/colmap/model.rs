@@ -98,25 +98,23 @@ impl Model {
         // A model whose point ids are not much larger than the image's observation count
         // (COLMAP numbers points from 1): the points in a table indexed by id, filled by one
         // in-order walk, O(n) per call in all (the table has at most 4 n + 1 entries); a
-        // lookup in the map costs several times an index.
+        // lookup in the map costs several times an index. Otherwise the map itself.
         let max_id = self.points.keys().next_back().copied().unwrap_or(0);
-        if max_id <= 4 * n as u64 {
+        let table = (max_id <= 4 * n as u64).then(|| {
             let mut table: Vec<Option<Point3<f64>>> = vec![None; max_id as usize + 1];
             for (id, p) in &self.points {
                 table[*id as usize] = Some(p.xyz);
             }
-            for (px, id) in &img.points2d {
-                if let Some(x) = id.and_then(|id| table.get(id as usize).copied().flatten()) {
-                    world.push(x);
-                    pixels.push(*px);
-                }
-            }
-        } else {
-            for (px, id) in &img.points2d {
-                if let Some(p) = id.and_then(|id| self.points.get(&id)) {
-                    world.push(p.xyz);
-                    pixels.push(*px);
-                }
+            table
+        });
+        let point = |id: u64| match &table {
+            Some(t) => t.get(id as usize).copied().flatten(),
+            None => self.points.get(&id).map(|p| p.xyz),
+        };
+        for (px, id) in &img.points2d {
+            if let Some(x) = id.and_then(point) {
+                world.push(x);
+                pixels.push(*px);
             }
         }
         (world, pixels)

@@ -59,7 +59,7 @@ pub(crate) struct PixelOutcome {
     /// `sum_i w_i |e_i|^2 / unit` at the returned pose (the plain squared error, also for a
     /// robust loss), divided by `squared_scale^2`.
     pub squared: f64,
-    /// A power of two: with a robust loss, the largest residual component's (so that the sum
+    /// A power of two: with a robust loss, above the largest residual component (so that the sum
     /// cannot overflow while every residual is finite: a robust loss grows slowly enough to
     /// refine residuals whose squares overflow); 1 with the squared loss, whose cost is the sum.
     pub squared_scale: f64,
@@ -142,49 +142,49 @@ impl ProjectionJob for Job<'_> {
 }
 
 impl<'a> Job<'a> {
-    /// `(sum_i w_i |e_i / s|^2 / unit, s)` at `pose`, `s` the power of two of the largest
-    /// residual component (1 if all are 0): two passes over the points, the first for `s`.
-    /// `(+inf, 1)` if a residual is not finite (a point at depth 0).
+    /// `(sum_i w_i |e_i / s|^2 / unit, s)` at `pose`, `s` a power of two at least the largest
+    /// residual component (1 if all are 0), in one pass: when a component exceeds the scale,
+    /// the scale grows to its power of two and the sum so far is rescaled (exactly, by a power
+    /// of two, as LAPACK's scaled sums of squares do). `(+inf, 1)` if a residual is not finite
+    /// (a point at depth 0).
     fn scaled_squared_error<P: Project + Copy>(
         &self,
         projection: P,
         pose: &Composed,
     ) -> (f64, f64) {
-        let residual = |k: usize| {
-            let x = self.world[k].coords - self.fr.c;
-            let p = pose.a * x + pose.t;
+        let n = self.world.len().min(self.px.pixels.len());
+        let (mut scale, mut sum) = (0.0f64, 0.0f64);
+        for k in 0..n {
+            let w = self.px.weights.map_or(1.0, |w| w[k] * self.inv_weight);
+            if !(w > 0.0) {
+                continue;
+            }
+            let p = pose.a * (self.world[k].coords - self.fr.c) + pose.t;
             let (px, py) = projection.project(p.x / p.z, p.y / p.z);
             let m = self.px.pixels[k];
-            (m.x - px, m.y - py)
-        };
-        let weight = |k: usize| self.px.weights.map_or(1.0, |w| w[k] * self.inv_weight);
-        let n = self.world.len().min(self.px.pixels.len());
-        let mut largest = 0.0f64;
-        for k in 0..n {
-            if weight(k) > 0.0 {
-                let (ex, ey) = residual(k);
-                if !(ex.is_finite() && ey.is_finite()) {
-                    // A point at depth 0 (or a NaN): the RMS residual is +inf, never NaN.
-                    return (f64::INFINITY, 1.0);
-                }
-                largest = largest.max(ex.abs()).max(ey.abs());
+            let (ex, ey) = (m.x - px, m.y - py);
+            if !(ex.is_finite() && ey.is_finite()) {
+                return (f64::INFINITY, 1.0);
             }
-        }
-        let s = if largest > 0.0 {
-            pow2_scale(largest)
-        } else {
-            1.0
-        };
-        let mut sum = 0.0;
-        for k in 0..n {
-            let w = weight(k);
-            if w > 0.0 {
-                let (ex, ey) = residual(k);
-                let (ex, ey) = (ex / s, ey / s);
+            let largest = ex.abs().max(ey.abs());
+            if largest >= scale && largest > 0.0 {
+                let grown = 2.0 * pow2_scale(largest);
+                if scale > 0.0 {
+                    let f = scale / grown;
+                    sum *= f * f;
+                }
+                scale = grown;
+            }
+            if scale > 0.0 {
+                let (ex, ey) = (ex / scale, ey / scale);
                 sum += w * (ex * ex + ey * ey);
             }
         }
-        (sum, s)
+        if scale > 0.0 {
+            (sum, scale)
+        } else {
+            (0.0, 1.0)
+        }
     }
 
     /// The refinement problem of these observations under `metric`.
