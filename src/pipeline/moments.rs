@@ -450,7 +450,7 @@ fn flat_mat(x: &Matrix3<f64>) -> Matrix3<f64> {
 }
 
 impl Accumulator {
-    /// `M`, `G` and `trace(M)` from the sums (one 3 x 3 Cholesky solve with 9 right-hand sides).
+    /// `M`, `G` and `trace(M)` from the sums (the Cholesky factor of `W^T W` in closed form).
     ///
     /// `flatten = true` gives the planar system of S4' (working-frame z set to 0): every
     /// sum containing z is zeroed, which equals accumulating the flattened points.
@@ -475,58 +475,66 @@ impl Accumulator {
                 self.a, self.a_u, self.a_v, self.a_q, self.s, self.s_u, self.s_v, self.s_q,
             )
         };
-        #[rustfmt::skip]
-        let wtw = Matrix3::new(
-            self.sw, 0.0, -self.su,
-            0.0, self.sw, -self.sv,
-            -self.su, -self.sv, self.sq,
-        );
-        let mut wtv = SMatrix::<f64, 3, 9>::zeros();
-        for j in 0..3 {
-            wtv[(0, j)] = -a[j];
-            wtv[(0, 6 + j)] = a_u[j];
-            wtv[(1, 3 + j)] = -a[j];
-            wtv[(1, 6 + j)] = a_v[j];
-            wtv[(2, j)] = a_u[j];
-            wtv[(2, 3 + j)] = a_v[j];
-            wtv[(2, 6 + j)] = -a_q[j];
-        }
-        let mut vtv = SMatrix::<f64, 9, 9>::zeros();
-        vtv.fixed_view_mut::<3, 3>(0, 0).copy_from(&s);
-        vtv.fixed_view_mut::<3, 3>(3, 3).copy_from(&s);
-        vtv.fixed_view_mut::<3, 3>(6, 6).copy_from(&s_q);
-        vtv.fixed_view_mut::<3, 3>(0, 6).copy_from(&(-s_u));
-        vtv.fixed_view_mut::<3, 3>(6, 0).copy_from(&(-s_u));
-        vtv.fixed_view_mut::<3, 3>(3, 6).copy_from(&(-s_v));
-        vtv.fixed_view_mut::<3, 3>(6, 3).copy_from(&(-s_v));
-
-        let sums_finite = [self.sw, self.su, self.sv, self.sq]
-            .iter()
-            .all(|x| x.is_finite())
-            && [a, a_u, a_v, a_q]
-                .iter()
-                .all(|x| x.iter().all(|y| y.is_finite()))
-            && [s, s_u, s_v, s_q]
-                .iter()
-                .all(|x| x.iter().all(|y| y.is_finite()));
+        let sums_finite = all_finite(&[self.sw, self.su, self.sv, self.sq])
+            && [a, a_u, a_v, a_q].iter().all(|x| all_finite(x.as_slice()))
+            && [s, s_u, s_v, s_q].iter().all(|x| all_finite(x.as_slice()));
         if !sums_finite {
             return None;
         }
-        let chol = wtw.cholesky()?;
-        let g = chol.solve(&wtv);
-        // M = V^T V - (W^T V)^T G, symmetric by construction: the upper triangle is computed
-        // and mirrored (45 of the 81 entries).
-        let mut m = vtv;
-        let mut finite = g.iter().all(|x| x.is_finite());
-        for i in 0..9 {
-            for j in i..9 {
-                let v = vtv[(i, j)]
-                    - (wtv[(0, i)] * g[(0, j)] + wtv[(1, i)] * g[(1, j)] + wtv[(2, i)] * g[(2, j)]);
-                finite &= v.is_finite();
-                m[(i, j)] = v;
-                m[(j, i)] = v;
+        // W^T W = L L^T in closed form: L = [[r, 0, 0], [0, r, 0], [-su / r, -sv / r, l22]]
+        // with r = sqrt(sw) and l22^2 = sq - (su^2 + sv^2) / sw (positive unless every image
+        // point is the same). H = L^-1 W^T V has the rows [-a, 0, a_u] / r, [0, -a, a_v] / r
+        // and c = [c0, c1, c2], so M = V^T V - H^T H block by block, and G = L^-T H.
+        let sw = self.sw;
+        if !(sw > 0.0) {
+            return None;
+        }
+        let isw = 1.0 / sw;
+        let (ku, kv) = (self.su * isw, self.sv * isw);
+        let l22sq = self.sq - (self.su * ku + self.sv * kv);
+        if !(l22sq > 0.0) {
+            return None;
+        }
+        let il22 = 1.0 / l22sq.sqrt();
+        let c0 = (a_u - a * ku) * il22;
+        let c1 = (a_v - a * kv) * il22;
+        let c2 = (a_u * ku + a_v * kv - a_q) * il22;
+        let outer = |x: &Vector3<f64>, y: &Vector3<f64>| x * y.transpose();
+        let aw = a * isw;
+        let p = s - outer(&aw, &a);
+        // The blocks on and above the diagonal; each entry of the upper triangle written to
+        // both of its places (M exactly symmetric).
+        let mut m = SMatrix::<f64, 9, 9>::zeros();
+        put_block(&mut m, 0, 0, &(p - outer(&c0, &c0)));
+        put_block(&mut m, 0, 1, &-outer(&c0, &c1));
+        put_block(&mut m, 0, 2, &(outer(&aw, &a_u) - s_u - outer(&c0, &c2)));
+        put_block(&mut m, 1, 1, &(p - outer(&c1, &c1)));
+        put_block(&mut m, 1, 2, &(outer(&aw, &a_v) - s_v - outer(&c1, &c2)));
+        let m22 = s_q - (outer(&a_u, &a_u) + outer(&a_v, &a_v)) * isw - outer(&c2, &c2);
+        put_block(&mut m, 2, 2, &m22);
+        let g2 = [c0 * il22, c1 * il22, c2 * il22];
+        let mut g = SMatrix::<f64, 3, 9>::zeros();
+        for k in 0..3 {
+            let rows = [
+                [
+                    -aw[k] + ku * g2[0][k],
+                    ku * g2[1][k],
+                    a_u[k] * isw + ku * g2[2][k],
+                ],
+                [
+                    kv * g2[0][k],
+                    -aw[k] + kv * g2[1][k],
+                    a_v[k] * isw + kv * g2[2][k],
+                ],
+                [g2[0][k], g2[1][k], g2[2][k]],
+            ];
+            for (r, row) in rows.iter().enumerate() {
+                for (b, &v) in row.iter().enumerate() {
+                    g[(r, 3 * b + k)] = v;
+                }
             }
         }
+        let finite = all_finite(m.as_slice()) && all_finite(g.as_slice());
         if !finite {
             return None;
         }
@@ -535,6 +543,38 @@ impl Accumulator {
             g,
             trace: m.trace(),
         })
+    }
+}
+
+/// Every entry is finite: `x * 0` is 0 for a finite `x` and NaN otherwise, summed in
+/// [`LANES`] independent lanes (packed registers, no branch per entry).
+#[inline(always)]
+fn all_finite(x: &[f64]) -> bool {
+    let mut acc = [0.0f64; LANES];
+    let mut chunks = x.chunks_exact(LANES);
+    for c in &mut chunks {
+        for l in 0..LANES {
+            acc[l] += c[l] * 0.0;
+        }
+    }
+    for (l, &r) in chunks.remainder().iter().enumerate() {
+        acc[l] += r * 0.0;
+    }
+    lane_sum(&acc) == 0.0
+}
+
+/// Block `(bi, bj)` (`bi <= bj`) of the symmetric 9 x 9 `m`: its entries on or above the
+/// diagonal of `m`, each also at its mirrored place.
+#[inline(always)]
+fn put_block(m: &mut SMatrix<f64, 9, 9>, bi: usize, bj: usize, b: &Matrix3<f64>) {
+    for r in 0..3 {
+        for c in 0..3 {
+            let (i, j) = (3 * bi + r, 3 * bj + c);
+            if i <= j {
+                m[(i, j)] = b[(r, c)];
+                m[(j, i)] = b[(r, c)];
+            }
+        }
     }
 }
 
