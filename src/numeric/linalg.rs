@@ -6,20 +6,37 @@
 
 use nalgebra::{SMatrix, SVector};
 
+/// A Cholesky factor `L` stored by rows (`l[i][j]`, zero above the diagonal).
+pub(crate) type Factor<const D: usize> = [[f64; D]; D];
+
 /// Cholesky factor `L` (lower) of a symmetric positive definite matrix, or `None` (also for a
 /// NaN entry).
 pub(crate) fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
-    cholesky_or_pivot(a).ok()
+    let rows = cholesky_rows::<D>(|i, j| a[(i, j)]).ok()?;
+    Some(SMatrix::from_fn(|i, j| rows[i][j]))
 }
 
-/// [`cholesky`], or the index `j` of the first pivot that is not positive: the leading
-/// `j x j` block was factored, so it is positive definite (up to the factorisation's backward
-/// error), and by Cauchy's interlacing theorem `a` has at most `D - j` eigenvalues `<= 0`.
-pub(crate) fn cholesky_or_pivot<const D: usize>(
-    a: &SMatrix<f64, D, D>,
-) -> Result<SMatrix<f64, D, D>, usize> {
-    let rows = cholesky_rows::<D>(|i, j| a[(i, j)])?;
-    Ok(SMatrix::from_fn(|i, j| rows[i][j]))
+/// The Cholesky factor of `m - shift I`, or the index `j` of the first pivot that is not
+/// positive: the leading `j x j` block was factored, so it is positive definite (up to the
+/// factorisation's backward error), and by Cauchy's interlacing theorem `m - shift I` has at
+/// most `D - j` eigenvalues `<= 0`.
+pub(crate) fn cholesky_shifted_or_pivot<const D: usize>(
+    m: &SMatrix<f64, D, D>,
+    shift: f64,
+) -> Result<Factor<D>, usize> {
+    cholesky_rows::<D>(|i, j| if i == j { m[(i, i)] - shift } else { m[(i, j)] })
+}
+
+/// Runs `$body` once for each index of the list, with `$j` a constant (`const $j: usize`):
+/// the loops of the body then have constant trip counts and unroll into straight-line code
+/// (the factorisations and substitutions below, for every dimension up to 12).
+macro_rules! for_each_const {
+    ($j:ident in [$($k:literal),*] $body:block) => {
+        $({
+            const $j: usize = $k;
+            $body
+        })*
+    };
 }
 
 /// The rows of the Cholesky factor `L` of the symmetric matrix with lower-triangle entries
@@ -27,23 +44,36 @@ pub(crate) fn cholesky_or_pivot<const D: usize>(
 /// entry). The textbook column-by-column order of operations; `L` is row-major, so that every
 /// inner product runs over two contiguous slices.
 #[inline(always)]
-fn cholesky_rows<const D: usize>(a: impl Fn(usize, usize) -> f64) -> Result<[[f64; D]; D], usize> {
+fn cholesky_rows<const D: usize>(a: impl Fn(usize, usize) -> f64) -> Result<Factor<D>, usize> {
+    const { assert!(D <= 12) };
     let mut rows = [[0.0f64; D]; D];
-    for j in 0..D {
-        let (head, below) = rows.split_at_mut(j + 1);
-        let rj = &mut head[j];
-        let d = dot_down(a(j, j), &rj[..j], &rj[..j]);
-        if !(d > 0.0) {
-            return Err(j);
+    for_each_const!(J in [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11] {
+        if J < D {
+            cholesky_column::<D, J>(&mut rows, &a)?;
         }
-        let djj = d.sqrt();
-        rj[j] = djj;
-        let rj = &rj[..j];
-        for (i, ri) in (j + 1..D).zip(below.iter_mut()) {
-            ri[j] = dot_down(a(i, j), &ri[..j], rj) / djj;
-        }
-    }
+    });
     Ok(rows)
+}
+
+/// Column `J` of [`cholesky_rows`]: the pivot, then the entries below it.
+#[inline(always)]
+fn cholesky_column<const D: usize, const J: usize>(
+    rows: &mut [[f64; D]; D],
+    a: &impl Fn(usize, usize) -> f64,
+) -> Result<(), usize> {
+    let (head, below) = rows.split_at_mut(J + 1);
+    let rj = &mut head[J];
+    let d = dot_down(a(J, J), &rj[..J], &rj[..J]);
+    if !(d > 0.0) {
+        return Err(J);
+    }
+    let djj = d.sqrt();
+    rj[J] = djj;
+    let rj = &rj[..J];
+    for (i, ri) in (J + 1..D).zip(below.iter_mut()) {
+        ri[J] = dot_down(a(i, J), &ri[..J], rj) / djj;
+    }
+    Ok(())
 }
 
 /// `s - x_0 y_0 - x_1 y_1 - ...`, subtracted in order.
@@ -54,19 +84,24 @@ fn dot_down(s: f64, x: &[f64], y: &[f64]) -> f64 {
 
 /// Solves `L L^T x = b` in place (`L` by rows, as [`cholesky_rows`] gives it).
 #[inline(always)]
-fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut [f64]) {
-    for i in 0..D {
-        let (done, rest) = x.split_at_mut(i);
-        rest[0] = dot_down(rest[0], &rows[i][..i], done) / rows[i][i];
-    }
-    for i in (0..D).rev() {
-        let (head, done) = x.split_at_mut(i + 1);
-        let s = done
-            .iter()
-            .zip(&rows[i + 1..])
-            .fold(head[i], |s, (xk, rk)| s - rk[i] * xk);
-        head[i] = s / rows[i][i];
-    }
+fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut [f64; D]) {
+    const { assert!(D <= 12) };
+    for_each_const!(I in [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11] {
+        if I < D {
+            let (done, rest) = x.split_at_mut(I);
+            rest[0] = dot_down(rest[0], &rows[I][..I], done) / rows[I][I];
+        }
+    });
+    for_each_const!(I in [11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0] {
+        if I < D {
+            let (head, done) = x.split_at_mut(I + 1);
+            let s = done
+                .iter()
+                .zip(&rows[I + 1..])
+                .fold(head[I], |s, (xk, rk)| s - rk[I] * xk);
+            head[I] = s / rows[I][I];
+        }
+    });
 }
 
 /// Inverse-iteration steps, at most: each multiplies the error by `(l1 - sigma) / (l2 - sigma)`.
@@ -89,13 +124,9 @@ const EIGENVECTOR_SHIFT: f64 = 1e-12;
 pub(crate) fn cholesky_shifted_up<const D: usize>(
     m: &SMatrix<f64, D, D>,
     scale: f64,
-) -> Option<(SMatrix<f64, D, D>, f64)> {
-    let mut a = *m;
+) -> Option<(Factor<D>, f64)> {
     let delta = EIGENVECTOR_SHIFT * scale;
-    for i in 0..D {
-        a[(i, i)] += delta;
-    }
-    Some((cholesky(&a)?, -delta))
+    Some((cholesky_shifted_or_pivot(m, -delta).ok()?, -delta))
 }
 
 /// Unit eigenvector of the smallest eigenvalue of the symmetric positive semidefinite `m`
@@ -114,7 +145,7 @@ pub(crate) fn smallest_eigenvector<const D: usize>(
 /// smallest eigenvalue of `m`, approximately, or `None` for non-finite iterates.
 pub(crate) fn inverse_iteration<const D: usize>(
     m: &SMatrix<f64, D, D>,
-    l: &SMatrix<f64, D, D>,
+    l: &Factor<D>,
 ) -> Option<SVector<f64, D>> {
     // Start from the coordinate axis with the smallest diagonal entry (the direction along
     // which M is smallest among the axes), plus a small all-ones component so no eigenvector is
@@ -122,12 +153,11 @@ pub(crate) fn inverse_iteration<const D: usize>(
     let kmin = (0..D)
         .min_by(|&i, &j| m[(i, i)].total_cmp(&m[(j, j)]))
         .unwrap_or(0);
-    let rows: [[f64; D]; D] = core::array::from_fn(|i| core::array::from_fn(|j| l[(i, j)]));
     let mut x = SVector::<f64, D>::from_element(1e-3);
     x[kmin] = 1.0;
     for k in 0..INVERSE_ITERATIONS {
         let prev = x;
-        cholesky_solve(&rows, x.as_mut_slice());
+        cholesky_solve(l, &mut x.data.0[0]);
         let n = x.norm();
         if !(n > 0.0 && n.is_finite()) {
             return None;

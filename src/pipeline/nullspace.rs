@@ -78,7 +78,7 @@ pub(crate) struct Probe {
     pub degenerate: bool,
     /// The Cholesky factor of `M - tau I` when it exists (no eigenvalue below `tau`); the
     /// case-1 inverse iteration reuses it.
-    shifted: Option<SMatrix<f64, 9, 9>>,
+    shifted: Option<linalg::Factor<9>>,
 }
 
 /// The probe's shift `tau = DEGENERATE_EIG trace(M) (1 + eps)`.
@@ -95,7 +95,7 @@ fn probe_shift(scale: f64) -> f64 {
 /// otherwise.
 pub(crate) fn probe(m: &SMatrix<f64, 9, 9>, scale: f64) -> Probe {
     let tau = probe_shift(scale);
-    let shifted = linalg::cholesky_or_pivot(&(m - SMatrix::<f64, 9, 9>::identity() * tau));
+    let shifted = linalg::cholesky_shifted_or_pivot(m, tau);
     let degenerate = match shifted {
         Ok(_) => false,
         Err(j) => 9 - j > 4 && linalg::count_eigenvalues_below(m, tau) > 4,
