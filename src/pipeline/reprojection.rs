@@ -40,7 +40,8 @@
 //!   less than half the smallest `|z_i|`; the other half is the margin for rounding. `|q_i| =
 //!   |X_i - c| / d` does not depend on the pose: it is measured once, in the first pass.
 //! - The cost does not go up. The predicted decrease `pred = -(2 g.delta + delta.H.delta)` of
-//!   the damped Gauss-Newton model is positive, and the true decrease differs from it by the
+//!   the damped Gauss-Newton model (computed as `lam |delta|^2 - g.delta`, equal since
+//!   `(H + lam I) delta = -g`) is positive, and the true decrease differs from it by the
 //!   residual-curvature term, a fraction of `pred` of the order of the linear convergence
 //!   ratio (below 1 here: the second condition with `|delta| > xtol (|t| + 1)` gives
 //!   `|delta| / |delta_prev| < 1`), plus `O(|delta|^3)`. The returned cost is the prediction,
@@ -403,7 +404,8 @@ fn levenberg_marquardt_until<P: Residuals>(
             prev_step = None;
             continue;
         };
-        let step_norm = delta.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let step_sq = delta.iter().map(|x| x * x).sum::<f64>();
+        let step_norm = step_sq.sqrt();
         let scale = t.norm() + 1.0;
         if step_norm <= opts.xtol * scale {
             stop = ReprojStop::Step;
@@ -414,16 +416,11 @@ fn levenberg_marquardt_until<P: Residuals>(
         let t_new = t + Vector3::new(delta[3], delta[4], delta[5]);
         let cand = Composed::new(&r_new, &fr.rw, fr.d, &t_new);
 
-        // Predicted decrease of the linear model: -(2 g.delta + delta.H.delta).
-        let mut g_d = 0.0;
-        let mut d_h_d = 0.0;
-        for k in 0..6 {
-            g_d += nrm.g[k] * delta[k];
-            for l in 0..6 {
-                d_h_d += delta[k] * nrm.h[k][l] * delta[l];
-            }
-        }
-        let pred = -(2.0 * g_d + d_h_d);
+        // Predicted decrease of the linear model, -(2 g.delta + delta.H.delta), which is
+        // lam |delta|^2 - g.delta since (H + lam I) delta = -g: two terms that are both
+        // positive for a descent step, so no cancellation (and no 6 x 6 quadratic form).
+        let g_d: f64 = (0..6).map(|k| nrm.g[k] * delta[k]).sum();
+        let pred = lam * step_sq - g_d;
         // The first step from this iterate (not one shrunk by a rejection): the caller may
         // stop a run that the model says cannot go where it needs to.
         if (it == 1 || prev_step.is_some()) && abandon(Checkpoint::Step { e: nrm.e, pred }) {
