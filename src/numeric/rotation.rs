@@ -110,7 +110,49 @@ pub(crate) fn candidate_to_rotation(r: &[f64; 9]) -> Option<Matrix3<f64>> {
     // Exact power-of-two scaling so the determinant cannot overflow or underflow.
     let a = a / pow2_scale(amax);
     let a = if a.determinant() < 0.0 { -a } else { a };
-    nearest_rotation(&a)
+    polar_rotation(&a).or_else(|| nearest_rotation(&a))
+}
+
+/// Scaled Newton steps of [`polar_rotation`], at most.
+const POLAR_ITERATIONS: usize = 8;
+/// [`polar_rotation`] stops after a step that changes the matrix by at most this (Frobenius
+/// norm): the iteration converges quadratically, so the result is then orthogonal to rounding.
+const POLAR_TOL: f64 = 1e-8;
+/// [`polar_rotation`] leaves to the SVD a matrix with `det X <= POLAR_MIN_DET |X|_F^3`
+/// (nearly singular: the inverse in the iteration would be inaccurate).
+const POLAR_MIN_DET: f64 = 1e-8;
+
+/// The orthogonal polar factor of `a` (det > 0), which is its nearest rotation, by Newton's
+/// iteration with Higham's Frobenius-norm scaling: `X <- (g X + X^-T / g) / 2` with
+/// `g = sqrt(|X^-1|_F / |X|_F)`, `X^-T` the cofactor matrix (rows `x1 x x2`, `x2 x x0`,
+/// `x0 x x1`) over the determinant. A start near a multiple of a rotation settles in two to
+/// four steps, a few hundred instructions against about 1,400 for [`nearest_rotation`]'s SVD.
+/// `None` (the caller uses the SVD) when an iterate is nearly singular or `POLAR_ITERATIONS`
+/// steps do not settle it.
+fn polar_rotation(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let mut x = *a;
+    for _ in 0..POLAR_ITERATIONS {
+        let (x0, x1, x2) = (
+            x.row(0).transpose(),
+            x.row(1).transpose(),
+            x.row(2).transpose(),
+        );
+        let (c0, c1, c2) = (x1.cross(&x2), x2.cross(&x0), x0.cross(&x1));
+        let det = x0.dot(&c0);
+        let nx2 = x.norm_squared();
+        if !(det > POLAR_MIN_DET * nx2 * nx2.sqrt()) {
+            return None;
+        }
+        let inv_t = Matrix3::from_rows(&[c0.transpose(), c1.transpose(), c2.transpose()]) / det;
+        let g = (inv_t.norm() / nx2.sqrt()).sqrt();
+        let next = (x * g + inv_t / g) * 0.5;
+        let step = (next - x).norm();
+        x = next;
+        if step <= POLAR_TOL {
+            return Some(x);
+        }
+    }
+    None
 }
 
 /// Angle between two vectors in radians, `atan2(|a x b|, a . b)` (accurate at small angles,

@@ -266,6 +266,33 @@ fn nearest_rotation_properties() {
 }
 
 #[test]
+fn polar_rotation_is_the_nearest_rotation() {
+    let mut rng = Pcg64::seed_from_u64(5);
+    let mut settled = 0;
+    for k in 0..2000 {
+        // Rotations times a scale plus noise from 1e-9 to 1 relative: condition numbers up
+        // to about 1e3 (and some matrices with det <= 0, which it must refuse).
+        let r = rand_rot(&mut rng);
+        let size = 10f64.powf(-9.0 + 9.0 * (k as f64 / 2000.0));
+        let noise = Matrix3::from_fn(|_, _| rng.random_range(-size..size));
+        let a = (r + noise) * rng.random_range(0.1..10.0);
+        let Some(p) = polar_rotation(&a) else {
+            continue;
+        };
+        settled += 1;
+        assert!(a.determinant() > 0.0, "{k}");
+        assert!(orth_err(&p) < ORTH_TOL && (p.determinant() - 1.0).abs() < ORTH_TOL, "{k}");
+        // The same rotation as the SVD's, to the rounding of the two computations.
+        let q = nearest_rotation(&a).unwrap();
+        assert!((p - q).amax() < 1e-13, "{k}: {:e}", (p - q).amax());
+    }
+    // Refused only near singularity or with det <= 0 (large noise).
+    assert!(settled >= 1900, "{settled}");
+    assert!(polar_rotation(&Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 1e-9))).is_none());
+    assert!(polar_rotation(&Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0))).is_none());
+}
+
+#[test]
 fn candidate_to_rotation_sign_and_skip() {
     let r = Rotation3::from_scaled_axis(Vector3::new(0.2, -1.0, 2.0)).into_inner();
     let mut v = [0.0; 9];
