@@ -281,7 +281,10 @@ fn polar_rotation_is_the_nearest_rotation() {
         };
         settled += 1;
         assert!(a.determinant() > 0.0, "{k}");
-        assert!(orth_err(&p) < ORTH_TOL && (p.determinant() - 1.0).abs() < ORTH_TOL, "{k}");
+        assert!(
+            orth_err(&p) < ORTH_TOL && (p.determinant() - 1.0).abs() < ORTH_TOL,
+            "{k}"
+        );
         // The same rotation as the SVD's, to the rounding of the two computations.
         let q = nearest_rotation(&a).unwrap();
         assert!((p - q).amax() < 1e-13, "{k}: {:e}", (p - q).amax());
