@@ -16,6 +16,15 @@ pub(crate) fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix
     Some(SMatrix::from_fn(|i, j| rows[i][j]))
 }
 
+/// Whether the symmetric matrix with lower-triangle entries `a(i, j)`, `j <= i`, is positive
+/// definite: its Cholesky factorisation exists (`false` also for a NaN entry). With the
+/// factorisation unrolled, `a` is evaluated at constant indices: a matrix formed from others
+/// entry by entry is never stored.
+#[inline(always)]
+pub(crate) fn positive_definite<const D: usize>(a: impl Fn(usize, usize) -> f64) -> bool {
+    cholesky_rows::<D>(a).is_ok()
+}
+
 /// The Cholesky factor of `m - shift I`, or the index `j` of the first pivot that is not
 /// positive: the leading `j x j` block was factored, so it is positive definite (up to the
 /// factorisation's backward error), and by Cauchy's interlacing theorem `m - shift I` has at

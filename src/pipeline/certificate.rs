@@ -94,10 +94,7 @@ fn split_holds(
     alpha: f64,
     eps: f64,
 ) -> bool {
-    psd_with_slack(
-        m - rows_cols(&(lam * alpha), &(lam_cols * (1.0 - alpha))),
-        eps,
-    )
+    psd_with_slack(m, &(lam * alpha), &(lam_cols * (1.0 - alpha)), eps)
 }
 
 /// `Lambda (x) I3 + I3 (x) Gamma` on row-major `vec(R)`: the quadratic form
@@ -115,9 +112,27 @@ fn rows_cols(lam: &Matrix3<f64>, gamma: &Matrix3<f64>) -> SMatrix<f64, 9, 9> {
     c
 }
 
-/// Whether `q + eps I` is positive definite (a Cholesky factorisation exists).
-fn psd_with_slack(q: SMatrix<f64, 9, 9>, eps: f64) -> bool {
-    crate::numeric::linalg::cholesky(&(q + SMatrix::<f64, 9, 9>::identity() * eps)).is_some()
+/// Whether `q - rows_cols(lam, gamma) + eps I` is positive definite (a Cholesky
+/// factorisation exists), with its entries formed as the factorisation reads them (the same
+/// values as the matrices formed one after the other, without forming them).
+fn psd_with_slack(
+    q: &SMatrix<f64, 9, 9>,
+    lam: &Matrix3<f64>,
+    gamma: &Matrix3<f64>,
+    eps: f64,
+) -> bool {
+    crate::numeric::linalg::positive_definite::<9>(|p, r| {
+        // Entry (p, r) of `rows_cols`: `Lambda` between equal columns, `Gamma` within a row.
+        let (pa, pb, ra, rb) = (p / 3, p % 3, r / 3, r % 3);
+        let mut c = 0.0;
+        if pb == rb {
+            c += lam[(pa, ra)];
+        }
+        if pa == ra {
+            c += gamma[(pb, rb)];
+        }
+        (q[(p, r)] - c) + if p == r { eps } else { 0.0 }
+    })
 }
 
 /// Orthonormal basis (Frobenius) of the 3x3 matrices orthogonal to `I`: five traceless
@@ -231,7 +246,7 @@ fn least_squares_multiplier(m: &SMatrix<f64, 9, 9>, a: &Matrix3<f64>, eps: f64) 
             return false;
         };
         let lam = (0..5).fold(Matrix3::zeros(), |acc, p| acc + cpl.t[p] * x[p]);
-        if psd_with_slack(q0 - rows_cols(&lam, &-lam), eps) {
+        if psd_with_slack(&q0, &lam, &-lam, eps) {
             return true;
         }
         if round == MULTIPLIER_REWEIGHTINGS {
