@@ -54,6 +54,11 @@ pub(crate) struct Accumulator {
     pub s_v: Matrix3<f64>,
     /// `sum w q P P^T`.
     pub s_q: Matrix3<f64>,
+    /// `sum w |m - mean|^2` about the weighted image mean: `sq - (su^2 + sv^2) / sw` in exact
+    /// arithmetic, the last pivot of `W^T W`, but accumulated about the mean (S1's image
+    /// spread) so that it keeps its relative accuracy when the image points nearly coincide,
+    /// where the difference of the sums is left with their rounding alone.
+    pub image_scatter: f64,
 }
 
 /// `M` (9 x 9, symmetric PSD) and `G` (3 x 9) of S2, with `f(R) = r^T M r` and `t = G r`.
@@ -381,6 +386,8 @@ pub(crate) fn accumulate_centred(
     };
     CentredSums {
         acc: Accumulator {
+            // The spread is in image units of `sm`: back to the unit of `u`, `v` (exact).
+            image_scatter: spread / (map.inv_image * map.inv_image),
             sw: s[0][0],
             su: s[0][1],
             sv: s[0][2],
@@ -430,6 +437,7 @@ impl Accumulator {
             s_u: m(&self.s_u),
             s_v: m(&self.s_v),
             s_q: m(&self.s_q),
+            image_scatter: self.image_scatter,
         }
     }
 }
@@ -482,8 +490,8 @@ impl Accumulator {
             return None;
         }
         // W^T W = L L^T in closed form: L = [[r, 0, 0], [0, r, 0], [-su / r, -sv / r, l22]]
-        // with r = sqrt(sw) and l22^2 = sq - (su^2 + sv^2) / sw (positive unless every image
-        // point is the same). H = L^-1 W^T V has the rows [-a, 0, a_u] / r, [0, -a, a_v] / r
+        // with r = sqrt(sw) and l22^2 = sq - (su^2 + sv^2) / sw = `image_scatter` (positive
+        // unless every image point is the same). H = L^-1 W^T V has the rows [-a, 0, a_u] / r, [0, -a, a_v] / r
         // and c = [c0, c1, c2], so M = V^T V - H^T H block by block, and G = L^-T H.
         let sw = self.sw;
         if !(sw > 0.0) {
@@ -491,8 +499,8 @@ impl Accumulator {
         }
         let isw = 1.0 / sw;
         let (ku, kv) = (self.su * isw, self.sv * isw);
-        let l22sq = self.sq - (self.su * ku + self.sv * kv);
-        if !(l22sq > 0.0) {
+        let l22sq = self.image_scatter;
+        if !(l22sq > 0.0 && l22sq.is_finite()) {
             return None;
         }
         let il22 = 1.0 / l22sq.sqrt();
