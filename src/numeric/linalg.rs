@@ -79,8 +79,10 @@ fn cholesky_column<const D: usize, const J: usize>(
     let djj = d.sqrt();
     rj[J] = djj;
     let rj = &rj[..J];
+    // One division per column: the entries below the pivot are independent products.
+    let inv = 1.0 / djj;
     for (i, ri) in (J + 1..D).zip(below.iter_mut()) {
-        ri[J] = dot_down(a(i, J), &ri[..J], rj) / djj;
+        ri[J] = dot_down(a(i, J), &ri[..J], rj) * inv;
     }
     Ok(())
 }
@@ -94,11 +96,29 @@ fn dot_down(s: f64, x: &[f64], y: &[f64]) -> f64 {
 /// Solves `L L^T x = b` in place (`L` by rows, as [`cholesky_rows`] gives it).
 #[inline(always)]
 fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut [f64; D]) {
+    cholesky_solve_with(rows, &inverse_diagonal(rows), x);
+}
+
+/// The reciprocals of the diagonal of `L` (independent divisions, off the substitutions'
+/// dependency chains).
+#[inline(always)]
+fn inverse_diagonal<const D: usize>(rows: &[[f64; D]; D]) -> [f64; D] {
+    core::array::from_fn(|i| 1.0 / rows[i][i])
+}
+
+/// [`cholesky_solve`] with the reciprocals of the diagonal given: every step of the two
+/// substitutions ends in a multiplication, not a division.
+#[inline(always)]
+fn cholesky_solve_with<const D: usize>(
+    rows: &[[f64; D]; D],
+    inv_diag: &[f64; D],
+    x: &mut [f64; D],
+) {
     const { assert!(D <= 12) };
     for_each_const!(I in [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11] {
         if I < D {
             let (done, rest) = x.split_at_mut(I);
-            rest[0] = dot_down(rest[0], &rows[I][..I], done) / rows[I][I];
+            rest[0] = dot_down(rest[0], &rows[I][..I], done) * inv_diag[I];
         }
     });
     for_each_const!(I in [11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0] {
@@ -108,7 +128,7 @@ fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut [f64; D]) {
                 .iter()
                 .zip(&rows[I + 1..])
                 .fold(head[I], |s, (xk, rk)| s - rk[I] * xk);
-            head[I] = s / rows[I][I];
+            head[I] = s * inv_diag[I];
         }
     });
 }
@@ -162,11 +182,12 @@ pub(crate) fn inverse_iteration<const D: usize>(
     let kmin = (0..D)
         .min_by(|&i, &j| m[(i, i)].total_cmp(&m[(j, j)]))
         .unwrap_or(0);
+    let inv_diag = inverse_diagonal(l);
     let mut x = SVector::<f64, D>::from_element(1e-3);
     x[kmin] = 1.0;
     for k in 0..INVERSE_ITERATIONS {
         let prev = x;
-        cholesky_solve(l, &mut x.data.0[0]);
+        cholesky_solve_with(l, &inv_diag, &mut x.data.0[0]);
         let n = x.norm();
         if !(n > 0.0 && n.is_finite()) {
             return None;
