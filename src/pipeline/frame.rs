@@ -14,8 +14,9 @@
 //! weighted sums of the centroid and the ranges; pass 2
 //! ([`crate::pipeline::moments::accumulate_centred`]) forms, in the centred but unrotated points
 //! `Y = X - c`, every S2 sum (their `sum w Y Y^T` is the scatter matrix) and the image spread.
-//! `Rw` is then the eigenvector matrix of the scatter ([`sym_eigen3`], cyclic Jacobi with a
-//! sweep bound), and the sums are carried to the working frame exactly (they are linear and
+//! `Rw` is then the eigenvector matrix of the scatter ([`sym_eigen3_closed`], closed form;
+//! the third pass below uses [`sym_eigen3`], cyclic Jacobi with a sweep bound, for its relative
+//! accuracy), and the sums are carried to the working frame exactly (they are linear and
 //! quadratic in `P = Rw Y / d`): the S2 sums come out of S1 ([`WorkingFrame::sums`]).
 //!
 //! Trap T9: the scatter's eigenvalues are the squared singular values, so it resolves
@@ -47,7 +48,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector2, Vector3};
 
 use super::moments::{accumulate_centred, Accumulator, CentredMap};
 use crate::error::{DegenerateKind, InputKind, PnpError};
-use crate::numeric::mat3::{pow2_scale, sym_eigen3};
+use crate::numeric::mat3::{pow2_scale, sym_eigen3, sym_eigen3_closed};
 
 /// Fast path of S1: the frame comes from the scatter when `lambda2 >= SCATTER_MIN * lambda0`
 /// (`sv2 / sv0 >= 1e-2`; see the module documentation, trap T9).
@@ -435,7 +436,7 @@ fn frame_impl(
     }
     // d in units of sx (a normal number: trace > 0 and wsum in (0, 2^60)).
     let dd = (trace / pass.acc.sw).sqrt();
-    let (vals, vecs) = sym_eigen3(&scatter).ok_or(PnpError::NoSolution)?;
+    let (vals, vecs) = sym_eigen3_closed(&scatter).ok_or(PnpError::NoSolution)?;
     let rows = |v: &Matrix3<f64>| {
         let mut r = v.transpose();
         if r.determinant() < 0.0 {

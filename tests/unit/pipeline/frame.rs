@@ -586,6 +586,58 @@ fn sym_eigen3_accuracy() {
 }
 
 #[test]
+fn sym_eigen3_closed_accuracy() {
+    // The closed form on the matrices of `sym_eigen3_accuracy` and on nearly coincident
+    // eigenvalues (1 and 1 +- 1e-9, where the trigonometric eigenvalues alone are off by
+    // about sqrt(eps)): backward stable like the iteration, eigenvalues to a few eps |A|.
+    let mut rng = Pcg64::seed_from_u64(19);
+    for k in 0..700 {
+        let q = Rotation3::from_scaled_axis(Vector3::new(
+            rng.random_range(-2.0..2.0),
+            rng.random_range(-2.0..2.0),
+            rng.random_range(-2.0..2.0),
+        ))
+        .into_inner();
+        let l = match k % 7 {
+            0 => Vector3::new(3.0, 2.0, 1.0),
+            1 => Vector3::new(1.0, 1.0, 1e-3),
+            2 => Vector3::new(1.0, 1.0, 1.0),
+            3 => Vector3::new(2.0, 0.0, 0.0),
+            4 => Vector3::new(1.0, 1.0 + 1e-9, 0.5),
+            5 => Vector3::new(1.0, 1.0 - 1e-9, 1.0 + 2e-9),
+            _ => Vector3::new(1.0, -0.5, 1e-12),
+        } * 10f64.powi(k % 11 * 30 - 150);
+        let a = q * Matrix3::from_diagonal(&l) * q.transpose();
+        let (vals, vecs) = sym_eigen3_closed(&a).unwrap();
+        let mut sorted = l;
+        sorted.as_mut_slice().sort_by(|x, y| y.total_cmp(x));
+        assert!(
+            (vals - sorted).amax() <= 4e-15 * l.amax(),
+            "{k}: {vals} {sorted}"
+        );
+        assert!(
+            (vecs.transpose() * vecs - Matrix3::identity()).amax() < 4e-15,
+            "{k}"
+        );
+        let res = a * vecs - vecs * Matrix3::from_diagonal(&vals);
+        assert!(
+            res.amax() <= 4e-15 * l.amax(),
+            "{k}: {:e}",
+            res.amax() / l.amax()
+        );
+    }
+    assert_eq!(
+        sym_eigen3_closed(&Matrix3::zeros()).unwrap().0,
+        Vector3::zeros()
+    );
+    let d = sym_eigen3_closed(&Matrix3::from_diagonal(&Vector3::new(1.0, 3.0, 2.0))).unwrap();
+    assert_eq!(d.0, Vector3::new(3.0, 2.0, 1.0));
+    let mut bad = Matrix3::identity();
+    bad[(0, 2)] = f64::NAN;
+    assert!(sym_eigen3_closed(&bad).is_none());
+}
+
+#[test]
 fn scatter_path_matches_streamed_qr_and_forced_pass3() {
     // The fast path (frame from the scatter), the forced third pass and the previous
     // streamed-QR implementation (with the direct S2 pass in its frame) on the same data.
