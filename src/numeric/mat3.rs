@@ -310,20 +310,11 @@ pub(crate) fn sym_eigen3(a: &Matrix3<f64>) -> Option<(Vector3<f64>, Matrix3<f64>
             break;
         }
     }
-    // Sort descending (3 elements: a fixed sorting network).
-    let mut idx = [0usize, 1, 2];
-    for &(i, j) in &[(0usize, 1usize), (1, 2), (0, 1)] {
-        if b[(idx[i], idx[i])] < b[(idx[j], idx[j])] {
-            idx.swap(i, j);
-        }
-    }
-    let vals = Vector3::new(
-        b[(idx[0], idx[0])],
-        b[(idx[1], idx[1])],
-        b[(idx[2], idx[2])],
-    );
-    let vecs = Matrix3::from_columns(&[v.column(idx[0]), v.column(idx[1]), v.column(idx[2])]);
-    Some((vals * scale, vecs))
+    Some(sorted_eigen(
+        [b[(0, 0)], b[(1, 1)], b[(2, 2)]],
+        [0, 1, 2].map(|k| v.column(k).into_owned()),
+        scale,
+    ))
 }
 
 /// Eigen-decomposition of a symmetric 3 x 3 matrix in closed form (as [`sym_eigen3`]:
