@@ -6,14 +6,20 @@
 
 use nalgebra::{SMatrix, SVector};
 
-/// A Cholesky factor `L` stored by rows (`l[i][j]`, zero above the diagonal).
-pub(crate) type Factor<const D: usize> = [[f64; D]; D];
+/// A Cholesky factor `L`: its rows (`rows[i][j]`, zero above the diagonal) and the
+/// reciprocals of its diagonal, which the factorisation forms anyway and the substitutions
+/// multiply by (a division on every step would lengthen their dependency chains).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Factor<const D: usize> {
+    rows: [[f64; D]; D],
+    inv_diag: [f64; D],
+}
 
 /// Cholesky factor `L` (lower) of a symmetric positive definite matrix, or `None` (also for a
 /// NaN entry).
 pub(crate) fn cholesky<const D: usize>(a: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
-    let rows = cholesky_rows::<D>(|i, j| a[(i, j)]).ok()?;
-    Some(SMatrix::from_fn(|i, j| rows[i][j]))
+    let f = cholesky_rows::<D>(|i, j| a[(i, j)]).ok()?;
+    Some(SMatrix::from_fn(|i, j| f.rows[i][j]))
 }
 
 /// Whether the symmetric matrix with lower-triangle entries `a(i, j)`, `j <= i`, is positive
@@ -55,22 +61,25 @@ macro_rules! for_each_const {
 #[inline(always)]
 fn cholesky_rows<const D: usize>(a: impl Fn(usize, usize) -> f64) -> Result<Factor<D>, usize> {
     const { assert!(D <= 12) };
-    let mut rows = [[0.0f64; D]; D];
+    let mut f = Factor {
+        rows: [[0.0f64; D]; D],
+        inv_diag: [0.0f64; D],
+    };
     for_each_const!(J in [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11] {
         if J < D {
-            cholesky_column::<D, J>(&mut rows, &a)?;
+            cholesky_column::<D, J>(&mut f, &a)?;
         }
     });
-    Ok(rows)
+    Ok(f)
 }
 
 /// Column `J` of [`cholesky_rows`]: the pivot, then the entries below it.
 #[inline(always)]
 fn cholesky_column<const D: usize, const J: usize>(
-    rows: &mut [[f64; D]; D],
+    f: &mut Factor<D>,
     a: &impl Fn(usize, usize) -> f64,
 ) -> Result<(), usize> {
-    let (head, below) = rows.split_at_mut(J + 1);
+    let (head, below) = f.rows.split_at_mut(J + 1);
     let rj = &mut head[J];
     let d = dot_down(a(J, J), &rj[..J], &rj[..J]);
     if !(d > 0.0) {
@@ -81,6 +90,7 @@ fn cholesky_column<const D: usize, const J: usize>(
     let rj = &rj[..J];
     // One division per column: the entries below the pivot are independent products.
     let inv = 1.0 / djj;
+    f.inv_diag[J] = inv;
     for (i, ri) in (J + 1..D).zip(below.iter_mut()) {
         ri[J] = dot_down(a(i, J), &ri[..J], rj) * inv;
     }
@@ -93,27 +103,11 @@ fn dot_down(s: f64, x: &[f64], y: &[f64]) -> f64 {
     x.iter().zip(y).fold(s, |s, (a, b)| s - a * b)
 }
 
-/// Solves `L L^T x = b` in place (`L` by rows, as [`cholesky_rows`] gives it).
+/// Solves `L L^T x = b` in place: two substitutions, each step ending in a multiplication by
+/// the reciprocal of the pivot.
 #[inline(always)]
-fn cholesky_solve<const D: usize>(rows: &[[f64; D]; D], x: &mut [f64; D]) {
-    cholesky_solve_with(rows, &inverse_diagonal(rows), x);
-}
-
-/// The reciprocals of the diagonal of `L` (independent divisions, off the substitutions'
-/// dependency chains).
-#[inline(always)]
-fn inverse_diagonal<const D: usize>(rows: &[[f64; D]; D]) -> [f64; D] {
-    core::array::from_fn(|i| 1.0 / rows[i][i])
-}
-
-/// [`cholesky_solve`] with the reciprocals of the diagonal given: every step of the two
-/// substitutions ends in a multiplication, not a division.
-#[inline(always)]
-fn cholesky_solve_with<const D: usize>(
-    rows: &[[f64; D]; D],
-    inv_diag: &[f64; D],
-    x: &mut [f64; D],
-) {
+fn cholesky_solve<const D: usize>(f: &Factor<D>, x: &mut [f64; D]) {
+    let (rows, inv_diag) = (&f.rows, &f.inv_diag);
     const { assert!(D <= 12) };
     for_each_const!(I in [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11] {
         if I < D {
@@ -182,12 +176,11 @@ pub(crate) fn inverse_iteration<const D: usize>(
     let kmin = (0..D)
         .min_by(|&i, &j| m[(i, i)].total_cmp(&m[(j, j)]))
         .unwrap_or(0);
-    let inv_diag = inverse_diagonal(l);
     let mut x = SVector::<f64, D>::from_element(1e-3);
     x[kmin] = 1.0;
     for k in 0..INVERSE_ITERATIONS {
         let prev = x;
-        cholesky_solve_with(l, &inv_diag, &mut x.data.0[0]);
+        cholesky_solve(l, &mut x.data.0[0]);
         let n = x.norm();
         if !(n > 0.0 && n.is_finite()) {
             return None;

@@ -125,8 +125,10 @@ const POLAR_MIN_DET: f64 = 1e-8;
 /// The orthogonal polar factor of `a` (det > 0), which is its nearest rotation, by Newton's
 /// iteration with Higham's Frobenius-norm scaling: `X <- (g X + X^-T / g) / 2` with
 /// `g = sqrt(|X^-1|_F / |X|_F)`, `X^-T` the cofactor matrix (rows `x1 x x2`, `x2 x x0`,
-/// `x0 x x1`) over the determinant. A start near a multiple of a rotation settles in two to
-/// four steps, a few hundred instructions against about 1,400 for [`nearest_rotation`]'s SVD.
+/// `x0 x x1`) over the determinant. The case-1 start settles in 2 steps on noise-free input
+/// and 3-4 at sigma = 2 px (N = 10 and 100, 200 problems each); `candidate_to_rotation` then
+/// takes about 940 instructions per call at N = 10 against about 1,580 with
+/// [`nearest_rotation`]'s SVD (callgrind).
 /// `None` (the caller uses the SVD) when an iterate is nearly singular or `POLAR_ITERATIONS`
 /// steps do not settle it.
 fn polar_rotation(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {

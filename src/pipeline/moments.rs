@@ -447,8 +447,9 @@ impl Accumulator {
         }
         // W^T W = L L^T in closed form: L = [[r, 0, 0], [0, r, 0], [-su / r, -sv / r, l22]]
         // with r = sqrt(sw) and l22^2 = sq - (su^2 + sv^2) / sw = `image_scatter` (positive
-        // unless every image point is the same). H = L^-1 W^T V has the rows [-a, 0, a_u] / r, [0, -a, a_v] / r
-        // and c = [c0, c1, c2], so M = V^T V - H^T H block by block, and G = L^-T H.
+        // unless every image point is the same). H = L^-1 W^T V has the rows [-a, 0, a_u] / r,
+        // [0, -a, a_v] / r and c = [c0, c1, c2], so M = V^T V - H^T H block by block, and
+        // G = L^-T H.
         let sw = self.sw;
         if !(sw > 0.0) {
             return None;

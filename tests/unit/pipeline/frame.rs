@@ -529,68 +529,18 @@ fn min_unit_is_two_to_minus_1000() {
     assert_eq!(MIN_UNIT, 2f64.powi(-1000));
 }
 
-#[test]
-fn sym_eigen3_accuracy() {
-    let mut rng = Pcg64::seed_from_u64(18);
-    for k in 0..300 {
-        let q = Rotation3::from_scaled_axis(Vector3::new(
-            rng.random_range(-2.0..2.0),
-            rng.random_range(-2.0..2.0),
-            rng.random_range(-2.0..2.0),
-        ))
-        .into_inner();
-        let l = match k % 5 {
-            0 => Vector3::new(3.0, 2.0, 1.0),
-            1 => Vector3::new(1.0, 1.0, 1e-3),
-            2 => Vector3::new(1.0, 1.0, 1.0),
-            3 => Vector3::new(2.0, 0.0, 0.0),
-            _ => Vector3::new(1.0, -0.5, 1e-12),
-        } * 10f64.powi(k % 7 * 50 - 150);
-        let a = q * Matrix3::from_diagonal(&l) * q.transpose();
-        let (vals, vecs) = sym_eigen3(&a).unwrap();
-        let mut sorted = l;
-        sorted.as_mut_slice().sort_by(|x, y| y.total_cmp(x));
-        // Backward stable: eigenvalues within a few eps |A|; the test matrix Q L Q^T itself
-        // carries ~3 eps |A| of rounding, so 4e-15 |A| (~18 ulps) in all.
-        assert!(
-            (vals - sorted).amax() <= 4e-15 * l.amax(),
-            "{k}: {vals} {sorted}"
-        );
-        // Orthogonal eigenvectors (a few rotations: ~10 eps, as crate::rotation's
-        // ORTH_TOL), A V = V L to rounding.
-        assert!((vecs.transpose() * vecs - Matrix3::identity()).amax() < 4e-15);
-        let res = a * vecs - vecs * Matrix3::from_diagonal(&vals);
-        assert!(res.amax() <= 4e-15 * l.amax());
-    }
-    // Relative accuracy for a graded, nearly diagonal positive definite matrix (the
-    // scatter of the third pass): eigenvalues 1, 1e-8, 1e-16 with couplings 1e-16 relative
-    // to the largest entry; each eigenvalue to a few eps relative.
-    #[rustfmt::skip]
-    let a = Matrix3::new(
-        1.0, 1e-16, -2e-16,
-        1e-16, 1e-8, 3e-20,
-        -2e-16, 3e-20, 1e-16,
-    );
-    let (vals, _) = sym_eigen3(&a).unwrap();
-    // Exact eigenvalues to first order: a_ii - a_1i^2 / a_11 (shifts 1e-24 and 4e-32).
-    assert!((vals[1] / (1e-8 - 1e-32) - 1.0).abs() < 1e-14);
-    assert!(
-        (vals[2] / (1e-16 - 4e-32) - 1.0).abs() < 1e-14,
-        "{}",
-        vals[2]
-    );
-    assert_eq!(sym_eigen3(&Matrix3::zeros()).unwrap().0, Vector3::zeros());
-    let mut bad = Matrix3::identity();
-    bad[(0, 2)] = f64::NAN;
-    assert!(sym_eigen3(&bad).is_none());
-}
+/// The 3 x 3 symmetric eigen-decompositions: the cyclic Jacobi iteration and the closed form.
+type Eigen3 = fn(&Matrix3<f64>) -> Option<(Vector3<f64>, Matrix3<f64>)>;
+const EIGEN3: [(&str, Eigen3); 2] = [("jacobi", sym_eigen3), ("closed", sym_eigen3_closed)];
 
 #[test]
-fn sym_eigen3_closed_accuracy() {
-    // The closed form on the matrices of `sym_eigen3_accuracy` and on nearly coincident
-    // eigenvalues (1 and 1 +- 1e-9, where the trigonometric eigenvalues alone are off by
-    // about sqrt(eps)): backward stable like the iteration, eigenvalues to a few eps |A|.
-    let mut rng = Pcg64::seed_from_u64(19);
+fn sym_eigen3_accuracy() {
+    // Both methods, backward stable: eigenvalues within a few eps |A| (the test matrix
+    // Q L Q^T itself carries ~3 eps |A| of rounding, so 4e-15 |A|, ~18 ulps, in all),
+    // orthogonal eigenvectors (a few rotations: ~10 eps, as crate::rotation's ORTH_TOL) and
+    // A V = V L to rounding, including nearly coincident eigenvalues (1 and 1 +- 1e-9, where
+    // the closed form's trigonometric eigenvalues alone are off by about sqrt(eps)).
+    let mut rng = Pcg64::seed_from_u64(18);
     for k in 0..700 {
         let q = Rotation3::from_scaled_axis(Vector3::new(
             rng.random_range(-2.0..2.0),
@@ -608,33 +558,59 @@ fn sym_eigen3_closed_accuracy() {
             _ => Vector3::new(1.0, -0.5, 1e-12),
         } * 10f64.powi(k % 11 * 30 - 150);
         let a = q * Matrix3::from_diagonal(&l) * q.transpose();
-        let (vals, vecs) = sym_eigen3_closed(&a).unwrap();
         let mut sorted = l;
         sorted.as_mut_slice().sort_by(|x, y| y.total_cmp(x));
-        assert!(
-            (vals - sorted).amax() <= 4e-15 * l.amax(),
-            "{k}: {vals} {sorted}"
-        );
-        assert!(
-            (vecs.transpose() * vecs - Matrix3::identity()).amax() < 4e-15,
-            "{k}"
-        );
-        let res = a * vecs - vecs * Matrix3::from_diagonal(&vals);
-        assert!(
-            res.amax() <= 4e-15 * l.amax(),
-            "{k}: {:e}",
-            res.amax() / l.amax()
-        );
+        for (name, eigen) in EIGEN3 {
+            let (vals, vecs) = eigen(&a).unwrap();
+            assert!(
+                (vals - sorted).amax() <= 4e-15 * l.amax(),
+                "{name} {k}: {vals} {sorted}"
+            );
+            assert!(
+                (vecs.transpose() * vecs - Matrix3::identity()).amax() < 4e-15,
+                "{name} {k}"
+            );
+            let res = a * vecs - vecs * Matrix3::from_diagonal(&vals);
+            assert!(
+                res.amax() <= 4e-15 * l.amax(),
+                "{name} {k}: {:e}",
+                res.amax() / l.amax()
+            );
+        }
     }
-    assert_eq!(
-        sym_eigen3_closed(&Matrix3::zeros()).unwrap().0,
-        Vector3::zeros()
+    for (name, eigen) in EIGEN3 {
+        assert_eq!(
+            eigen(&Matrix3::zeros()).unwrap().0,
+            Vector3::zeros(),
+            "{name}"
+        );
+        let d = eigen(&Matrix3::from_diagonal(&Vector3::new(1.0, 3.0, 2.0))).unwrap();
+        assert_eq!(d.0, Vector3::new(3.0, 2.0, 1.0), "{name}");
+        let mut bad = Matrix3::identity();
+        bad[(0, 2)] = f64::NAN;
+        assert!(eigen(&bad).is_none(), "{name}");
+    }
+}
+
+#[test]
+fn sym_eigen3_relative_accuracy() {
+    // Relative accuracy for a graded, nearly diagonal positive definite matrix (the
+    // scatter of the third pass): eigenvalues 1, 1e-8, 1e-16 with couplings 1e-16 relative
+    // to the largest entry; each eigenvalue to a few eps relative.
+    #[rustfmt::skip]
+    let a = Matrix3::new(
+        1.0, 1e-16, -2e-16,
+        1e-16, 1e-8, 3e-20,
+        -2e-16, 3e-20, 1e-16,
     );
-    let d = sym_eigen3_closed(&Matrix3::from_diagonal(&Vector3::new(1.0, 3.0, 2.0))).unwrap();
-    assert_eq!(d.0, Vector3::new(3.0, 2.0, 1.0));
-    let mut bad = Matrix3::identity();
-    bad[(0, 2)] = f64::NAN;
-    assert!(sym_eigen3_closed(&bad).is_none());
+    let (vals, _) = sym_eigen3(&a).unwrap();
+    // Exact eigenvalues to first order: a_ii - a_1i^2 / a_11 (shifts 1e-24 and 4e-32).
+    assert!((vals[1] / (1e-8 - 1e-32) - 1.0).abs() < 1e-14);
+    assert!(
+        (vals[2] / (1e-16 - 4e-32) - 1.0).abs() < 1e-14,
+        "{}",
+        vals[2]
+    );
 }
 
 #[test]
