@@ -364,15 +364,8 @@ pub(crate) fn sym_eigen3_closed(a: &Matrix3<f64>) -> Option<(Vector3<f64>, Matri
         return None;
     }
     let v = cross[k] / norms[k].sqrt();
-    // An orthonormal basis (u, w) of the plane orthogonal to v, from the axis least along v.
-    let axis = if v.x.abs() <= v.y.abs() && v.x.abs() <= v.z.abs() {
-        Vector3::x()
-    } else if v.y.abs() <= v.z.abs() {
-        Vector3::y()
-    } else {
-        Vector3::z()
-    };
-    let u = v.cross(&axis).normalize();
+    // An orthonormal basis (u, w) of the plane orthogonal to v.
+    let u = any_orthogonal(&v);
     let w = v.cross(&u);
     // A restricted to the plane, diagonalised by one Jacobi rotation.
     let (mu, mw) = (m * u, m * w);
