@@ -77,20 +77,69 @@ pub(crate) fn weighted_blocks<B>(
 ) -> ControlFlow<B, (Block, usize)> {
     let mut blk = Block::new();
     let mut filled = 0;
-    for ((x, m), &w) in world.iter().zip(image).zip(weights) {
-        if w == 0.0 {
+    let n = world.len().min(image.len()).min(weights.len());
+    let (world, image, weights) = (&world[..n], &image[..n], &weights[..n]);
+    let mut cw = world.chunks_exact(LANES);
+    let mut cm = image.chunks_exact(LANES);
+    let mut cws = weights.chunks_exact(LANES);
+    for ((xs, ms), ws) in (&mut cw).zip(&mut cm).zip(&mut cws) {
+        if filled == 0 && ws.iter().all(|&w| w != 0.0) {
+            // A whole block of active points at a block boundary (the common case): the
+            // same lanes as point by point, without a test per point.
+            for l in 0..LANES {
+                blk.set(l, &xs[l], &ms[l]);
+                blk.w[l] = ws[l] * scale;
+            }
+            full(&blk)?;
             continue;
         }
-        let l = filled % LANES;
-        blk.set(l, x, m);
-        blk.w[l] = w * scale;
-        filled = l + 1;
-        if filled == LANES {
-            full(&blk)?;
-            filled = 0;
+        for l in 0..LANES {
+            add_active(
+                &mut blk,
+                &mut filled,
+                &xs[l],
+                &ms[l],
+                ws[l],
+                scale,
+                &mut full,
+            )?;
         }
     }
+    for ((x, m), &w) in cw
+        .remainder()
+        .iter()
+        .zip(cm.remainder())
+        .zip(cws.remainder())
+    {
+        add_active(&mut blk, &mut filled, x, m, w, scale, &mut full)?;
+    }
     ControlFlow::Continue((blk, filled))
+}
+
+/// One point of [`weighted_blocks`]' point-by-point loop: skipped if its weight is 0, else put
+/// in the next lane, and the block handed to `full` when that fills it.
+#[inline(always)]
+fn add_active<B>(
+    blk: &mut Block,
+    filled: &mut usize,
+    x: &Point3<f64>,
+    m: &Point2<f64>,
+    w: f64,
+    scale: f64,
+    full: &mut impl FnMut(&Block) -> ControlFlow<B>,
+) -> ControlFlow<B> {
+    if w == 0.0 {
+        return ControlFlow::Continue(());
+    }
+    let l = *filled;
+    blk.set(l, x, m);
+    blk.w[l] = w * scale;
+    *filled = l + 1;
+    if *filled == LANES {
+        *filled = 0;
+        full(blk)?;
+    }
+    ControlFlow::Continue(())
 }
 
 /// A pass's loop over the points with or without weights: [`weighted_blocks`] or
