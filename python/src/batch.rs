@@ -161,6 +161,30 @@ fn hold_rows<'py, const C: usize>(
     Ok(Held::Owned(rows))
 }
 
+/// The entries of a problem, a `(world, image)` or `(world, image, weights)` tuple (or list):
+/// `(world, image, weights or None)`; `None` for anything else. (Read in place: no vector per
+/// problem in the batch's serial part.)
+type Parts<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Option<Bound<'py, PyAny>>,
+);
+
+fn problem_parts<'py>(item: &Bound<'py, PyAny>) -> Option<Parts<'py>> {
+    let (len, get): (usize, &dyn Fn(usize) -> Option<Bound<'py, PyAny>>) =
+        if let Ok(t) = item.cast::<PyTuple>() {
+            (t.len(), &move |k| t.get_item(k).ok())
+        } else if let Ok(l) = item.cast::<PyList>() {
+            (l.len(), &move |k| l.get_item(k).ok())
+        } else {
+            return None;
+        };
+    if !(len == 2 || len == 3) {
+        return None;
+    }
+    Some((get(0)?, get(1)?, if len == 3 { get(2) } else { None }))
+}
+
 /// Checks every problem (`(world, image)` or `(world, image, weights)`) and holds its arrays,
 /// raising on the first malformed one with its index in the message.
 fn gather<'py>(
@@ -183,14 +207,7 @@ fn gather<'py>(
     let mut out = Vec::with_capacity(items.len());
     let mut arrays = Vec::with_capacity(2 * items.len());
     for (i, (item, cam)) in items.iter().zip(which).enumerate() {
-        let parts: Vec<Bound<'py, PyAny>> = match item.cast::<PyTuple>() {
-            Ok(t) => t.iter().collect(),
-            Err(_) => match item.cast::<PyList>() {
-                Ok(l) => l.iter().collect(),
-                Err(_) => vec![],
-            },
-        };
-        if !(parts.len() == 2 || parts.len() == 3) {
+        let Some(parts) = problem_parts(item) else {
             return Err(problems_error(
                 py,
                 format!(
@@ -199,10 +216,10 @@ fn gather<'py>(
                     item.get_type().name()?
                 ),
             ));
-        }
-        let world = hold_rows(&parts[0], || format!("problems[{i}] world"), &mut arrays)?;
-        let image = hold_rows(&parts[1], || format!("problems[{i}] image"), &mut arrays)?;
-        let weights = match parts.get(2).filter(|w| !w.is_none()) {
+        };
+        let world = hold_rows(&parts.0, || format!("problems[{i}] world"), &mut arrays)?;
+        let image = hold_rows(&parts.1, || format!("problems[{i}] image"), &mut arrays)?;
+        let weights = match parts.2.as_ref().filter(|w| !w.is_none()) {
             Some(w) => Some(match borrow(w, 1, None) {
                 Some(b) => {
                     arrays.push(b);

@@ -71,8 +71,9 @@ pub(crate) struct PySolution {
     used: usize,
     #[pyo3(get)]
     skipped: usize,
-    /// Row-major covariance and sigma.
-    cov: Option<([f64; 36], f64)>,
+    /// Row-major covariance and sigma (boxed: most solutions have none, and a batch moves
+    /// every solution twice, into its list and into its Python object).
+    cov: Option<Box<([f64; 36], f64)>>,
 }
 
 const SOURCES: [&str; 9] = [
@@ -139,7 +140,7 @@ impl From<&Solution> for PySolution {
                 for (k, v) in m.iter_mut().enumerate() {
                     *v = c.matrix[(k / 6, k % 6)];
                 }
-                (m, c.sigma)
+                Box::new((m, c.sigma))
             }),
         }
     }
@@ -212,7 +213,7 @@ impl PySolution {
     #[getter]
     fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
         self.cov
-            .as_ref()
+            .as_deref()
             .map(|(m, _)| array2(py, 6, 6, m).into_any())
     }
 
@@ -280,8 +281,13 @@ impl PySolution {
                         self.converged,
                     ) == (o.newton_iterations, o.reprojection_iterations, o.converged)
                     && (self.used, self.skipped) == (o.used, o.skipped)
-                    && self.cov.map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
-                        == o.cov.map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
+                    && self
+                        .cov
+                        .as_deref()
+                        .map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
+                        == o.cov
+                            .as_deref()
+                            .map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
             }
             Err(_) => false,
         }
@@ -307,7 +313,7 @@ impl PySolution {
                 self.converged,
             ),
             (self.used, self.skipped),
-            self.cov.map(|(m, s)| (m.to_vec(), s)),
+            self.cov.as_deref().map(|(m, s)| (m.to_vec(), *s)),
         );
         Ok((rebuild, PyTuple::new(py, [state.into_pyobject(py)?])?))
     }
@@ -341,7 +347,7 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
     };
     let (r, t, q, rvec) = (arr(r, 9)?, arr(t, 3)?, arr(q, 4)?, arr(rvec, 3)?);
     let cov = match cov {
-        Some((m, s)) => Some((arr(m, 36)?.try_into().expect("checked"), s)),
+        Some((m, s)) => Some(Box::new((arr(m, 36)?.try_into().expect("checked"), s))),
         None => None,
     };
     let source = SOURCES
