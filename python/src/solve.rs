@@ -59,9 +59,9 @@ pub(crate) fn check_finite(
 ///     weights: optional non-negative weight per point, shape (N,); a point of weight 0 is
 ///         ignored (exactly as if dropped), weights scale the squared residuals.
 ///     camera: a ``Camera``: ``image`` holds observed (distorted) pixels. They are undistorted
-///         and, in the default mode, the refinement minimises (to first order) the pixel
-///         reprojection error through the lens. Pixels that cannot be undistorted are left out
-///         and counted in ``Solution.skipped``.
+///         and, in the default mode, the refinement minimises the pixel reprojection error
+///         through the camera model, distortion included. Pixels that cannot be undistorted
+///         are left out and counted in ``Solution.skipped``.
 ///     refinement: "ml" (default; alias "reprojection"): EOPnP then Levenberg-Marquardt on
 ///         the reprojection error, the maximum-likelihood pose; "algebraic": EOPnP alone.
 ///     planar: planar branch selection: "auto" (default), "planar" or "nonplanar".

@@ -529,7 +529,7 @@ impl Ransac {
         let start = Instant::now();
         self.check()?;
         solver.check_loss()?;
-        let u = undistort_all(world, pixels, camera, weights)?;
+        let u = undistort_all(world, pixels, camera, weights, true)?;
         let px = solver.camera_loss(&u, camera);
         let mut sol = self.estimate_with(
             solver,
