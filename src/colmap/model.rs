@@ -92,8 +92,10 @@ impl Model {
         let Some(img) = self.images.get(&image_id) else {
             return (Vec::new(), Vec::new());
         };
-        // Sized once (every observation may have a 3D point), filled in order.
-        let n = img.points2d.len();
+        // Sized once, to the triangulated observations (a model's images often have several
+        // times as many keypoints as 3D points: buffers for all of them, reallocated by every
+        // call, were mapped fresh from the system and page-faulted), filled in order.
+        let n = img.points2d.iter().filter(|(_, id)| id.is_some()).count();
         let (mut world, mut pixels) = (Vec::with_capacity(n), Vec::with_capacity(n));
         // A model whose point ids are not much larger than the image's observation count
         // (COLMAP numbers points from 1): the points in a table indexed by id, filled by one
@@ -101,14 +103,14 @@ impl Model {
         // lookup in the map costs several times an index. Otherwise the map itself.
         let max_id = self.points.keys().next_back().copied().unwrap_or(0);
         let table = (max_id <= 4 * n as u64).then(|| {
-            let mut table: Vec<Option<Point3<f64>>> = vec![None; max_id as usize + 1];
+            let mut table: Vec<Option<&Point3<f64>>> = vec![None; max_id as usize + 1];
             for (id, p) in &self.points {
-                table[*id as usize] = Some(p.xyz);
+                table[*id as usize] = Some(&p.xyz);
             }
             table
         });
         let point = |id: u64| match &table {
-            Some(t) => t.get(id as usize).copied().flatten(),
+            Some(t) => t.get(id as usize).copied().flatten().copied(),
             None => self.points.get(&id).map(|p| p.xyz),
         };
         for (px, id) in &img.points2d {
