@@ -161,15 +161,16 @@ fn hold_rows<'py, const C: usize>(
     Ok(Held::Owned(rows))
 }
 
-/// The entries of a problem, a `(world, image)` or `(world, image, weights)` tuple (or list):
-/// `(world, image, weights or None)`; `None` for anything else. (Read in place: no vector per
-/// problem in the batch's serial part.)
+/// A problem's world, image and weights (if given).
 type Parts<'py> = (
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     Option<Bound<'py, PyAny>>,
 );
 
+/// The entries of a problem, a `(world, image)` or `(world, image, weights)` tuple (or list);
+/// `None` for anything else. (Read in place: no vector per problem in the batch's serial
+/// part.)
 fn problem_parts<'py>(item: &Bound<'py, PyAny>) -> Option<Parts<'py>> {
     let (len, get): (usize, &dyn Fn(usize) -> Option<Bound<'py, PyAny>>) =
         if let Ok(t) = item.cast::<PyTuple>() {
