@@ -745,8 +745,9 @@ impl Undistorted<'_> {
 /// Undistorts pixel correspondences (the pixel-input path of [`Solver`] and of
 /// [`crate::ransac::Ransac`]): checks the lengths and the caller's weights (their errors carry
 /// the correspondence's index), then keeps every correspondence whose pixel can be
-/// undistorted, with its first-order weight if `first_order`. Buffers are sized once; the world points, pixels and caller's weights are
-/// copied only from the first pixel that cannot be undistorted on.
+/// undistorted, with its first-order weight if `first_order`. Buffers are sized once; the
+/// world points, pixels and caller's weights are copied only from the first pixel that cannot
+/// be undistorted on.
 pub(crate) fn undistort_all<'a>(
     world: &'a [Point3<f64>],
     pixels: &'a [Point2<f64>],

@@ -1,8 +1,9 @@
 //! S10: Levenberg-Marquardt on the pixel residuals through the camera model.
 //!
-//! With a camera (pixel input), S1-S7 solve on undistorted points weighted by the lens
-//! distortion's local scale, a first-order stand-in for the pixel error. S10 minimises the
-//! pixel error itself, `E(R, t) = sum_i w_i rho(|u_i - K(pi(R P_i + t))|^2)`, with `u_i` the
+//! With a camera (pixel input), S1-S7 solve on the undistorted points, with the caller's
+//! weights only: they give S10's start (the lens distortion's local scale, a first-order
+//! stand-in for the pixel error, weights them only in the algebraic mode, where their pose is
+//! the result). S10 minimises the pixel error itself, `E(R, t) = sum_i w_i rho(|u_i - K(pi(R P_i + t))|^2)`, with `u_i` the
 //! observed pixel, `K` the camera's projection (distortion included, [`Projector`]),
 //! `pi(x, y, z) = (x/z, y/z)`, `w_i` the caller's weight and `rho` the [`Loss`]: for the
 //! squared loss the maximum-likelihood pose under isotropic Gaussian pixel noise, for any
@@ -16,7 +17,7 @@
 //! camera's Jacobian, `e` the pixel residual) take the place of S9's row weights and
 //! normalised residual. The lens model is fixed at compile time ([`Projector::with_projection`]).
 //! S10 starts from S7's minimum, in place of S9 (which runs only if S10 cannot: a point at
-//! depth 0, a non-finite result). Starting it from S9's first-order minimum instead saves
+//! depth 0, a non-finite result). Starting it from S9's minimum instead saves
 //! about one S10 pass but costs S9's two or three passes (on the bundled COLMAP model: 17 %
 //! more instructions per image, callgrind).
 //!
