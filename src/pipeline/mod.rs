@@ -148,12 +148,12 @@ pub(crate) fn run(
             None
         };
         if let Some((r0, source, sigma)) = start {
-            if let Some(mut m) = search.refine(&r0, source) {
+            if let Some(m) = search.refine(&r0, source) {
                 let bound = sigma.is_some_and(|s| certificate::below_spectral_bound(m.f, s, scale));
-                if (bound || is_certified(&m.r)) && select::in_front(world, weights, fr, &m.r, &m.t)
-                {
-                    m.cheirality = Some(true);
-                    return out.finish(&m, opts.refinement, reproj);
+                if bound || is_certified(&m.r) {
+                    if let Some(sol) = out.finish_if_in_front(&m, opts.refinement, reproj)? {
+                        return Ok(sol);
+                    }
                 }
                 search.keep(m);
             }
@@ -183,12 +183,12 @@ pub(crate) fn run(
         if search.in_known_basin(&c.r) {
             continue;
         }
-        if let Some(mut m) = search.refine(&c.r, c.source) {
+        if let Some(m) = search.refine(&c.r, c.source) {
             // A certified global minimum with most points in front is S7's pick.
-            if early_exit && is_certified(&m.r) && select::in_front(world, weights, fr, &m.r, &m.t)
-            {
-                m.cheirality = Some(true);
-                return out.finish(&m, opts.refinement, reproj);
+            if early_exit && is_certified(&m.r) {
+                if let Some(sol) = out.finish_if_in_front(&m, opts.refinement, reproj)? {
+                    return Ok(sol);
+                }
             }
             search.keep(m);
         }

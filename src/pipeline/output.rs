@@ -144,7 +144,22 @@ impl Output<'_> {
         mode: Refinement,
         opts: &ReprojOptions,
     ) -> Result<Solution, PnpError> {
-        self.finish_with(m, mode, opts, None)
+        self.finish_with(m, mode, opts, None, false)
+            .and_then(|s| s.ok_or(PnpError::NoSolution))
+    }
+
+    /// [`Output::finish`] for a minimum whose S7 depth test (more than half of the points in
+    /// front, [`in_front`]) is still to be made: `Ok(None)` if it fails. In the default mode
+    /// S9's first pass, which evaluates every depth at the minimum anyway, counts them (the
+    /// same count: the same operations), so the test costs no pass of its own; with S10, or
+    /// in the algebraic mode, [`in_front`] makes it.
+    pub(crate) fn finish_if_in_front(
+        &self,
+        m: &Minimum,
+        mode: Refinement,
+        opts: &ReprojOptions,
+    ) -> Result<Option<Solution>, PnpError> {
+        self.finish_with(m, mode, opts, None, true)
     }
 
     /// [`Output::finish`] in the default mode for a pose S9 has already refined: `s9` is
@@ -156,16 +171,27 @@ impl Output<'_> {
         opts: &ReprojOptions,
         s9: &ReprojOutcome,
     ) -> Result<Solution, PnpError> {
-        self.finish_with(m, Refinement::Reprojection, opts, Some(s9))
+        self.finish_with(m, Refinement::Reprojection, opts, Some(s9), false)
+            .and_then(|s| s.ok_or(PnpError::NoSolution))
     }
 
+    /// S9 or S10, then S8; `front_check`: S7's depth test at `m` first (`Ok(None)` if it
+    /// fails; see [`Output::finish_if_in_front`]).
     fn finish_with(
         &self,
         m: &Minimum,
         mode: Refinement,
         opts: &ReprojOptions,
         s9: Option<&ReprojOutcome>,
-    ) -> Result<Solution, PnpError> {
+        front_check: bool,
+    ) -> Result<Option<Solution>, PnpError> {
+        let mut m = *m;
+        if front_check && mode == Refinement::Algebraic {
+            if !in_front(self.world, self.weights, self.fr, &m.r, &m.t) {
+                return Ok(None);
+            }
+            m.cheirality = Some(true);
+        }
         let (mut r, mut t) = (m.r, m.t);
         if let Some(o) = s9.filter(|_| self.pixel.is_some_and(|px| px.refine)) {
             // S10 starts from S9's pose.
@@ -187,8 +213,19 @@ impl Output<'_> {
         let mut s9_error = None;
         let mut depth_signs_kept = false;
         let mut s10 = None;
+        // The deferred S7 depth test of the default mode (`front_check`).
+        let mut front_pending = front_check && mode == Refinement::Reprojection;
         if mode == Refinement::Reprojection {
             if let Some(px) = self.pixel.filter(|px| px.refine) {
+                if front_pending {
+                    // S10's passes may skip other points than S7's weights (the caller's
+                    // weights against the first-order ones): S7's own count.
+                    if !in_front(self.world, self.weights, self.fr, &m.r, &m.t) {
+                        return Ok(None);
+                    }
+                    m.cheirality = Some(true);
+                    front_pending = false;
+                }
                 let po = pixel::refine_pixels(self.world, px, self.fr, &r, &t, opts);
                 let out = &po.out;
                 let finite = out.r.iter().all(|x| x.is_finite())
@@ -223,6 +260,17 @@ impl Output<'_> {
                     opts,
                 ),
             };
+            if front_pending {
+                // S9 ran from `m` (no S10 before it): its first pass counted the depths there.
+                let front = match out.start_in_front {
+                    Some(count) => 2 * count > self.fr.n_active,
+                    None => in_front(self.world, self.weights, self.fr, &m.r, &m.t),
+                };
+                if !front {
+                    return Ok(None);
+                }
+                m.cheirality = Some(true);
+            }
             if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
                 r = out.r;
                 t = out.t;
@@ -303,7 +351,7 @@ impl Output<'_> {
             && sol.pose.translation.vector.iter().all(|x| x.is_finite())
             && sol.pose.rotation.coords.iter().all(|x| x.is_finite());
         if finite {
-            Ok(sol)
+            Ok(Some(sol))
         } else {
             Err(PnpError::NoSolution)
         }

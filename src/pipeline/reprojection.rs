@@ -137,6 +137,9 @@ pub(crate) struct ReprojOutcome {
     pub iterations: u32,
     /// Stop reason.
     pub stop: ReprojStop,
+    /// The number of active points in front of the camera (positive depth) at the starting
+    /// pose, counted by the first pass (`None` if it did not run).
+    pub start_in_front: Option<usize>,
 }
 
 /// Relative depth below which a starting depth counts as zero.
@@ -178,6 +181,9 @@ pub(super) struct Normal {
     /// `max_i |q_i|` over the active points. Only the pass without reference pose computes it
     /// (NaN otherwise): `|q_i| = |X_i - c| / d` does not depend on the pose.
     pub(super) max_abs_q: f64,
+    /// The active points with positive depth; only the pass without reference pose counts
+    /// them (`None` otherwise).
+    pub(super) in_front: Option<usize>,
 }
 
 /// The residuals one Levenberg-Marquardt run minimises ([`levenberg_marquardt`]): S9's
@@ -371,12 +377,17 @@ fn levenberg_marquardt_until<P: Residuals>(
         e: f64::NAN,
         iterations: 0,
         stop: ReprojStop::SkippedZeroDepth,
+        start_in_front: None,
     };
     let Some(mut nrm) = prob.accumulate(&cur, None) else {
         return skipped; // unreachable: no reference pose
     };
+    let start_in_front = nrm.in_front;
     if nrm.min_abs_z <= ZERO_DEPTH_REL * nrm.max_abs_z {
-        return skipped;
+        return ReprojOutcome {
+            start_in_front,
+            ..skipped
+        };
     }
 
     let e0 = nrm.e;
@@ -492,6 +503,7 @@ fn levenberg_marquardt_until<P: Residuals>(
         e: e_final.unwrap_or(nrm.e),
         iterations,
         stop,
+        start_in_front,
     }
 }
 

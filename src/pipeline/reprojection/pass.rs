@@ -118,6 +118,8 @@ struct LaneSums {
     max_q2: [f64; LANES],
     /// Some depth of the lane differs in sign from its depth under the reference pose.
     flipped: [u64; LANES],
+    /// Points of the lane with positive depth (pass without reference pose only).
+    front: [u64; LANES],
 }
 
 impl LaneSums {
@@ -168,6 +170,11 @@ impl LaneSums {
             } else {
                 self.max_q2.iter().fold(0.0f64, |a, &q| a.max(q)).sqrt()
             },
+            in_front: if CHECK {
+                None
+            } else {
+                Some(self.front.iter().sum::<u64>() as usize)
+            },
         }
     }
 }
@@ -201,6 +208,7 @@ fn pass_body<const CHECK: bool, const HESS: bool, M: Metric>(
         max_abs_z: [0.0; LANES],
         max_q2: [0.0; LANES],
         flipped: [0; LANES],
+        front: [0; LANES],
     };
     let flipped = |acc: &LaneSums| CHECK && acc.flipped.iter().any(|&f| f != 0);
     let rest = blocks(
@@ -257,6 +265,9 @@ fn lane<const CHECK: bool, const HESS: bool, M: Metric>(
         let q2 = qx * qx + qy * qy + qz * qz;
         let mq = acc.max_q2[l];
         acc.max_q2[l] = if q2 > mq { q2 } else { mq };
+        // S7's depth test at this pose, `a . (X - c) + t_z > 0` (`select::in_front`: the
+        // same operations in the same order, so the same count).
+        acc.front[l] += u64::from(pz > 0.0);
     }
     // `if a < b { a } else { b }` (not f64::min): one packed instruction; a NaN depth is
     // ignored as by f64::min, the partial extremes never being NaN.

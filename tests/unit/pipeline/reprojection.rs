@@ -307,6 +307,7 @@ fn structured_normal_equations_match_outer_products() {
             assert!((0..6).all(|k| (0..6).all(|l| a.h[k][l] == a.h[l][k])));
             assert!((a.e - b.e).abs() <= 1e-15 * b.e);
             assert_eq!((a.min_abs_z, a.max_abs_z), (b.min_abs_z, b.max_abs_z));
+            assert_eq!(a.in_front, b.in_front);
         }
         // The gradient-only pass: the same cost, gradient and depths to the bit (same
         // operations on the same sums), the caller's J^T W J, the same depth-sign test.
@@ -673,6 +674,7 @@ impl Problem<'_, RowWeights> {
             min_abs_z: f64::INFINITY,
             max_abs_z: 0.0,
             max_abs_q: f64::NAN,
+            in_front: reference.is_none().then_some(0),
         };
         for i in 0..self.world.len() {
             let wi = self.weights.map_or(1.0, |w| w[i]);
@@ -687,6 +689,9 @@ impl Problem<'_, RowWeights> {
                 if !same_side {
                     return None;
                 }
+            }
+            if let Some(count) = nrm.in_front.as_mut() {
+                *count += usize::from(pt.z > 0.0);
             }
             let az = pt.z.abs();
             nrm.min_abs_z = nrm.min_abs_z.min(az);
