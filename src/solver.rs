@@ -420,14 +420,7 @@ impl Solver {
     ) -> Result<Solution, PnpError> {
         let r = check_initial(initial)?;
         let t = initial.translation.vector;
-        self.check_loss()?;
-        let u = undistort_all(
-            world,
-            pixels,
-            camera,
-            user_weights,
-            self.first_order_weights(camera),
-        )?;
+        let u = self.undistort(world, pixels, camera, user_weights)?;
         let mut reproj = self.opts.reproj;
         reproj.row_weights = u.rows;
         let px = self.camera_loss(&u, camera);
@@ -500,15 +493,25 @@ impl Solver {
         }
     }
 
-    /// Whether the solve through `camera` weights the undistorted points to first order by
-    /// the distortion ([`Undistorted::weights`]). Not when S10 ends it (the default mode,
-    /// through a camera with distortion or with a robust loss): S10 minimises the pixel error
-    /// itself, and the solve on the undistorted points before it only gives its start, from
-    /// the caller's weights alone (none: the unweighted passes). Measured on the bundled
-    /// COLMAP model: the same S10 passes, `solve_pixels` 0.898M -> 0.771M instructions per
-    /// image (with the weights no longer formed by the undistortion).
-    fn first_order_weights(&self, camera: &Camera) -> bool {
-        !(self.opts.refinement == Refinement::Reprojection && self.s10_refines(camera))
+    /// The pixel-input path of `solve_pixels` and `refine_pixels`: the loss checked, then the
+    /// correspondences undistorted ([`undistort_all`]), with the first-order weights
+    /// ([`Undistorted::weights`]) unless S10 ends the solve (the default mode, through a
+    /// camera with distortion or with a robust loss): S10 minimises the pixel error itself,
+    /// and the solve on the undistorted points before it only gives its start, from the
+    /// caller's weights alone (none: the unweighted passes). Measured on the bundled COLMAP
+    /// model: the same S10 passes, `solve_pixels` 0.898M -> 0.771M instructions per image
+    /// (with the weights no longer formed by the undistortion).
+    fn undistort<'a>(
+        &self,
+        world: &'a [Point3<f64>],
+        pixels: &'a [Point2<f64>],
+        camera: &Camera,
+        user_weights: Option<&'a [f64]>,
+    ) -> Result<Undistorted<'a>, PnpError> {
+        self.check_loss()?;
+        let first_order =
+            !(self.opts.refinement == Refinement::Reprojection && self.s10_refines(camera));
+        undistort_all(world, pixels, camera, user_weights, first_order)
     }
 
     /// Whether S10 refines a solve through `camera` in the default mode: a camera with
@@ -630,14 +633,7 @@ impl Solver {
         camera: &Camera,
         user_weights: Option<&[f64]>,
     ) -> Result<Solution, PnpError> {
-        self.check_loss()?;
-        let u = undistort_all(
-            world,
-            pixels,
-            camera,
-            user_weights,
-            self.first_order_weights(camera),
-        )?;
+        let u = self.undistort(world, pixels, camera, user_weights)?;
         let px = self.camera_loss(&u, camera);
         let mut sol =
             self.solve_with_row_weights(&u.world, &u.image, u.solve_weights(), u.rows, Some(&px))?;

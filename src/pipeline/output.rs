@@ -186,14 +186,20 @@ impl Output<'_> {
         front_check: bool,
     ) -> Result<Option<Solution>, PnpError> {
         let mut m = *m;
-        if front_check && mode == Refinement::Algebraic {
+        // S7's depth test at `m`, when it is still to be made (`front_check`): counted by S9's
+        // first pass when S9 runs from `m` (the default mode without S10), else by S7 now
+        // (S10's passes may skip other points than S7's weights: the caller's weights against
+        // the first-order ones).
+        let refines_pixels = self.pixel.is_some_and(|px| px.refine);
+        let s9_counts = front_check && mode == Refinement::Reprojection && !refines_pixels;
+        if front_check && !s9_counts {
             if !in_front(self.world, self.weights, self.fr, &m.r, &m.t) {
                 return Ok(None);
             }
             m.cheirality = Some(true);
         }
         let (mut r, mut t) = (m.r, m.t);
-        if let Some(o) = s9.filter(|_| self.pixel.is_some_and(|px| px.refine)) {
+        if let Some(o) = s9.filter(|_| refines_pixels) {
             // S10 starts from S9's pose.
             if o.r.iter().all(|x| x.is_finite()) && o.t.iter().all(|x| x.is_finite()) {
                 (r, t) = (o.r, o.t);
@@ -213,19 +219,8 @@ impl Output<'_> {
         let mut s9_error = None;
         let mut depth_signs_kept = false;
         let mut s10 = None;
-        // The deferred S7 depth test of the default mode (`front_check`).
-        let mut front_pending = front_check && mode == Refinement::Reprojection;
         if mode == Refinement::Reprojection {
             if let Some(px) = self.pixel.filter(|px| px.refine) {
-                if front_pending {
-                    // S10's passes may skip other points than S7's weights (the caller's
-                    // weights against the first-order ones): S7's own count.
-                    if !in_front(self.world, self.weights, self.fr, &m.r, &m.t) {
-                        return Ok(None);
-                    }
-                    m.cheirality = Some(true);
-                    front_pending = false;
-                }
                 let po = pixel::refine_pixels(self.world, px, self.fr, &r, &t, opts);
                 let out = &po.out;
                 let finite = out.r.iter().all(|x| x.is_finite())
@@ -260,8 +255,8 @@ impl Output<'_> {
                     opts,
                 ),
             };
-            if front_pending {
-                // S9 ran from `m` (no S10 before it): its first pass counted the depths there.
+            if s9_counts {
+                // S9 ran from `m`: its first pass counted the depths there.
                 let front = match out.start_in_front {
                     Some(count) => 2 * count > self.fr.n_active,
                     None => in_front(self.world, self.weights, self.fr, &m.r, &m.t),

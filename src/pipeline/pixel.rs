@@ -3,9 +3,10 @@
 //! With a camera (pixel input), S1-S7 solve on the undistorted points, with the caller's
 //! weights only: they give S10's start (the lens distortion's local scale, a first-order
 //! stand-in for the pixel error, weights them only in the algebraic mode, where their pose is
-//! the result). S10 minimises the pixel error itself, `E(R, t) = sum_i w_i rho(|u_i - K(pi(R P_i + t))|^2)`, with `u_i` the
-//! observed pixel, `K` the camera's projection (distortion included, [`Projector`]),
-//! `pi(x, y, z) = (x/z, y/z)`, `w_i` the caller's weight and `rho` the [`Loss`]: for the
+//! the result). S10 minimises the pixel error itself,
+//! `E(R, t) = sum_i w_i rho(|u_i - K(pi(R P_i + t))|^2)`, with `u_i` the observed pixel, `K`
+//! the camera's projection (distortion included, [`Projector`]), `pi(x, y, z) = (x/z, y/z)`,
+//! `w_i` the caller's weight and `rho` the [`Loss`]: for the
 //! squared loss the maximum-likelihood pose under isotropic Gaussian pixel noise, for any
 //! camera model. With a robust loss the weights are iteratively reweighted (`rho'(r2)` per
 //! point), and a step is accepted only if `E` itself decreases.
