@@ -23,6 +23,9 @@ pub(crate) const NEWTON_MAX_DAMPING_STEPS: u32 = 64;
 pub(crate) const M_EIGEN_MAX_ITER: usize = 1000;
 /// QL iterations of nalgebra's 3 x 3 eigen-decomposition in Lambda Twist P3P.
 pub(crate) const P3P_EIGEN_MAX_ITER: usize = 100;
+/// Newton steps to the one root of the P3P cubic of the small-N starts (monotone from a bound
+/// on the root; about 5-10 are used).
+pub(crate) const P3P_CUBIC_MAX_ITER: usize = 100;
 /// Safeguarded Newton/bisection iterations per root bracket.
 pub(crate) const ROOT_MAX_BRACKET_ITERS: usize = 160;
 /// Newton polishing steps per root.
@@ -47,6 +50,8 @@ pub(crate) enum Bound {
     MEigen,
     /// QL iterations of nalgebra's 3x3 eigen-decomposition in Lambda Twist P3P.
     P3pEigen,
+    /// Newton steps to one root of the P3P cubic (`p3p::one_cubic_root`).
+    P3pCubic,
     /// Safeguarded Newton/bisection iterations per root bracket (`roots`).
     RootBracket,
     /// Newton polishing steps per root (`roots`).
@@ -65,6 +70,7 @@ impl Bound {
             Bound::NewtonDamping => NEWTON_MAX_DAMPING_STEPS as usize,
             Bound::MEigen => M_EIGEN_MAX_ITER,
             Bound::P3pEigen => P3P_EIGEN_MAX_ITER,
+            Bound::P3pCubic => P3P_CUBIC_MAX_ITER,
             Bound::RootBracket => ROOT_MAX_BRACKET_ITERS,
             Bound::RootPolish => ROOT_POLISH_STEPS,
             Bound::Undistort => UNDISTORT_MAX_ITERATIONS as usize,

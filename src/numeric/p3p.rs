@@ -33,9 +33,14 @@
 //! is a rotation to rounding without a projection step.
 //!
 //! `p3p_unpolished` (crate-private: the solver's small-N starts, which S9 refines) skips the
-//! Gauss-Newton polish and takes the plane pair from the closed-form eigenvalues of `D0`
-//! (trace and principal minors, the null one taken as 0) and cross products of the rows of
-//! `D0 - s I`, with the iterative decomposition as fallback.
+//! Gauss-Newton polish, takes `D0` from one real root of the cubic (`one_cubic_root`: every
+//! real root gives a degenerate member whose plane pair, when real, holds every solution)
+//! and its plane pair from the closed-form eigenvalues of `D0` (trace and principal minors,
+//! the null one taken as 0) and cross products of the rows of `D0 - s I`; where that fails,
+//! the polished solver's search over every root with the iterative decomposition decides.
+//! Measured with `examples/small_n.rs` (500 general problems): 30.7M -> 28.5M instructions
+//! at N = 4, 22.7M -> 20.0M at N = 5, no minimum missed in 6,000 problems per N and scene
+//! type.
 //!
 //! Everything is fixed-size (no heap allocation) and every loop is bounded.
 //!
@@ -53,7 +58,7 @@
 //!     && (p.translation - t).norm() < 1e-9));
 //! ```
 
-use crate::numeric::bounds::{converged, limit, Bound};
+use crate::numeric::bounds::{converged, limit, Bound, Budget};
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix2x3, Matrix3, Point3, Vector2, Vector3};
 
@@ -206,10 +211,10 @@ fn p3p_with(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3], polish: bool)
             rotation,
             translation,
         };
-        let finite = rotation
-            .iter()
-            .chain(translation.iter())
-            .all(|v| v.is_finite());
+        // Two plain loops, not a chained iterator (left out of line as a call of about 230
+        // instructions per pose in some builds).
+        let finite =
+            rotation.iter().all(|v| v.is_finite()) && translation.iter().all(|v| v.is_finite());
         let scale = 1.0 + translation.norm();
         let duplicate = out.iter().any(|q| {
             (q.rotation - rotation).norm() <= 1e-9
@@ -244,6 +249,17 @@ fn degenerate_member(
     } else {
         [c0, c1, c2, c3]
     };
+    if closed_form {
+        // The unpolished starts: one real root of the cubic (every real root of it gives a
+        // degenerate member whose plane pair, when real, holds every solution), its plane
+        // pair in closed form; the search over all roots below only if that fails.
+        if let Some(pair) = one_cubic_root(&coeffs)
+            .map(|g| if reversed { d1 * g + d2 } else { d1 + d2 * g })
+            .and_then(|d0| plane_pair_closed(&d0))
+        {
+            return Some(pair);
+        }
+    }
     let roots = crate::numeric::roots::real_roots(&coeffs);
     let mut best: Option<(Vector3<f64>, Vector3<f64>, f64)> = None;
     let consider = |best: &mut Option<(Vector3<f64>, Vector3<f64>, f64)>, d0: Matrix3<f64>| {
@@ -269,6 +285,52 @@ fn degenerate_member(
         consider(&mut best, if r1 <= r2 { *d1 } else { *d2 });
     }
     best
+}
+
+/// A real root of the cubic `c[0] + c[1] g + c[2] g^2 + c[3] g^3`, or `None` if `c[3]` is 0
+/// or not finite or the iteration fails. With `p` monic and `y = g - g_i` measured from its
+/// inflection point `g_i`, `p = y^3 + P y + Q`: if `Q < 0` a root lies at `y > 0`, where `p` is
+/// convex, and Newton's iteration from any point above it decreases monotonically to it; if
+/// `Q > 0`, symmetrically, from below. The start is such a point: `|Q| / P` (the Newton step
+/// from `y = 0`, beyond the root by convexity) when `P > 0`, else `max(cbrt(2 |Q|), sqrt(2
+/// |P|))` (there `|y|^3 > |Q| + |P| |y|`).
+fn one_cubic_root(c: &[f64; 4]) -> Option<f64> {
+    if !(c[3] != 0.0 && c[3].is_finite()) {
+        return None;
+    }
+    let (a, b, k) = (c[2] / c[3], c[1] / c[3], c[0] / c[3]);
+    let gi = -a / 3.0;
+    // p(g_i) and p'(g_i) of the monic cubic g^3 + a g^2 + b g + k.
+    let q = ((gi + a) * gi + b) * gi + k;
+    let pp = (3.0 * gi + 2.0 * a) * gi + b;
+    if !(q.is_finite() && pp.is_finite()) {
+        return None;
+    }
+    if q == 0.0 {
+        return Some(gi);
+    }
+    // The side of the root: y > 0 if q < 0.
+    let side = if q < 0.0 { 1.0 } else { -1.0 };
+    let y = if pp > 0.0 {
+        q.abs() / pp
+    } else {
+        (2.0 * q.abs()).cbrt().max((-2.0 * pp).sqrt())
+    };
+    // Newton on g itself (not on y, whose offset g_i would bound the root's precision by
+    // the ulp of g_i): every step moves towards g_i, by `side`.
+    let mut g = gi + side * y;
+    let mut budget = Budget::new(Bound::P3pCubic);
+    while budget.next() {
+        let f = ((g + a) * g + b) * g + k;
+        let df = (3.0 * g + 2.0 * a) * g + b;
+        let next = g - f / df;
+        // Monotone in exact arithmetic: stop where rounding ends the progress.
+        if !(side * (g - next) > 0.0) {
+            return Some(g);
+        }
+        g = next;
+    }
+    None
 }
 
 /// Adjugate (transposed cofactor matrix) of a 3x3 matrix.

@@ -107,6 +107,7 @@ fn ordinary_solves_never_exhaust_a_constant_bound() {
         Bound::NewtonDamping,
         Bound::MEigen,
         Bound::P3pEigen,
+        Bound::P3pCubic,
         Bound::RootBracket,
         Bound::Undistort,
     ];
@@ -291,6 +292,34 @@ fn p3p_eigen_decomposition() {
         });
         let sol = res.map(|s| s.solution);
         assert_true_pose(&sol, &r, &format!("RANSAC, P3pEigen = 5, seed {seed}"));
+    }
+}
+
+#[test]
+fn p3p_cubic_root() {
+    // With one Newton step the one root of the unpolished P3P's cubic is not reached: the
+    // search over every root of the cubic decides, and the true pose is still among the
+    // solutions; so is the solve's at N = 4 (its small-N starts are these).
+    let (w, i, r) = problem(3, false, 6);
+    let world = [w[0], w[1], w[2]];
+    let bearing = [0, 1, 2].map(|k| Vector3::new(i[k].x, i[k].y, 1.0).normalize());
+    let true_pose = |sols: &crate::p3p::P3pSolutions| {
+        sols.iter()
+            .any(|s| crate::numeric::rotation::rotation_error_deg(&s.rotation, &r) < 1e-6)
+    };
+    assert!(true_pose(&crate::numeric::p3p::p3p_unpolished(
+        &world, &bearing
+    )));
+    let (out, hit) = with_limit(Bound::P3pCubic, 1, || {
+        crate::numeric::p3p::p3p_unpolished(&world, &bearing)
+    });
+    assert!(hit >= 1);
+    assert!(true_pose(&out));
+    for seed in 0..5 {
+        let (w, i, r) = problem(4, false, 30 + seed);
+        let (sol, hit) = with_limit(Bound::P3pCubic, 1, || Solver::default().solve(&w, &i));
+        assert!(hit >= 1, "seed {seed}");
+        assert_true_pose(&sol, &r, &format!("N = 4, P3pCubic = 1, seed {seed}"));
     }
 }
 
