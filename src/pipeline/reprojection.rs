@@ -170,10 +170,16 @@ impl Composed {
     }
 }
 
-/// Normal equations at one pose: `h = J^T W J` (upper triangle filled, then mirrored),
-/// `g = J^T W e`, `e = E`, the extreme absolute depths and the largest lever arm `|q_i|`.
+/// `J^T W J` at one pose (upper triangle filled, then mirrored). A pass writes it into a
+/// buffer of the caller's ([`Residuals::accumulate`]): Levenberg-Marquardt keeps two and
+/// switches between them, where moving a [`Normal`] with its `H` copied 384 bytes per
+/// accepted step (a `memcpy` call, about 5 % of the instructions of an N = 4 solve).
+pub(super) type Hessian = [[f64; 6]; 6];
+
+/// The rest of the normal equations at one pose: `g = J^T W e`, `e = E`, the extreme
+/// absolute depths and the largest lever arm `|q_i|` (`J^T W J` is a [`Hessian`] beside it).
+#[derive(Clone, Copy)]
 pub(super) struct Normal {
-    pub(super) h: [[f64; 6]; 6],
     pub(super) g: [f64; 6],
     pub(super) e: f64,
     pub(super) min_abs_z: f64,
@@ -190,30 +196,27 @@ pub(super) struct Normal {
 /// normalised residuals ([`Problem`]) or S10's pixel residuals through the camera
 /// ([`super::pixel`]).
 pub(super) trait Residuals {
-    /// One O(N) pass at `pose`: cost, `J^T W J`, gradient and depth range (and, without
-    /// `reference`, `max_abs_q`). With `reference`, `None` as soon as a depth differs in sign
-    /// from its depth under `reference`.
-    fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal>;
-
-    /// As [`Residuals::accumulate`] with a reference pose, without `J^T W J`: the returned
-    /// `h` is `h_prev`, the caller's `J^T W J` from a nearby pose (see
-    /// [`HESSIAN_REUSE_REL`]).
-    fn accumulate_gradient(
+    /// One O(N) pass at `pose`: cost, `J^T W J` (into `h`), gradient and depth range (and,
+    /// without `reference`, `max_abs_q`). With `reference`, `None` as soon as a depth differs
+    /// in sign from its depth under `reference` (`h` then undefined).
+    fn accumulate(
         &self,
         pose: &Composed,
-        reference: &Composed,
-        h_prev: &[[f64; 6]; 6],
+        reference: Option<&Composed>,
+        h: &mut Hessian,
     ) -> Option<Normal>;
+
+    /// As [`Residuals::accumulate`] with a reference pose, without `J^T W J`: the caller
+    /// keeps its `J^T W J` from a nearby pose (see [`HESSIAN_REUSE_REL`]).
+    fn accumulate_gradient(&self, pose: &Composed, reference: &Composed) -> Option<Normal>;
 }
 
-impl Normal {
-    fn max_diag(&self) -> f64 {
-        (0..6).fold(f64::NEG_INFINITY, |acc, k| acc.max(self.h[k][k]))
-    }
+fn max_diag(h: &Hessian) -> f64 {
+    (0..6).fold(f64::NEG_INFINITY, |acc, k| acc.max(h[k][k]))
+}
 
-    fn trace(&self) -> f64 {
-        (0..6).map(|k| self.h[k][k]).sum()
-    }
+fn trace(h: &Hessian) -> f64 {
+    (0..6).map(|k| h[k][k]).sum()
 }
 
 /// The inputs of one refinement, borrowed from the caller: S9's (normalised points, row
@@ -251,29 +254,26 @@ impl<M: Metric> Residuals for Problem<'_, M> {
     /// per-point code on packed registers. The lanes are added once at the end. The sequence
     /// of active points, and so the result to the bit, does not depend on the points of
     /// weight 0; the depth-sign test is the scalar one, lane by lane.
-    fn accumulate(&self, pose: &Composed, reference: Option<&Composed>) -> Option<Normal> {
+    fn accumulate(
+        &self,
+        pose: &Composed,
+        reference: Option<&Composed>,
+        h: &mut Hessian,
+    ) -> Option<Normal> {
         let k = PassInputs::new(&self.c, self.inv_weight, pose, reference);
         let (w, m, wt) = (self.world, self.image, self.weights);
         if reference.is_some() {
-            pass::<true, true, M>(&k, &self.metric, w, m, wt)
+            pass::<true, true, M>(&k, &self.metric, w, m, wt, Some(h))
         } else {
-            pass::<false, true, M>(&k, &self.metric, w, m, wt)
+            pass::<false, true, M>(&k, &self.metric, w, m, wt, Some(h))
         }
     }
 
     /// Cost, gradient and depth range only (7 sums per point instead of 27).
-    fn accumulate_gradient(
-        &self,
-        pose: &Composed,
-        reference: &Composed,
-        h_prev: &[[f64; 6]; 6],
-    ) -> Option<Normal> {
+    fn accumulate_gradient(&self, pose: &Composed, reference: &Composed) -> Option<Normal> {
         let k = PassInputs::new(&self.c, self.inv_weight, pose, Some(reference));
         let (w, m, wt) = (self.world, self.image, self.weights);
-        pass::<true, false, M>(&k, &self.metric, w, m, wt).map(|mut nrm| {
-            nrm.h = *h_prev;
-            nrm
-        })
+        pass::<true, false, M>(&k, &self.metric, w, m, wt, None)
     }
 }
 
@@ -379,7 +379,10 @@ fn levenberg_marquardt_until<P: Residuals>(
         stop: ReprojStop::SkippedZeroDepth,
         start_in_front: None,
     };
-    let Some(mut nrm) = prob.accumulate(&cur, None) else {
+    // `J^T W J` at the current pose is `hs[hi]`; a full pass at a candidate writes the other.
+    let mut hs: [Hessian; 2] = [[[0.0; 6]; 6]; 2];
+    let mut hi = 0;
+    let Some(mut nrm) = prob.accumulate(&cur, None, &mut hs[0]) else {
         return skipped; // unreachable: no reference pose
     };
     let start_in_front = nrm.in_front;
@@ -396,20 +399,20 @@ fn levenberg_marquardt_until<P: Residuals>(
     let mut e_final = None;
     // Norm of the step accepted in the previous iteration (None after anything else).
     let mut prev_step: Option<f64> = None;
-    // Distance (sum of accepted step norms) from the pose where `nrm.h` was computed.
+    // Distance (sum of accepted step norms) from the pose where `hs[hi]` was computed.
     let mut h_dist = 0.0;
-    let mut lam = opts.tau * nrm.max_diag();
+    let mut lam = opts.tau * max_diag(&hs[hi]);
     let mut nu = 2.0;
     let mut stop = ReprojStop::MaxIterations;
     let mut iterations = 0;
     for it in 1..=opts.max_iterations {
         iterations = it;
         let gmax = nrm.g.iter().fold(0.0_f64, |acc, gk| acc.max(gk.abs()));
-        if gmax <= opts.gtol * (nrm.trace() * nrm.e).sqrt() {
+        if gmax <= opts.gtol * (trace(&hs[hi]) * nrm.e).sqrt() {
             stop = ReprojStop::Gradient;
             break;
         }
-        let Some(delta) = solve_damped6(&nrm.h, lam, &nrm.g) else {
+        let Some(delta) = solve_damped6(&hs[hi], lam, &nrm.g) else {
             lam *= nu;
             nu *= 2.0;
             prev_step = None;
@@ -461,13 +464,18 @@ fn levenberg_marquardt_until<P: Residuals>(
         // pose where it was computed, the pass only evaluates cost and gradient and keeps it.
         let reuse = h_dist + step_norm <= HESSIAN_REUSE_REL * scale;
         let next = if reuse {
-            prob.accumulate_gradient(&cand, &cur, &nrm.h)
+            prob.accumulate_gradient(&cand, &cur)
         } else {
-            prob.accumulate(&cand, Some(&cur))
+            prob.accumulate(&cand, Some(&cur), &mut hs[1 - hi])
         };
         match next {
             Some(next) if next.e < nrm.e => {
-                h_dist = if reuse { h_dist + step_norm } else { 0.0 };
+                if reuse {
+                    h_dist += step_norm;
+                } else {
+                    h_dist = 0.0;
+                    hi = 1 - hi;
+                }
                 let rho = if pred > 0.0 {
                     (nrm.e - next.e) / pred
                 } else {
@@ -489,7 +497,7 @@ fn levenberg_marquardt_until<P: Residuals>(
                 lam *= nu;
                 nu *= 2.0;
                 prev_step = None;
-                if lam > DAMPING_LIMIT_REL * nrm.max_diag() {
+                if lam > DAMPING_LIMIT_REL * max_diag(&hs[hi]) {
                     stop = ReprojStop::Damping;
                     break;
                 }

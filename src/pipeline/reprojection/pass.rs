@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-use super::{Composed, Normal};
+use super::{Composed, Hessian, Normal};
 use core::ops::ControlFlow;
 
 use crate::numeric::lanes::{blocks, dispatched, lane_sum, Block, LANES};
@@ -123,11 +123,13 @@ struct LaneSums {
 }
 
 impl LaneSums {
-    /// Adds the lanes ((0 + 1) + (2 + 3)) and assembles the normal equations. `CHECK`: the
-    /// pass had a reference pose (and so no `max_abs_q`).
+    /// Adds the lanes ((0 + 1) + (2 + 3)) and assembles the normal equations (with `HESS`,
+    /// `J^T W J` into `h`; without, its sums are neither added nor read). `CHECK`: the pass
+    /// had a reference pose (and so no `max_abs_q`).
     // Index loops fill the blocks of H by position.
     #[allow(clippy::needless_range_loop)]
-    fn normal<const CHECK: bool>(&self) -> Normal {
+    #[inline(always)]
+    fn normal<const CHECK: bool, const HESS: bool>(&self, h: Option<&mut Hessian>) -> Normal {
         let s: [f64; NSUMS] = core::array::from_fn(|j| lane_sum(&self.s[j]));
         let (e, hrr, hrt, htt, gq, gb) = (
             s[0],
@@ -137,30 +139,30 @@ impl LaneSums {
             &s[21..24],
             &s[24..27],
         );
-        let mut h = [[0.0f64; 6]; 6];
-        let mut idx = 0;
-        for j in 0..3 {
-            for l in j..3 {
-                h[j][l] = hrr[idx];
-                idx += 1;
+        if let Some(h) = h.filter(|_| HESS) {
+            let mut idx = 0;
+            for j in 0..3 {
+                for l in j..3 {
+                    h[j][l] = hrr[idx];
+                    idx += 1;
+                }
+                h[j][3] = hrt[3 * j];
+                h[j][4] = hrt[3 * j + 1];
+                h[j][5] = -hrt[3 * j + 2];
             }
-            h[j][3] = hrt[3 * j];
-            h[j][4] = hrt[3 * j + 1];
-            h[j][5] = -hrt[3 * j + 2];
-        }
-        h[3][3] = htt[0];
-        h[3][4] = s[27];
-        h[3][5] = -htt[2];
-        h[4][4] = htt[1];
-        h[4][5] = -htt[3];
-        h[5][5] = htt[4];
-        for k in 0..6 {
-            for l in 0..k {
-                h[k][l] = h[l][k];
+            h[3][3] = htt[0];
+            h[3][4] = s[27];
+            h[3][5] = -htt[2];
+            h[4][4] = htt[1];
+            h[4][5] = -htt[3];
+            h[5][5] = htt[4];
+            for k in 0..6 {
+                for l in 0..k {
+                    h[k][l] = h[l][k];
+                }
             }
         }
         Normal {
-            h,
             g: [-gq[0], -gq[1], -gq[2], -gb[0], -gb[1], gb[2]],
             e,
             min_abs_z: self.min_abs_z.iter().fold(f64::INFINITY, |a, &z| a.min(z)),
@@ -183,6 +185,7 @@ dispatched! {
 /// One pass over the points: gathers the active points into blocks (without weights, every
 /// point, straight from the slices) and runs [`lane`] on each lane. `CHECK`: compare depth
 /// signs with the reference pose of `k`; `None` after the first block with a flipped sign.
+/// `HESS`: the sums of `J^T W J`, written into `h` (which is then `Some`).
 ///
 /// Built for the processor ([`crate::numeric::lanes::dispatched`]).
 pub(in crate::pipeline) fn pass[const CHECK: bool, const HESS: bool, M: Metric][CHECK, HESS, M](
@@ -191,6 +194,7 @@ pub(in crate::pipeline) fn pass[const CHECK: bool, const HESS: bool, M: Metric][
         world: &[Point3<f64>],
         image: &[Point2<f64>],
         weights: Option<&[f64]>,
+        h: Option<&mut Hessian>,
     ) -> Option<Normal> = pass_body;
 }
 
@@ -201,6 +205,7 @@ fn pass_body<const CHECK: bool, const HESS: bool, M: Metric>(
     world: &[Point3<f64>],
     image: &[Point2<f64>],
     weights: Option<&[f64]>,
+    h: Option<&mut Hessian>,
 ) -> Option<Normal> {
     let mut acc = LaneSums {
         s: [[0.0; LANES]; NSUMS],
@@ -237,7 +242,7 @@ fn pass_body<const CHECK: bool, const HESS: bool, M: Metric>(
     if flipped(&acc) {
         return None;
     }
-    Some(acc.normal::<CHECK>())
+    Some(acc.normal::<CHECK, HESS>(h))
 }
 
 /// Adds point `l` of `blk` to lane `l` of `acc` (see [`Problem::accumulate`]).

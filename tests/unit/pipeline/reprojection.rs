@@ -292,38 +292,36 @@ fn structured_normal_equations_match_outer_products() {
         let pose = Composed::new(&r, &s.rw, s.d, &t);
         let reference = Composed::new(&r0, &s.rw, s.d, &t0);
         for rf in [None, Some(&reference)] {
-            let a = prob.accumulate(&pose, rf).unwrap();
-            let b = prob.accumulate_reference(&pose, rf).unwrap();
-            let hmax = b.h.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+            let mut ah = [[f64::NAN; 6]; 6];
+            let a = prob.accumulate(&pose, rf, &mut ah).unwrap();
+            let (bh, b) = prob.accumulate_reference(&pose, rf).unwrap();
+            let hmax = bh.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
             let gmax = b.g.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             for k in 0..6 {
                 for l in 0..6 {
-                    worst = worst.max((a.h[k][l] - b.h[k][l]).abs() / hmax);
+                    worst = worst.max((ah[k][l] - bh[k][l]).abs() / hmax);
                 }
                 // g is small near a minimum: compare with its scale sqrt(e |H|).
                 let gs = gmax.max((b.e * hmax).sqrt());
                 worst = worst.max((a.g[k] - b.g[k]).abs() / gs);
             }
-            assert!((0..6).all(|k| (0..6).all(|l| a.h[k][l] == a.h[l][k])));
+            assert!((0..6).all(|k| (0..6).all(|l| ah[k][l] == ah[l][k])));
             assert!((a.e - b.e).abs() <= 1e-15 * b.e);
             assert_eq!((a.min_abs_z, a.max_abs_z), (b.min_abs_z, b.max_abs_z));
             assert_eq!(a.in_front, b.in_front);
         }
         // The gradient-only pass: the same cost, gradient and depths to the bit (same
-        // operations on the same sums), the caller's J^T W J, the same depth-sign test.
-        let h_prev = [[seed as f64; 6]; 6];
-        let a = prob.accumulate(&pose, Some(&reference)).unwrap();
-        let c = prob
-            .accumulate_gradient(&pose, &reference, &h_prev)
-            .unwrap();
+        // operations on the same sums), the same depth-sign test.
+        let mut h = [[0.0; 6]; 6];
+        let a = prob.accumulate(&pose, Some(&reference), &mut h).unwrap();
+        let c = prob.accumulate_gradient(&pose, &reference).unwrap();
         assert_eq!((a.e, a.g), (c.e, c.g));
         assert_eq!((a.min_abs_z, a.max_abs_z), (c.min_abs_z, c.max_abs_z));
-        assert_eq!(c.h, h_prev);
         let flipped = Composed::new(&r, &s.rw, s.d, &(t - Vector3::new(0.0, 0.0, 1e3)));
-        assert!(prob.accumulate(&flipped, Some(&reference)).is_none());
         assert!(prob
-            .accumulate_gradient(&flipped, &reference, &h_prev)
+            .accumulate(&flipped, Some(&reference), &mut h)
             .is_none());
+        assert!(prob.accumulate_gradient(&flipped, &reference).is_none());
     }
     // Same sums in another association order: rounding of O(N) terms relative to the
     // largest entry, N <= 44 (measured ~1e-16).
@@ -665,10 +663,10 @@ impl Problem<'_, RowWeights> {
         &self,
         pose: &Composed,
         reference: Option<&Composed>,
-    ) -> Option<Normal> {
+    ) -> Option<(Hessian, Normal)> {
         let (wx, wy) = (self.metric.wx, self.metric.wy);
+        let mut h = [[0.0; 6]; 6];
         let mut nrm = Normal {
-            h: [[0.0; 6]; 6],
             g: [0.0; 6],
             e: 0.0,
             min_abs_z: f64::INFINITY,
@@ -704,15 +702,15 @@ impl Problem<'_, RowWeights> {
                 let ay = sy * pt.jy[k];
                 nrm.g[k] += ax * pt.ex + ay * pt.ey;
                 for l in k..6 {
-                    nrm.h[k][l] += ax * pt.jx[l] + ay * pt.jy[l];
+                    h[k][l] += ax * pt.jx[l] + ay * pt.jy[l];
                 }
             }
         }
         for k in 0..6 {
             for l in 0..k {
-                nrm.h[k][l] = nrm.h[l][k];
+                h[k][l] = h[l][k];
             }
         }
-        Some(nrm)
+        Some((h, nrm))
     }
 }
