@@ -60,7 +60,7 @@
 
 use crate::numeric::bounds::{converged, limit, Bound, Budget};
 use arrayvec::ArrayVec;
-use nalgebra::{Matrix2x3, Matrix3, Point3, Vector2, Vector3};
+use nalgebra::{Matrix3, Point3, Vector3};
 
 /// Maximum number of P3P solutions.
 pub const MAX_P3P_SOLUTIONS: usize = 4;
@@ -449,11 +449,19 @@ fn depths_on_plane(
     };
     let p = n.cross(&helper).normalize();
     let q = n.cross(&p);
-    let basis = Matrix2x3::from_rows(&[p.transpose(), q.transpose()]);
-    let restrict = |d: &Matrix3<f64>| basis * d * basis.transpose();
+    // The conics restricted to the plane, `[[p.Dp, p.Dq], [p.Dq, q.Dq]]` (D symmetric), and
+    // the one of larger Frobenius norm.
+    let restrict = |d: &Matrix3<f64>| {
+        let dq = d * q;
+        (p.dot(&(d * p)), p.dot(&dq), q.dot(&dq))
+    };
+    let squared_norm = |(a, b, c): (f64, f64, f64)| a * a + 2.0 * b * b + c * c;
     let (r1, r2) = (restrict(d1), restrict(d2));
-    let r = if r1.norm() >= r2.norm() { r1 } else { r2 };
-    let (q11, q12, q22) = (r[(0, 0)], r[(0, 1)], r[(1, 1)]);
+    let (q11, q12, q22) = if squared_norm(r1) >= squared_norm(r2) {
+        r1
+    } else {
+        r2
+    };
     // q11 u^2 + 2 q12 u v + q22 v^2 = 0 for L = u p + v q: solve for the ratio with the
     // larger leading coefficient.
     let swap = q11.abs() < q22.abs();
@@ -481,12 +489,8 @@ fn depths_on_plane(
         ts.push(0.0);
     }
     for t in ts {
-        let v2 = if swap {
-            Vector2::new(1.0, t)
-        } else {
-            Vector2::new(t, 1.0)
-        };
-        let l = basis.transpose() * v2;
+        // L = u p + v q with (u, v) = (1, t) or (t, 1).
+        let l = if swap { p + q * t } else { p * t + q };
         let form = l.dot(&(sum_form * l));
         if !(form > 0.0 && form.is_finite()) {
             continue;
