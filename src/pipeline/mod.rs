@@ -211,9 +211,9 @@ type Correspondences<'a> = (&'a [Point3<f64>], &'a [Point2<f64>], Option<&'a [f6
 
 /// S4''' and S9 for at most five active points (default mode): the P3P starts (and, in planar
 /// scenes, the minimum of f from the p1 start, S4' + S6), S9 from the best few, best first; a
-/// start inside the basin of a pose already refined is skipped, and a run is abandoned when it
-/// enters one or when its model says it cannot end below the best refined cost
-/// ([`triples::cannot_reach`]). The refined pose with the most points in front, then the lowest reprojection
+/// run is abandoned when its model says it cannot end below the best refined cost
+/// ([`triples::cannot_reach`]), and a start inside the basin of a pose already refined or of
+/// a pose where a run was so abandoned is skipped (a run that enters one is abandoned). The refined pose with the most points in front, then the lowest reprojection
 /// error, with its S9 outcome; `None` if no run gives a finite pose.
 fn small_n(
     opts: &Options,
@@ -238,23 +238,31 @@ fn small_n(
             triples::add(sp, &r, &t, (CandidateSource::Planar1, it), &mut starts);
         }
     }
-    // Every refined pose (at most one per start, so never more than a `Starts` holds).
+    // Every refined pose (at most one per start, so never more than a `Starts` holds), and
+    // every pose where a run was abandoned because it could not end below the best
+    // ([`triples::cannot_reach`]): a start or a run that comes near one of those heads into
+    // the same basin.
     let mut found = triples::Starts::new();
+    let mut beaten = triples::Starts::new();
     let mut best: Option<(triples::Start, reprojection::ReprojOutcome)> = None;
     for s in starts
         .iter()
         .take(triples::refined(sp, planar_sys.is_some()))
     {
-        if found.iter().any(|f| f.near(&s.r, &s.t)) {
+        if found.iter().chain(&beaten).any(|f| f.near(&s.r, &s.t)) {
             continue;
         }
-        if best.as_ref().is_some_and(|(b, _)| !s.worth_refining(b)) {
+        if best
+            .as_ref()
+            .is_some_and(|(b, _)| !s.worth_refining(b, planar_sys.is_some()))
+        {
             continue;
         }
         // The cost a run must end below to be picked, unless it has more points in front.
         let to_beat = best
             .as_ref()
             .and_then(|(b, _)| (s.in_front <= b.in_front).then_some(b.cost));
+        let mut cannot_reach = false;
         let o = reprojection::refine_reprojection_until(
             world,
             image,
@@ -264,12 +272,23 @@ fn small_n(
             &s.t,
             reproj,
             &mut |c| match c {
-                reprojection::Checkpoint::Accepted(r, t) => found.iter().any(|f| f.near(r, t)),
+                reprojection::Checkpoint::Accepted(r, t) => {
+                    found.iter().chain(&beaten).any(|f| f.near(r, t))
+                }
                 reprojection::Checkpoint::Step { e, pred } => {
-                    to_beat.is_some_and(|b| triples::cannot_reach(e, pred, b))
+                    cannot_reach = to_beat.is_some_and(|b| triples::cannot_reach(e, pred, b));
+                    cannot_reach
                 }
             },
         );
+        if cannot_reach && !beaten.is_full() {
+            beaten.push(triples::Start {
+                r: o.r,
+                t: o.t,
+                cost: o.e,
+                ..*s
+            });
+        }
         let finite = o.r.iter().chain(o.t.iter()).all(|x| x.is_finite()) && o.e.is_finite();
         if !finite
             || matches!(
