@@ -535,6 +535,17 @@ impl Projector {
         pixels: &[Point2<f64>],
         each: &mut impl FnMut(usize, Option<(Point2<f64>, f64)>) -> Result<(), E>,
     ) -> Result<(), E> {
+        if L::IDENTITY && !self.fisheye {
+            // No distortion: the affine map alone, with undistort_with's outcome (a pixel or
+            // a result that is not finite gives none; the weight is 1).
+            let ((fx, fy), (cx, cy)) = (self.focal, self.centre);
+            for (i, px) in pixels.iter().enumerate() {
+                let (u, v) = ((px.x - cx) / fx, (px.y - cy) / fy);
+                let ok = u.is_finite() && v.is_finite();
+                each(i, ok.then_some((Point2::new(u, v), 1.0)))?;
+            }
+            return Ok(());
+        }
         if !L::RADIAL {
             for (i, px) in pixels.iter().enumerate() {
                 each(i, self.undistort_weighted_with(lens, *px).ok())?;
