@@ -90,7 +90,7 @@ pub type P3pSolutions = ArrayVec<P3pPose, MAX_P3P_SOLUTIONS>;
 /// to a previous one are reported once.
 #[must_use]
 pub fn p3p(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3]) -> P3pSolutions {
-    p3p_with(world, bearing, true)
+    p3p_with::<true>(world, bearing)
 }
 
 /// [`p3p`] without the Gauss-Newton polish of the depths: starting poses for a refinement
@@ -100,10 +100,14 @@ pub(crate) fn p3p_unpolished(
     world: &[Point3<f64>; 3],
     bearing: &[Vector3<f64>; 3],
 ) -> P3pSolutions {
-    p3p_with(world, bearing, false)
+    p3p_with::<false>(world, bearing)
 }
 
-fn p3p_with(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3], polish: bool) -> P3pSolutions {
+/// [`p3p`] (`POLISH`) and [`p3p_unpolished`], each compiled for its own use.
+fn p3p_with<const POLISH: bool>(
+    world: &[Point3<f64>; 3],
+    bearing: &[Vector3<f64>; 3],
+) -> P3pSolutions {
     let mut out = P3pSolutions::new();
     let finite = world.iter().all(|p| p.coords.iter().all(|v| v.is_finite()))
         && bearing.iter().all(|b| b.iter().all(|v| v.is_finite()));
@@ -167,7 +171,7 @@ fn p3p_with(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3], polish: bool)
         ka23 - ka13,
     );
 
-    let Some((e1, e2, ratio)) = degenerate_member(&d1, &d2, !polish) else {
+    let Some((e1, e2, ratio)) = degenerate_member(&d1, &d2, !POLISH) else {
         return out;
     };
     // M12 + M13 + M23.
@@ -192,7 +196,7 @@ fn p3p_with(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3], polish: bool)
     };
     let cw = (xs[0] + xs[1] + xs[2]) / 3.0;
     for l in lambdas {
-        let l = if polish {
+        let l = if POLISH {
             gauss_newton(l, [a12, a13, a23], [b12, b13, b23])
         } else {
             l
