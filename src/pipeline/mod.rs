@@ -213,8 +213,9 @@ type Correspondences<'a> = (&'a [Point3<f64>], &'a [Point2<f64>], Option<&'a [f6
 /// scenes, the minimum of f from the p1 start, S4' + S6), S9 from the best few, best first; a
 /// run is abandoned when its model says it cannot end below the best refined cost
 /// ([`triples::cannot_reach`]), and a start inside the basin of a pose already refined or of
-/// a pose where a run was so abandoned is skipped (a run that enters one is abandoned). The refined pose with the most points in front, then the lowest reprojection
-/// error, with its S9 outcome; `None` if no run gives a finite pose.
+/// a pose where a run was so abandoned is skipped (a run that enters one is abandoned). The
+/// refined pose with the most points in front, then the lowest reprojection error, with its
+/// S9 outcome; `None` if no run gives a finite pose.
 fn small_n(
     opts: &Options,
     prep: &Prepared,

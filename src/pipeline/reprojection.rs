@@ -172,8 +172,8 @@ impl Composed {
 
 /// `J^T W J` at one pose (upper triangle filled, then mirrored). A pass writes it into a
 /// buffer of the caller's ([`Residuals::accumulate`]): Levenberg-Marquardt keeps two and
-/// switches between them, where moving a [`Normal`] with its `H` copied 384 bytes per
-/// accepted step (a `memcpy` call, about 5 % of the instructions of an N = 4 solve).
+/// switches between them, where moving a [`Normal`] with its `H` had copied 384 bytes per
+/// accepted step (a `memcpy` call; 500 general N = 4 solves 28.49M -> 27.56M instructions).
 pub(super) type Hessian = [[f64; 6]; 6];
 
 /// The rest of the normal equations at one pose: `g = J^T W e`, `e = E`, the extreme

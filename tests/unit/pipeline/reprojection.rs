@@ -659,6 +659,8 @@ impl Problem<'_, RowWeights> {
     /// the reference of the tests. One O(N) pass at `pose`: cost, normal equations and depth range. With `reference`,
     /// returns `None` as soon as a depth differs in sign from its depth under `reference`.
     /// Points of weight 0 are skipped entirely (bit-identical to dropping them).
+    // Index loops fill H by position.
+    #[allow(clippy::needless_range_loop)]
     fn accumulate_reference(
         &self,
         pose: &Composed,
