@@ -299,13 +299,16 @@ fn non_invertible_region_is_an_error() {
 /// every pixel gets the same outcome (no point, or the same point and weight to rounding),
 /// over strong distortion with folds (pixels beyond them have no preimage), the image centre,
 /// far-out and non-finite pixels, and with the iteration bound lowered so that the lanes give
-/// up and the one-pixel iteration decides.
+/// up and the one-pixel iteration decides. The cameras without distortion (their own loop of
+/// the affine map) are checked the same way.
 #[test]
 fn radial_lanes_match_the_one_pixel_iteration() {
     use crate::numeric::bounds::{hook, Bound};
     use rand::{Rng, SeedableRng};
     let (w, h) = (2000, 1600);
     let models: Vec<(&str, Vec<f64>)> = vec![
+        ("SIMPLE_PINHOLE", vec![1000.0, 1000.0, 800.0]),
+        ("PINHOLE", vec![1000.0, 1010.0, 1000.0, 800.0]),
         ("SIMPLE_RADIAL", vec![1000.0, 1000.0, 800.0, 0.0577095]),
         ("SIMPLE_RADIAL", vec![1000.0, 1000.0, 800.0, -0.3]),
         ("SIMPLE_RADIAL", vec![1000.0, 1000.0, 800.0, 0.3]),
