@@ -781,65 +781,37 @@ pub(crate) fn undistort_all<'a>(
     let (fx, fy) = focal;
     let fmax = fx.max(fy);
     let rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));
-    let mut image = Vec::with_capacity(n);
-    let mut weights = (first_order && (camera.has_distortion() || user_weights.is_some()))
-        .then(|| Vec::with_capacity(n));
-    // The copies of the kept correspondences, made at the first pixel left out.
-    struct Kept {
-        world: Vec<Point3<f64>>,
-        pixels: Vec<Point2<f64>>,
-        used: Vec<usize>,
-        user_weights: Option<Vec<f64>>,
+    // Every pixel undistorted in bulk into buffers of size `n` (with `|det J| / (fx fy)` into
+    // `weights` when the first-order weights are formed); the indices of the pixels left out,
+    // in order (no allocation when there is none, the usual case).
+    let mut image = vec![Point2::origin(); n];
+    let mut weights =
+        (first_order && (camera.has_distortion() || user_weights.is_some())).then(|| vec![0.0; n]);
+    let mut failed: Vec<usize> = Vec::new();
+    camera
+        .projector()
+        .undistort_into(pixels, &mut image, weights.as_deref_mut(), |i| {
+            failed.push(i)
+        });
+    // The first-order weights times the caller's, checked in order.
+    if let Some(w) = weights.as_mut() {
+        let mut bad = None;
+        for_kept(n, &failed, |i| {
+            let weight = user_weights.map_or(w[i], |uw| uw[i] * w[i]);
+            w[i] = weight;
+            if bad.is_none() && !weight.is_finite() {
+                bad = Some(i);
+            }
+        });
+        if let Some(index) = bad {
+            return Err(PnpError::NonFinite {
+                index,
+                input: InputKind::Weight,
+            });
+        }
     }
-    let mut kept: Option<Kept> = None;
-    // The camera unpacked and its model dispatched once, not per point.
-    camera.projector().try_undistort_weighted_each(
-        pixels,
-        #[inline(always)]
-        |i, undistorted| {
-            let Some((m, weight)) = undistorted else {
-                if kept.is_none() {
-                    // Everything before `i` was kept: copied into buffers of capacity `n`.
-                    fn prefix<T: Copy>(s: &[T], len: usize, n: usize) -> Vec<T> {
-                        let mut v = Vec::with_capacity(n);
-                        v.extend_from_slice(&s[..len]);
-                        v
-                    }
-                    let mut used = Vec::with_capacity(n);
-                    used.extend(0..i);
-                    kept = Some(Kept {
-                        world: prefix(world, i, n),
-                        pixels: prefix(pixels, i, n),
-                        used,
-                        user_weights: user_weights.map(|uw| prefix(uw, i, n)),
-                    });
-                }
-                return Ok(());
-            };
-            if let Some(keep) = weights.as_mut() {
-                let weight = user_weights.map_or(weight, |uw| uw[i] * weight);
-                if !weight.is_finite() {
-                    return Err(PnpError::NonFinite {
-                        index: i,
-                        input: InputKind::Weight,
-                    });
-                }
-                keep.push(weight);
-            }
-            image.push(m);
-            if let Some(k) = kept.as_mut() {
-                k.world.push(world[i]);
-                k.used.push(i);
-                k.pixels.push(pixels[i]);
-                if let (Some(uw), Some(keep)) = (user_weights, k.user_weights.as_mut()) {
-                    keep.push(uw[i]);
-                }
-            }
-            Ok(())
-        },
-    )?;
-    Ok(match kept {
-        None => Undistorted {
+    if failed.is_empty() {
+        return Ok(Undistorted {
             world: Cow::Borrowed(world),
             image,
             weights,
@@ -848,18 +820,46 @@ pub(crate) fn undistort_all<'a>(
             user_weights: user_weights.map(Cow::Borrowed),
             rows,
             focal,
-        },
-        Some(k) => Undistorted {
-            world: Cow::Owned(k.world),
-            image,
-            weights,
-            used: Some(k.used),
-            pixels: Cow::Owned(k.pixels),
-            user_weights: k.user_weights.map(Cow::Owned),
-            rows,
-            focal,
-        },
+        });
+    }
+    // Some pixels left out: the kept correspondences copied, the buffers compacted.
+    let m = n - failed.len();
+    let mut used = Vec::with_capacity(m);
+    for_kept(n, &failed, |i| used.push(i));
+    let pick = |s: &[Point3<f64>]| used.iter().map(|&i| s[i]).collect::<Vec<_>>();
+    let kept_world = pick(world);
+    let kept_pixels: Vec<Point2<f64>> = used.iter().map(|&i| pixels[i]).collect();
+    let kept_user = user_weights.map(|uw| used.iter().map(|&i| uw[i]).collect::<Vec<_>>());
+    for (k, &i) in used.iter().enumerate() {
+        image[k] = image[i];
+        if let Some(w) = weights.as_mut() {
+            w[k] = w[i];
+        }
+    }
+    image.truncate(m);
+    if let Some(w) = weights.as_mut() {
+        w.truncate(m);
+    }
+    Ok(Undistorted {
+        world: Cow::Owned(kept_world),
+        image,
+        weights,
+        used: Some(used),
+        pixels: Cow::Owned(kept_pixels),
+        user_weights: kept_user.map(Cow::Owned),
+        rows,
+        focal,
     })
+}
+
+/// `each(i)` for every index `i` in `0..n` that is not in `skip` (ascending), in order.
+fn for_kept(n: usize, skip: &[usize], mut each: impl FnMut(usize)) {
+    let mut skip = skip.iter().copied().peekable();
+    for i in 0..n {
+        if skip.next_if_eq(&i).is_none() {
+            each(i);
+        }
+    }
 }
 
 /// The rotation of a finite initial pose, or [`PnpError::InvalidOption`] (`"initial"`).

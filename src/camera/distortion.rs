@@ -310,17 +310,16 @@ pub(super) struct RadialLane {
 /// trust region (`|step| <= max(0.1 |r|, 0.1)`), the same convergence check at every iterate
 /// (`|r (1 + g) - |x0||` is the length of the residual `(u, v) + D(u, v) - x0`, and
 /// `det J = (d/dr) (1 + g)` at the point), and at most as many steps: the same iterates in
-/// exact arithmetic. With `fisheye`, a converged point then goes through the inverse
+/// exact arithmetic. With `FISHEYE`, a converged point then goes through the inverse
 /// equidistant map as in [`super::Projector::undistort`]. The points run in lockstep, each frozen
 /// when its check passes; a point whose iteration would stop otherwise (a failed step, a
 /// negligible step without convergence, the iteration bound) is left to
 /// [`iterative_undistortion`] (`ok = false`), which fails where this would.
 #[inline(always)]
-pub(super) fn radial_undistortion<L: Lens>(
+pub(super) fn radial_undistortion<L: Lens, const FISHEYE: bool>(
     d: &L,
     x0: &[[f64; 2]; GROUP],
     n: usize,
-    fisheye: bool,
     out: &mut [RadialLane; GROUP],
 ) {
     const RADIUS: f64 = 0.1; // iterative_undistortion's trust region
@@ -375,7 +374,7 @@ pub(super) fn radial_undistortion<L: Lens>(
         let s = if rd[l] > 0.0 { r[l] / rd[l] } else { 1.0 };
         let (mut u, mut v, mut det) = (x0[l][0] * s, x0[l][1] * s, det_out[l]);
         let mut ok = ok[l] & (u.abs() < f64::INFINITY) & (v.abs() < f64::INFINITY);
-        if fisheye {
+        if FISHEYE {
             // The equidistant map's inverse, as Projector::undistort_with: theta =
             // |(u, v)| = |r|, the normalised radius tan(theta), the determinant divided by
             // s (1 + tan^2) with s = tan(theta) / theta. Beyond the hemisphere: left to the
@@ -411,22 +410,20 @@ dispatched! {
     /// focal lengths `focal` and principal point `centre`, [`GROUP`] at a time; entry `i` of
     /// `out` is pixel `i`'s. Built for the processor
     /// ([`crate::numeric::lanes::dispatched`]).
-    pub(super) fn radial_chunk[L: Lens][L](
+    pub(super) fn radial_chunk[L: Lens, const FISHEYE: bool][L, FISHEYE](
         lens: &L,
         focal: (f64, f64),
         centre: (f64, f64),
-        fisheye: bool,
         px: &[Point2<f64>],
         out: &mut [RadialLane; RADIAL_CHUNK],
     ) -> () = radial_chunk_body;
 }
 
 #[inline(always)]
-fn radial_chunk_body<L: Lens>(
+fn radial_chunk_body<L: Lens, const FISHEYE: bool>(
     lens: &L,
     focal: (f64, f64),
     centre: (f64, f64),
-    fisheye: bool,
     px: &[Point2<f64>],
     out: &mut [RadialLane; RADIAL_CHUNK],
 ) {
@@ -437,6 +434,6 @@ fn radial_chunk_body<L: Lens>(
             *x = [(p.x - centre.0) / focal.0, (p.y - centre.1) / focal.1];
         }
         let res: &mut [RadialLane; GROUP] = res.try_into().expect("chunks of GROUP");
-        radial_undistortion(lens, &x0, block.len(), fisheye, res);
+        radial_undistortion::<L, FISHEYE>(lens, &x0, block.len(), res);
     }
 }

@@ -512,66 +512,107 @@ impl Projector {
         with_lens!(self.distortion, l => self.undistort_weighted_with(l, pixel))
     }
 
-    /// Every pixel through [`Projector::undistort_weighted`] with the model dispatched once:
-    /// `each(i, Some((point, weight)))` for pixel `i`, in order, or `each(i, None)` if it has
-    /// no undistorted point (any error of `undistort_weighted`); stops at the first error
-    /// `each` returns.
-    pub(crate) fn try_undistort_weighted_each<E>(
+    /// Every pixel through [`Projector::undistort_weighted`] with the model dispatched once,
+    /// in bulk: entry `i` of `out` (and of `weights`, when given) becomes pixel `i`'s point
+    /// (and weight); `failed(i)` is called, in order, for each pixel that has none (any error
+    /// of `undistort_weighted`), whose entries are left as they were. `out` and `weights` are
+    /// as long as `pixels`.
+    pub(crate) fn undistort_into(
         &self,
         pixels: &[Point2<f64>],
-        mut each: impl FnMut(usize, Option<(Point2<f64>, f64)>) -> Result<(), E>,
-    ) -> Result<(), E> {
-        with_lens!(self.distortion, l => self.undistort_weighted_each_with(l, pixels, &mut each))
+        out: &mut [Point2<f64>],
+        weights: Option<&mut [f64]>,
+        failed: impl FnMut(usize),
+    ) {
+        debug_assert_eq!(out.len(), pixels.len());
+        match weights {
+            Some(w) => {
+                debug_assert_eq!(w.len(), pixels.len());
+                with_lens!(self.distortion, l => self.undistort_into_with(l, pixels, out, w, failed));
+            }
+            None => with_lens!(self.distortion, l => {
+                self.undistort_into_with(l, pixels, out, Discard, failed)
+            }),
+        }
     }
 
-    /// [`Projector::try_undistort_weighted_each`] for one lens. A radial lens
-    /// ([`Lens::RADIAL`]) undistorts its pixels sixteen at a time along their rays
-    /// (`radial_chunk`: the same iterates in exact arithmetic), and a pixel whose iteration
-    /// it leaves undecided goes through [`Projector::undistort_weighted_with`].
+    /// [`Projector::undistort_into`] for one lens. A radial lens ([`Lens::RADIAL`])
+    /// undistorts its pixels sixteen at a time along their rays (`radial_chunk`: the same
+    /// iterates in exact arithmetic), and a pixel whose iteration it leaves undecided goes
+    /// through [`Projector::undistort_weighted_with`].
     #[inline(always)]
-    fn undistort_weighted_each_with<L: Lens, E>(
+    fn undistort_into_with<L: Lens, W: WeightSink>(
         &self,
         lens: L,
         pixels: &[Point2<f64>],
-        each: &mut impl FnMut(usize, Option<(Point2<f64>, f64)>) -> Result<(), E>,
-    ) -> Result<(), E> {
+        out: &mut [Point2<f64>],
+        mut weights: W,
+        mut failed: impl FnMut(usize),
+    ) {
+        let n = pixels.len().min(out.len());
+        let (pixels, out) = (&pixels[..n], &mut out[..n]);
         if L::IDENTITY && !self.fisheye {
             // No distortion: the affine map alone, with undistort_with's outcome (a pixel or
             // a result that is not finite gives none; the weight is 1).
             let ((fx, fy), (cx, cy)) = (self.focal, self.centre);
-            for (i, px) in pixels.iter().enumerate() {
+            for (i, (px, o)) in pixels.iter().zip(out.iter_mut()).enumerate() {
                 let (u, v) = ((px.x - cx) / fx, (px.y - cy) / fy);
-                let ok = u.is_finite() && v.is_finite();
-                each(i, ok.then_some((Point2::new(u, v), 1.0)))?;
+                if u.is_finite() && v.is_finite() {
+                    *o = Point2::new(u, v);
+                    weights.set(i, 1.0);
+                } else {
+                    failed(i);
+                }
             }
-            return Ok(());
+            return;
         }
-        if !L::RADIAL {
-            for (i, px) in pixels.iter().enumerate() {
-                each(i, self.undistort_weighted_with(lens, *px).ok())?;
+        // One pixel through the one-pixel path.
+        let one = |i: usize,
+                   px: Point2<f64>,
+                   o: &mut Point2<f64>,
+                   weights: &mut W,
+                   failed: &mut dyn FnMut(usize)| {
+            match self.undistort_weighted_with(lens, px) {
+                Ok((m, w)) => {
+                    *o = m;
+                    weights.set(i, w);
+                }
+                Err(_) => failed(i),
             }
-            return Ok(());
+        };
+        if !L::RADIAL {
+            for (i, (px, o)) in pixels.iter().zip(out.iter_mut()).enumerate() {
+                one(i, *px, o, &mut weights, &mut failed);
+            }
+            return;
         }
         let mut lanes = [RadialLane::default(); RADIAL_CHUNK];
-        for (c, chunk) in pixels.chunks(RADIAL_CHUNK).enumerate() {
-            radial_chunk(
-                &lens,
-                self.focal,
-                self.centre,
-                self.fisheye,
-                chunk,
-                &mut lanes,
-            );
-            for (j, (px, lane)) in chunk.iter().zip(&lanes).enumerate() {
-                let result = if lane.ok {
-                    weight_of(*px, Point2::new(lane.u, lane.v), lane.det)
+        for (c, (chunk, outs)) in pixels
+            .chunks(RADIAL_CHUNK)
+            .zip(out.chunks_mut(RADIAL_CHUNK))
+            .enumerate()
+        {
+            if self.fisheye {
+                radial_chunk::<L, true>(&lens, self.focal, self.centre, chunk, &mut lanes);
+            } else {
+                radial_chunk::<L, false>(&lens, self.focal, self.centre, chunk, &mut lanes);
+            }
+            for (j, ((px, lane), o)) in chunk.iter().zip(&lanes).zip(outs).enumerate() {
+                let i = c * RADIAL_CHUNK + j;
+                if !lane.ok {
+                    one(i, *px, o, &mut weights, &mut failed);
+                    continue;
+                }
+                // weight_of's outcome: the weight |det J|, none if it is not finite.
+                let w = lane.det.abs();
+                if w.is_finite() {
+                    *o = Point2::new(lane.u, lane.v);
+                    weights.set(i, w);
                 } else {
-                    self.undistort_weighted_with(lens, *px)
-                };
-                each(c * RADIAL_CHUNK + j, result.ok())?;
+                    failed(i);
+                }
             }
         }
-        Ok(())
     }
 
     /// [`Projector::undistort_weighted`] for one lens: the weight `|det J| / (fx fy)` of
@@ -634,6 +675,26 @@ impl Projector {
         } else {
             Ok((Point2::new(u, v), det))
         }
+    }
+}
+
+/// Where [`Projector::undistort_into`] puts the weights: a slice, or nowhere.
+trait WeightSink {
+    fn set(&mut self, i: usize, w: f64);
+}
+
+/// No weights asked for.
+struct Discard;
+
+impl WeightSink for Discard {
+    #[inline(always)]
+    fn set(&mut self, _: usize, _: f64) {}
+}
+
+impl WeightSink for &mut [f64] {
+    #[inline(always)]
+    fn set(&mut self, i: usize, w: f64) {
+        self[i] = w;
     }
 }
 

@@ -295,7 +295,7 @@ fn non_invertible_region_is_an_error() {
 }
 
 /// The radial models' lockstep undistortion (`radial_chunk`, used by `solve_pixels` through
-/// `try_undistort_weighted_each`) against the one-pixel iteration (`Camera::undistort_weighted`):
+/// `undistort_into`) against the one-pixel iteration (`Camera::undistort_weighted`):
 /// every pixel gets the same outcome (no point, or the same point and weight to rounding),
 /// over strong distortion with folds (pixels beyond them have no preimage), the image centre,
 /// far-out and non-finite pixels, and with the iteration bound lowered so that the lanes give
@@ -351,12 +351,32 @@ fn radial_lanes_match_the_one_pixel_iteration() {
         ]);
         for limit in [None, Some(1), Some(2)] {
             let run = || {
-                let mut got = Vec::new();
-                proj.try_undistort_weighted_each(&pixels, |i, r| {
-                    got.push((i, r));
-                    Ok::<(), ()>(())
-                })
-                .unwrap();
+                // Entries of a pixel left out keep the sentinel.
+                let mut out = vec![Point2::new(f64::NAN, 7.0); pixels.len()];
+                let mut weights = vec![-1.0; pixels.len()];
+                let mut failed = Vec::new();
+                proj.undistort_into(&pixels, &mut out, Some(&mut weights), |i| failed.push(i));
+                assert!(failed.windows(2).all(|p| p[0] < p[1]), "in order");
+                let got: Vec<_> = (0..pixels.len())
+                    .map(|i| {
+                        if failed.contains(&i) {
+                            assert!(out[i].x.is_nan() && out[i].y == 7.0 && weights[i] == -1.0);
+                            (i, None)
+                        } else {
+                            (i, Some((out[i], weights[i])))
+                        }
+                    })
+                    .collect();
+                // Without weights: the same points, the same pixels left out.
+                let mut bare = vec![Point2::origin(); pixels.len()];
+                let mut failed_bare = Vec::new();
+                proj.undistort_into(&pixels, &mut bare, None, |i| failed_bare.push(i));
+                assert_eq!(failed_bare, failed);
+                for (i, g) in &got {
+                    if let Some((p, _)) = g {
+                        assert_eq!(bare[*i], *p);
+                    }
+                }
                 let want: Vec<_> = pixels
                     .iter()
                     .map(|p| cam.undistort_weighted(*p).ok())
@@ -405,7 +425,7 @@ fn radial_lanes_match_the_one_pixel_iteration() {
         out
     };
     let lanes = chunk(&|o| {
-        distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), false, &px, o)
+        distortion::radial_chunk::<_, false>(&lens, (1000.0, 1000.0), (1000.0, 800.0), &px, o)
     });
     assert!(lanes.iter().all(|l| l.ok));
     // The baseline and AVX2 builds agree to the bit (a perspective and a fisheye lens).
@@ -413,10 +433,22 @@ fn radial_lanes_match_the_one_pixel_iteration() {
     let chunks = || {
         (
             chunk(&|o| {
-                distortion::radial_chunk(&lens, (1000.0, 1000.0), (1000.0, 800.0), false, &px, o)
+                distortion::radial_chunk::<_, false>(
+                    &lens,
+                    (1000.0, 1000.0),
+                    (1000.0, 800.0),
+                    &px,
+                    o,
+                )
             }),
             chunk(&|o| {
-                distortion::radial_chunk(&fisheye, (1000.0, 1000.0), (1000.0, 800.0), true, &px, o)
+                distortion::radial_chunk::<_, true>(
+                    &fisheye,
+                    (1000.0, 1000.0),
+                    (1000.0, 800.0),
+                    &px,
+                    o,
+                )
             }),
         )
     };
