@@ -343,6 +343,10 @@ pub(super) fn radial_undistortion<L: Lens, const FISHEYE: bool>(
     while steps > 0 && live.iter().any(|&a| a) {
         steps -= 1;
         let last = steps == 0;
+        // The next radii and determinants, every entry written (a select, not a store under
+        // a mask: masked stores are slow on some processors).
+        let mut r_next = [0.0; GROUP];
+        let mut det_next = [0.0; GROUP];
         for l in 0..GROUP {
             let ([xr, _], j, radial) = d.apply(r[l], 0.0);
             let f = xr - rd[l];
@@ -363,11 +367,13 @@ pub(super) fn radial_undistortion<L: Lens, const FISHEYE: bool>(
             let negligible = st * st <= STEP_TOL * STEP_TOL * (if x > 1.0 { x } else { 1.0 });
             let done = live[l] & conv;
             ok[l] |= done;
-            det_out[l] = if done { det } else { det_out[l] };
+            det_next[l] = if done { det } else { det_out[l] };
             let stepping = live[l] & !conv & can_step & !negligible;
-            r[l] = if stepping { r_new } else { r[l] };
+            r_next[l] = if stepping { r_new } else { r[l] };
             live[l] = stepping;
         }
+        r = r_next;
+        det_out = det_next;
     }
     for l in 0..GROUP {
         // (u, v) = r x0 / |x0| (x0 itself at the centre, where r = 0).
