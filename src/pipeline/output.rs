@@ -15,7 +15,7 @@ use super::newton;
 use super::nullspace::{CandidateSource, MAX_CANDIDATES};
 use super::options::Refinement;
 use super::pixel::{self, PixelInputs};
-use super::reprojection::{self, ReprojOptions, ReprojOutcome};
+use super::reprojection::{self, Composed, ReprojOptions, ReprojOutcome};
 use super::select::{in_front, Minimum};
 use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
@@ -151,8 +151,9 @@ impl Output<'_> {
     /// [`Output::finish`] for a minimum whose S7 depth test (more than half of the points in
     /// front, [`in_front`]) is still to be made: `Ok(None)` if it fails. In the default mode
     /// S9's first pass, which evaluates every depth at the minimum anyway, counts them (the
-    /// same count: the same operations), so the test costs no pass of its own; with S10, or
-    /// in the algebraic mode, [`in_front`] makes it.
+    /// same count: the same operations), so the test costs no pass of its own; in the
+    /// algebraic mode the pass of the reported reprojection error counts them (the same
+    /// operations again); with S10, [`in_front`] makes it.
     pub(crate) fn finish_if_in_front(
         &self,
         m: &Minimum,
@@ -192,7 +193,8 @@ impl Output<'_> {
         // the first-order ones).
         let refines_pixels = self.pixel.is_some_and(|px| px.refine);
         let s9_counts = front_check && mode == Refinement::Reprojection && !refines_pixels;
-        if front_check && !s9_counts {
+        let error_counts = front_check && mode == Refinement::Algebraic;
+        if front_check && !s9_counts && !error_counts {
             if !in_front(self.world, self.weights, self.fr, &m.r, &m.t) {
                 return Ok(None);
             }
@@ -283,23 +285,38 @@ impl Output<'_> {
         // (found by fuzzing: an image coordinate of 3e9) the accumulated M is not PSD to
         // working precision and r^T M r comes out negative; the nearest admissible value is 0.
         let f = newton::cost_at(self.m45, &r).max(0.0);
-        let cheirality = match m.cheirality {
-            Some(c) if mode == Refinement::Algebraic || depth_signs_kept => c,
-            _ => in_front(self.world, self.weights, self.fr, &r, &t),
-        };
         let (rw, tw) = self.fr.to_world(&r, &t);
         // In S1's weight unit (exact powers of two): `e * weight_unit` is the caller's cost.
-        let e = match (s9_error, s10) {
-            (Some(e), None) => e,
-            (_, Some(_)) => 0.0, // S10's cost and RMS residual are reported instead
-            (None, None) => reprojection_error(
-                self.world,
-                self.image,
-                self.weights,
-                1.0 / self.fr.weight_unit,
-                &rw,
-                &tw,
-            ),
+        // (With the pass of the reprojection error, its count of the points in front.)
+        let (e, front) = match (s9_error, s10) {
+            (Some(e), None) => (e, None),
+            (_, Some(_)) => (0.0, None), // S10's cost and RMS residual are reported instead
+            (None, None) => {
+                let pose = Composed::new(&r, &self.fr.rw, self.fr.d, &t);
+                let (e, front) = reprojection_error(
+                    self.world,
+                    self.image,
+                    self.weights,
+                    1.0 / self.fr.weight_unit,
+                    &pose,
+                    &self.fr.c,
+                );
+                if error_counts {
+                    // S7's depth test at m (the algebraic mode: the pose is m's).
+                    if 2 * front <= self.fr.n_active {
+                        return Ok(None);
+                    }
+                    m.cheirality = Some(true);
+                }
+                (e, Some(front))
+            }
+        };
+        let cheirality = match m.cheirality {
+            Some(c) if mode == Refinement::Algebraic || depth_signs_kept => c,
+            _ => match front {
+                Some(front) => 2 * front > self.fr.n_active,
+                None => in_front(self.world, self.weights, self.fr, &r, &t),
+            },
         };
         let wsum = self.fr.weight_sum;
         let rot = to_unit_quaternion(&rw);
@@ -383,19 +400,23 @@ pub(crate) fn rank_all(
 }
 
 dispatched! {
-    /// Weighted sum of squared normalised reprojection residuals of a world-frame pose, with
-    /// the weights multiplied by `inv_weight` (S1's weight unit). Points at or behind the
-    /// camera plane contribute an infinite residual. Vectorised across points like the passes
-    /// of S2 and S9: the points with non-zero weight, in order, in blocks of [`LANES`], one
-    /// partial sum per lane, the lanes added pairwise at the end.
+    /// Weighted sum of squared normalised reprojection residuals at a working-frame pose
+    /// (`pose`: `x_cam = a (X - c) + t`, S9's composed form, whose camera coordinates are the
+    /// world pose's divided by S1's scale `d`: the same projections, at depths of order 1
+    /// whatever the input's scale), with the weights multiplied by `inv_weight` (S1's weight
+    /// unit); and the number of points with non-zero weight and a positive depth, computed
+    /// as [`in_front`] computes it (the same operations, so the same count). Vectorised
+    /// across points like the passes of S2 and S9: the points with non-zero weight, in order,
+    /// in blocks of [`LANES`], one partial sum and count per lane, the lanes added pairwise
+    /// at the end.
     fn reprojection_error[][](
         world: &[Point3<f64>],
         image: &[Point2<f64>],
         weights: Option<&[f64]>,
         inv_weight: f64,
-        r: &Matrix3<f64>,
-        t: &Vector3<f64>,
-    ) -> f64 = reprojection_error_body;
+        pose: &Composed,
+        c: &Vector3<f64>,
+    ) -> (f64, usize) = reprojection_error_body;
 }
 
 #[inline(always)]
@@ -404,18 +425,21 @@ fn reprojection_error_body(
     image: &[Point2<f64>],
     weights: Option<&[f64]>,
     inv_weight: f64,
-    r: &Matrix3<f64>,
-    t: &Vector3<f64>,
-) -> f64 {
-    let pose = (
+    pose: &Composed,
+    c: &Vector3<f64>,
+) -> (f64, usize) {
+    let a = &pose.a;
+    let k = (
         [
-            [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
-            [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
-            [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+            [a[(0, 0)], a[(0, 1)], a[(0, 2)]],
+            [a[(1, 0)], a[(1, 1)], a[(1, 2)]],
+            [a[(2, 0)], a[(2, 1)], a[(2, 2)]],
         ],
-        [t.x, t.y, t.z],
+        [c.x, c.y, c.z],
+        [pose.t.x, pose.t.y, pose.t.z],
     );
     let mut acc = [0.0; LANES];
+    let mut front = [0u64; LANES];
     let ControlFlow::Continue((blk, filled)) = blocks::<Infallible>(
         world,
         image,
@@ -424,29 +448,40 @@ fn reprojection_error_body(
         #[inline(always)]
         |full| {
             for l in 0..LANES {
-                residual_lane(&pose, full, l, &mut acc);
+                residual_lane(&k, full, l, &mut acc, &mut front);
             }
             ControlFlow::Continue(())
         },
     );
     for l in 0..filled {
-        residual_lane(&pose, &blk, l, &mut acc);
+        residual_lane(&k, &blk, l, &mut acc, &mut front);
     }
-    lane_sum(&acc)
+    (lane_sum(&acc), front.iter().sum::<u64>() as usize)
 }
 
-/// Adds the weighted squared residual of point `l` of `blk` under the pose `(R, t)` (rows of
-/// `R`) to lane `l` of `acc`.
+/// Adds the weighted squared residual of point `l` of `blk` under the pose `(a, c, t)` (rows
+/// of `a`) to lane `l` of `acc`, and 1 to lane `l` of `front` if the point's depth is
+/// positive.
 #[inline(always)]
 fn residual_lane(
-    (r, t): &([[f64; 3]; 3], [f64; 3]),
+    (a, c, t): &([[f64; 3]; 3], [f64; 3], [f64; 3]),
     blk: &Block,
     l: usize,
     acc: &mut [f64; LANES],
+    front: &mut [u64; LANES],
 ) {
     let (x, m, w) = blk.point(l);
+    let xc = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
+    // `a . (X - c) + t`: the operations of `in_front` (and of S9's pass).
     let p: [f64; 3] =
-        core::array::from_fn(|j| r[j][0] * x[0] + r[j][1] * x[1] + r[j][2] * x[2] + t[j]);
-    let (du, dv) = (m[0] - p[0] / p[2], m[1] - p[1] / p[2]);
+        core::array::from_fn(|j| a[j][0] * xc[0] + a[j][1] * xc[1] + a[j][2] * xc[2] + t[j]);
+    front[l] += u64::from(p[2] > 0.0);
+    // One division per point, as in S9's pass.
+    let iz = 1.0 / p[2];
+    let (du, dv) = (m[0] - p[0] * iz, m[1] - p[1] * iz);
     acc[l] += w * (du * du + dv * dv);
 }
+
+#[cfg(test)]
+#[path = "../../tests/unit/pipeline/output.rs"]
+mod tests;

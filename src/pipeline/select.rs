@@ -37,7 +37,7 @@ pub(crate) fn in_front(
 dispatched! {
     /// The number of active points with `a . (X_i - c) + t_z > 0`: a count, so the same in
     /// every build; branch-free, so that the compiler vectorises it.
-    fn count_in_front[][](
+    pub(crate) fn count_in_front[][](
         world: &[Point3<f64>],
         weights: Option<&[f64]>,
         a: &Vector3<f64>,
