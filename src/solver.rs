@@ -826,10 +826,12 @@ pub(crate) fn undistort_all<'a>(
     let m = n - failed.len();
     let mut used = Vec::with_capacity(m);
     for_kept(n, &failed, |i| used.push(i));
-    let pick = |s: &[Point3<f64>]| used.iter().map(|&i| s[i]).collect::<Vec<_>>();
-    let kept_world = pick(world);
-    let kept_pixels: Vec<Point2<f64>> = used.iter().map(|&i| pixels[i]).collect();
-    let kept_user = user_weights.map(|uw| used.iter().map(|&i| uw[i]).collect::<Vec<_>>());
+    fn pick<T: Copy>(s: &[T], used: &[usize]) -> Vec<T> {
+        used.iter().map(|&i| s[i]).collect()
+    }
+    let kept_world = pick(world, &used);
+    let kept_pixels = pick(pixels, &used);
+    let kept_user = user_weights.map(|uw| pick(uw, &used));
     for (k, &i) in used.iter().enumerate() {
         image[k] = image[i];
         if let Some(w) = weights.as_mut() {
