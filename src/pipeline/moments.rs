@@ -422,6 +422,10 @@ impl Accumulator {
     /// Returns `None` if `W^T W` is not positive definite (all image points coincide, which
     /// S1 already rejects) or if a result is not finite (e.g. image coordinates so large that
     /// `u^2 + v^2` overflows).
+    ///
+    /// Inlined into its callers, so that `M` and `G` are built where the solve keeps them (see
+    /// [`super::frame::working_frame`]: returned by value, the 840 bytes were copied twice).
+    #[inline(always)]
     pub(crate) fn system(&self, flatten: bool) -> Option<System> {
         let (a, a_u, a_v, a_q, s, s_u, s_v, s_q) = if flatten {
             (
