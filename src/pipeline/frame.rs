@@ -117,6 +117,12 @@ impl WorkingFrame {
         (self.rw * (x.coords - self.c)) * (1.0 / self.d)
     }
 
+    /// S7's depth rule: `count` points in front are more than half of the active points.
+    #[inline]
+    pub(crate) fn most_in_front(&self, count: usize) -> bool {
+        2 * count > self.n_active
+    }
+
     /// Working-frame pose to the world pose (S8): `(R Rw, d t - R Rw c)`.
     ///
     /// Both poses give the same projection of every point. The result can overflow only if

@@ -322,7 +322,7 @@ fn small_n(
         source: b.source,
         planar: b.source == CandidateSource::Planar1,
         iterations: b.iterations,
-        cheirality: Some(2 * b.in_front > fr.n_active),
+        cheirality: Some(fr.most_in_front(b.in_front)),
     };
     Some((m, o))
 }

@@ -424,7 +424,8 @@ impl Accumulator {
     /// `u^2 + v^2` overflows).
     ///
     /// Inlined into its callers, so that `M` and `G` are built where the solve keeps them (see
-    /// [`super::frame::working_frame`]: returned by value, the 840 bytes were copied twice).
+    /// [`super::frame::working_frame`]: returned by value, the 840 bytes were copied two to
+    /// three times).
     #[inline(always)]
     pub(crate) fn system(&self, flatten: bool) -> Option<System> {
         let (a, a_u, a_v, a_q, s, s_u, s_v, s_q) = if flatten {

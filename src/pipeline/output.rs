@@ -260,7 +260,7 @@ impl Output<'_> {
             if s9_counts {
                 // S9 ran from `m`: its first pass counted the depths there.
                 let front = match out.start_in_front {
-                    Some(count) => 2 * count > self.fr.n_active,
+                    Some(count) => self.fr.most_in_front(count),
                     None => in_front(self.world, self.weights, self.fr, &m.r, &m.t),
                 };
                 if !front {
@@ -303,7 +303,7 @@ impl Output<'_> {
                 );
                 if error_counts {
                     // S7's depth test at m (the algebraic mode: the pose is m's).
-                    if 2 * front <= self.fr.n_active {
+                    if !self.fr.most_in_front(front) {
                         return Ok(None);
                     }
                     m.cheirality = Some(true);
@@ -314,7 +314,7 @@ impl Output<'_> {
         let cheirality = match m.cheirality {
             Some(c) if mode == Refinement::Algebraic || depth_signs_kept => c,
             _ => match front {
-                Some(front) => 2 * front > self.fr.n_active,
+                Some(front) => self.fr.most_in_front(front),
                 None => in_front(self.world, self.weights, self.fr, &r, &t),
             },
         };

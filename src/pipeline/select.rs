@@ -31,7 +31,7 @@ pub(crate) fn in_front(
     t: &Vector3<f64>,
 ) -> bool {
     let a = (r * fr.rw).row(2).transpose() / fr.d;
-    2 * count_in_front(world, weights, &a, &fr.c, t.z) > fr.n_active
+    fr.most_in_front(count_in_front(world, weights, &a, &fr.c, t.z))
 }
 
 dispatched! {

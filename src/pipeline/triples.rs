@@ -85,9 +85,9 @@ const MAX_COST_RATIO: f64 = 1e4;
 /// per N and scene type in two seed sets): the largest ratio of a start that led to a lower
 /// minimum was 1,429 in general scenes, but 20,238 in one planar N = 4 problem of 12,000 (the
 /// largest in the other seed set: 319), whose global minimum only that start reaches (32 S9
-/// iterations): with 10,000 it
-/// was missed (cost 2.06x LM's from the ground truth). With 100,000 it is found, for 7 % more
-/// instructions in planar N = 4 solves (in general ones the same cut costs 40 %).
+/// iterations): with 10,000 it was missed (cost 2.06x LM's from the ground truth). With
+/// 100,000 it is found, for 7 % more instructions in planar N = 4 solves (in general ones the
+/// same cut costs 40 %).
 const MAX_COST_RATIO_PLANAR: f64 = 1e5;
 
 /// A later run of S9 is abandoned before a step when its cost `e` exceeds
