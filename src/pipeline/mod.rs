@@ -148,7 +148,8 @@ pub(crate) fn run(
             None
         };
         if let Some((r0, source, sigma)) = start {
-            if let Some(m) = search.refine(&r0, source) {
+            let f0 = newton::cost_at(m45, &r0);
+            if let Some(m) = search.refine(&r0, f0, source) {
                 let bound = sigma.is_some_and(|s| certificate::below_spectral_bound(m.f, s, scale));
                 if bound || is_certified(&m.r) {
                     if let Some(sol) = out.finish_if_in_front(&m, opts.refinement, reproj)? {
@@ -177,13 +178,13 @@ pub(crate) fn run(
         .map(|(i, c)| (newton::cost_at(m45, &c.r), i))
         .collect();
     init.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    for &(_, i) in &init {
+    for &(f0, i) in &init {
         let c = cands[i];
         // A start already inside the basin of a known minimum would only find it again.
         if search.in_known_basin(&c.r) {
             continue;
         }
-        if let Some(m) = search.refine(&c.r, c.source) {
+        if let Some(m) = search.refine(&c.r, f0, c.source) {
             // A certified global minimum with most points in front is S7's pick.
             if early_exit && is_certified(&m.r) {
                 if let Some(sol) = out.finish_if_in_front(&m, opts.refinement, reproj)? {
@@ -233,7 +234,7 @@ fn small_n(
     if let Some(psys) = planar_sys {
         if let Some(r0) = planar::first_start(psys, world, weights, fr, scale) {
             let (r, it) = Search::new(opts, sys, m45, scale)
-                .refine(&r0, CandidateSource::Planar1)
+                .refine(&r0, newton::cost_at(m45, &r0), CandidateSource::Planar1)
                 .map_or((r0, 0), |m| (m.r, m.iterations));
             let t = sys.translation(&r);
             triples::add(sp, &r, &t, (CandidateSource::Planar1, it), &mut starts);
@@ -404,12 +405,13 @@ pub(crate) fn refine(
     // (M is already accumulated), to the algebraic minimum of the prior's basin, whose
     // translation follows from its rotation; S9 then needs the few passes it needs after a
     // full search. If Newton fails, S9 starts at the prior itself.
+    let f0 = newton::cost_at(m45, &r_work);
     let m = Search::new(opts, &prep.sys, m45, prep.scale)
-        .refine(&r_work, CandidateSource::Initial)
+        .refine(&r_work, f0, CandidateSource::Initial)
         .unwrap_or_else(|| Minimum {
             r: r_work,
             t: (t + r * fr.c) / fr.d,
-            f: newton::cost_at(m45, &r_work),
+            f: f0,
             source: CandidateSource::Initial,
             planar: false,
             iterations: 0,
@@ -455,18 +457,17 @@ impl<'a> Search<'a> {
         !self.exhaustive && self.minima.iter().any(|m| (m.r - r).norm() <= IN_BASIN)
     }
 
-    /// S6 from `r0`: a new local minimum, or `None` when the refinement entered the basin of a
-    /// known one, found one already known, or did not produce a finite rotation.
-    fn refine(&self, r0: &Matrix3<f64>, source: CandidateSource) -> Option<Minimum> {
-        let known: ArrayVec<Matrix3<f64>, MAX_CANDIDATES> =
-            self.minima.iter().map(|m| m.r).collect();
+    /// S6 from `r0` (`f0 = f(r0)`, `newton::cost_at`'s value): a new local minimum, or `None`
+    /// when the refinement entered the basin of a known one, found one already known, or did
+    /// not produce a finite rotation.
+    fn refine(&self, r0: &Matrix3<f64>, f0: f64, source: CandidateSource) -> Option<Minimum> {
         let refined = newton::refine_so3_until(
             &self.sys.m,
             self.m45,
             self.scale,
-            r0,
+            (r0, f0),
             &self.newton,
-            &mut |r| !self.exhaustive && known.iter().any(|k| (k - r).norm() <= IN_BASIN),
+            &mut |r| self.in_known_basin(r),
         );
         if refined.stopped_early
             || !refined.f.is_finite()

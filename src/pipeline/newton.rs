@@ -191,18 +191,18 @@ pub(crate) fn refine_so3(
     opts: &NewtonOptions,
 ) -> Refined {
     let m = crate::pipeline::moments::m_symmetric(m45);
-    refine_so3_until(&m, m45, scale, r0, opts, &mut |_| false)
+    refine_so3_until(&m, m45, scale, (r0, cost_at(m45, r0)), opts, &mut |_| false)
 }
 
-/// As [`refine_so3`] (`m` is M itself, `m45` its upper triangle), but stops early (with
-/// `stopped_early = true`) as soon as `stop` returns true for an accepted iterate. The solver
-/// uses it to abandon a trajectory once it has entered the neighbourhood of a local minimum
-/// that is already known.
+/// As [`refine_so3`] (`m` is M itself, `m45` its upper triangle, `f0` is `cost_at(m45, r0)`,
+/// which the solver has already computed), but stops early (with `stopped_early = true`) as
+/// soon as `stop` returns true for an accepted iterate. The solver uses it to abandon a
+/// trajectory once it has entered the neighbourhood of a local minimum that is already known.
 pub(crate) fn refine_so3_until(
     m: &SMatrix<f64, 9, 9>,
     m45: &[f64; 45],
     scale: f64,
-    r0: &Matrix3<f64>,
+    (r0, f0): (&Matrix3<f64>, f64),
     opts: &NewtonOptions,
     stop: &mut dyn FnMut(&Matrix3<f64>) -> bool,
 ) -> Refined {
@@ -219,7 +219,7 @@ pub(crate) fn refine_so3_until(
     // is computed when the next iteration needs it (never at the iterate the loop stops at).
     let mut model = None;
     // Acceptance compares values of one evaluation order: `cost_at` throughout.
-    let mut f = cost_at(m45, &r);
+    let mut f = f0;
     let mut mu = opts.mu0;
     let mut iterations = 0u32;
     let mut hit_limit = true;
