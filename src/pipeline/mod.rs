@@ -461,13 +461,15 @@ impl<'a> Search<'a> {
     /// when the refinement entered the basin of a known one, found one already known, or did
     /// not produce a finite rotation.
     fn refine(&self, r0: &Matrix3<f64>, f0: f64, source: CandidateSource) -> Option<Minimum> {
+        let known: ArrayVec<Matrix3<f64>, MAX_CANDIDATES> =
+            self.minima.iter().map(|m| m.r).collect();
         let refined = newton::refine_so3_until(
             &self.sys.m,
             self.m45,
             self.scale,
             (r0, f0),
             &self.newton,
-            &mut |r| self.in_known_basin(r),
+            &mut |r| !self.exhaustive && known.iter().any(|k| (k - r).norm() <= IN_BASIN),
         );
         if refined.stopped_early
             || !refined.f.is_finite()
