@@ -62,6 +62,9 @@ use select::Minimum;
 /// this small, or when quadratic convergence predicts the next step below a thousandth of it,
 /// so the minimum of f is located to ~1e-9 before S9 takes over.
 const S6_TOLERANCE_BEFORE_S9: f64 = 1e-6;
+/// An exact fit: the case-1 start's `f` at most this times `trace(M)`. Noise-free input gives
+/// about 1e-16 (the rounding of M), sigma = 0.001 px about 1e-11 (N = 10).
+const EXACT_FIT: f64 = 1e-14;
 /// Planarity thresholds (S3).
 const NONPLANAR_MIN_RATIO: f64 = 1e-6;
 const PLANAR_MAX_RATIO: f64 = 1e-3;
@@ -149,7 +152,20 @@ pub(crate) fn run(
         };
         if let Some((r0, source, sigma)) = start {
             let f0 = newton::cost_at(m45, &r0);
-            if let Some(m) = search.refine(&r0, f0, source) {
+            // An exact fit (noise-free input): f at the case-1 start is at the rounding level
+            // of its lower bound 0 and below the spectral bound, so the start is the certified
+            // global minimum of f to within rounding. In the default mode S6 is skipped, and
+            // S9 applies the Gauss-Newton step of its `xtol` stop, which makes the pose exact
+            // (docs/algorithm.md, the driver).
+            let exact = opts.refinement == Refinement::Reprojection
+                && f0 <= EXACT_FIT * scale
+                && sigma.is_some_and(|s| certificate::below_spectral_bound(f0, s, scale));
+            let m = if exact {
+                Some(search.at_start(&r0, f0, source))
+            } else {
+                search.refine(&r0, f0, source)
+            };
+            if let Some(m) = m {
                 let bound = sigma.is_some_and(|s| certificate::below_spectral_bound(m.f, s, scale));
                 if bound || is_certified(&m.r) {
                     if let Some(sol) = out.finish_if_in_front(&m, opts.refinement, reproj)? {
@@ -324,6 +340,7 @@ fn small_n(
         planar: b.source == CandidateSource::Planar1,
         iterations: b.iterations,
         cheirality: Some(fr.most_in_front(b.in_front)),
+        exact: false,
     };
     Some((m, o))
 }
@@ -416,6 +433,7 @@ pub(crate) fn refine(
             planar: false,
             iterations: 0,
             cheirality: None,
+            exact: false,
         });
     out.finish(&m, Refinement::Reprojection, reproj)
 }
@@ -489,7 +507,22 @@ impl<'a> Search<'a> {
             planar: matches!(source, CandidateSource::Planar1 | CandidateSource::Planar2),
             iterations: refined.iterations,
             cheirality: None,
+            exact: false,
         })
+    }
+
+    /// The start `r0` itself as the minimum (`f0 = f(r0)`), S6 skipped: an exact fit.
+    fn at_start(&self, r0: &Matrix3<f64>, f0: f64, source: CandidateSource) -> Minimum {
+        Minimum {
+            r: *r0,
+            t: self.sys.translation(r0),
+            f: f0,
+            source,
+            planar: matches!(source, CandidateSource::Planar1 | CandidateSource::Planar2),
+            iterations: 0,
+            cheirality: None,
+            exact: true,
+        }
     }
 
     /// Records a new minimum (while there is room).

@@ -187,6 +187,16 @@ impl Output<'_> {
         front_check: bool,
     ) -> Result<Option<Solution>, PnpError> {
         let mut m = *m;
+        let exact_opts;
+        let opts = if m.exact {
+            exact_opts = ReprojOptions {
+                exact_start: true,
+                ..*opts
+            };
+            &exact_opts
+        } else {
+            opts
+        };
         // S7's depth test at `m`, when it is still to be made (`front_check`): counted by S9's
         // first pass when S9 runs from `m` (the default mode without S10), else by S7 now
         // (S10's passes may skip other points than S7's weights: the caller's weights against

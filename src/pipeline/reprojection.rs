@@ -49,6 +49,14 @@
 //! - The accuracy is that of the `xtol` stop: that stop leaves the last (unapplied) step, at
 //!   most `xtol (|t| + 1)`, as the distance to the minimum; this one leaves the predicted next
 //!   step, bounded alike.
+//!
+//! From an exact fit ([`ReprojOptions::exact_start`]: S6 was skipped because the start's
+//! algebraic cost is at the rounding level, docs/algorithm.md, the driver) the `xtol` stop
+//! applies its step instead of dropping it, when it cannot flip a depth sign (the third
+//! condition above). The residuals are at the rounding level, where Gauss-Newton converges
+//! quadratically: the step corrects the start's error (the rounding of M's null vector, up to
+//! about 1e-9 in quasi-singular scenes) to second order, which the dropped step would leave
+//! in the pose.
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
@@ -74,6 +82,10 @@ pub(crate) struct ReprojOptions {
     /// Weights of the x and y residual rows, e.g. `(fx^2, fy^2)` to minimise the pixel error
     /// for anisotropic intrinsics. Default `(1, 1)`.
     pub row_weights: (f64, f64),
+    /// The start is an exact fit (f at the rounding level, S6 skipped): the step of the `xtol`
+    /// stop, Gauss-Newton on residuals at the rounding level, is applied (module docs).
+    /// Default `false`.
+    pub exact_start: bool,
 }
 
 impl Default for ReprojOptions {
@@ -84,6 +96,7 @@ impl Default for ReprojOptions {
             xtol: 1e-10,
             gtol: 1e-13,
             row_weights: (1.0, 1.0),
+            exact_start: false,
         }
     }
 }
@@ -421,11 +434,17 @@ fn levenberg_marquardt_until<P: Residuals>(
         let step_sq = delta.iter().map(|x| x * x).sum::<f64>();
         let step_norm = step_sq.sqrt();
         let scale = t.norm() + 1.0;
+        let w = Vector3::new(delta[0], delta[1], delta[2]);
         if step_norm <= opts.xtol * scale {
+            // From an exact fit the residuals stay at the rounding level, where this
+            // Gauss-Newton step is exact to second order: it is applied (module docs).
+            if opts.exact_start && step_norm * (max_abs_q + 1.0) < 0.5 * nrm.min_abs_z {
+                r = exp_so3(&w) * r;
+                t += Vector3::new(delta[3], delta[4], delta[5]);
+            }
             stop = ReprojStop::Step;
             break;
         }
-        let w = Vector3::new(delta[0], delta[1], delta[2]);
         let r_new = exp_so3(&w) * r;
         let t_new = t + Vector3::new(delta[3], delta[4], delta[5]);
         let cand = Composed::new(&r_new, &fr.rw, fr.d, &t_new);

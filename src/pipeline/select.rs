@@ -19,6 +19,10 @@ pub(crate) struct Minimum {
     pub iterations: u32,
     /// Whether more than half of the points are in front (`None` until it is counted).
     pub cheirality: Option<bool>,
+    /// An exact fit: the start itself, certified at the rounding level of `f` (S6 skipped);
+    /// S9 (or S10) then applies the step of its `xtol` stop
+    /// ([`super::reprojection::ReprojOptions::exact_start`]).
+    pub exact: bool,
 }
 
 /// Whether more than half of the active points have positive depth (working-frame pose),
