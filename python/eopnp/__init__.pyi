@@ -99,7 +99,7 @@ class Solution:
         """The candidate generator of the winning start."""
     @property
     def newton_iterations(self) -> int:
-        """Damped-Newton iterations of the winning candidate."""
+        """Damped-Newton iterations of the winning candidate (0 when skipped: an exact fit)."""
     @property
     def reprojection_iterations(self) -> int:
         """Levenberg-Marquardt iterations of the refinement (0 in algebraic mode)."""

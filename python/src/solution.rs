@@ -27,7 +27,8 @@ use crate::convert::{array1, array2};
 ///     planar: the planar branch produced the starting candidate.
 ///     source: the candidate generator of the winning start ("case1", ..., "planar1",
 ///         "planar2", "extra_start"; "initial" for ``refine``).
-///     newton_iterations: damped-Newton iterations of the winning candidate.
+///     newton_iterations: damped-Newton iterations of the winning candidate (0 when skipped:
+///         an exact fit, whose start is already the minimum of the algebraic cost).
 ///     reprojection_iterations: Levenberg-Marquardt iterations of the refinement.
 ///     converged: the refinement stopped at a minimum (False when it ran out of iterations or
 ///         could not start; True in algebraic mode).

@@ -57,7 +57,8 @@ pub struct Solution {
     pub planar: bool,
     /// The candidate generator of the winning start.
     pub source: CandidateSource,
-    /// Damped-Newton iterations (S6) of the winning candidate.
+    /// Damped-Newton iterations (S6) of the winning candidate (0 when S6 was skipped: an exact
+    /// fit, whose start is already the minimum of the algebraic cost to rounding).
     pub newton_iterations: u32,
     /// Levenberg-Marquardt iterations of the reprojection refinement (S9; 0 in algebraic mode).
     pub reprojection_iterations: u32,
