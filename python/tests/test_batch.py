@@ -155,3 +155,15 @@ def test_batch_views_of_one_array(rng, threads):
     got = eopnp.solve_batch(views, threads=threads)
     for k, (v, g) in enumerate(zip(views, got)):
         assert g == eopnp.solve(*v), k
+
+
+def test_solve_batch_results_untracked_by_gc(rng):
+    """A batch's Solution objects hold no Python reference, so they are kept off the garbage
+    collector's lists (no collection traverses them); they stay intact through collections."""
+    import gc
+
+    probs = batch(rng, count=30)
+    got = eopnp.solve_batch(probs, threads=2)
+    assert not any(gc.is_tracked(s) for s in got)
+    gc.collect()
+    assert got == [eopnp.solve(*p) for p in probs]
