@@ -499,29 +499,35 @@ impl<'a> Search<'a> {
         {
             return None;
         }
-        Some(Minimum {
-            r: refined.r,
-            t: self.sys.translation(&refined.r),
-            f: refined.f,
-            source,
-            planar: matches!(source, CandidateSource::Planar1 | CandidateSource::Planar2),
-            iterations: refined.iterations,
-            cheirality: None,
-            exact: false,
-        })
+        Some(self.minimum(&refined.r, refined.f, source, refined.iterations))
     }
 
     /// The start `r0` itself as the minimum (`f0 = f(r0)`), S6 skipped: an exact fit.
     fn at_start(&self, r0: &Matrix3<f64>, f0: f64, source: CandidateSource) -> Minimum {
         Minimum {
-            r: *r0,
-            t: self.sys.translation(r0),
-            f: f0,
+            exact: true,
+            ..self.minimum(r0, f0, source, 0)
+        }
+    }
+
+    /// The minimum at rotation `r` (`f = f(r)`), its translation from `r`, found from a start
+    /// of `source` by `iterations` S6 iterations.
+    fn minimum(
+        &self,
+        r: &Matrix3<f64>,
+        f: f64,
+        source: CandidateSource,
+        iterations: u32,
+    ) -> Minimum {
+        Minimum {
+            r: *r,
+            t: self.sys.translation(r),
+            f,
             source,
             planar: matches!(source, CandidateSource::Planar1 | CandidateSource::Planar2),
-            iterations: 0,
+            iterations,
             cheirality: None,
-            exact: true,
+            exact: false,
         }
     }
 

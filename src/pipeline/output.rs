@@ -188,15 +188,10 @@ impl Output<'_> {
         front_check: bool,
     ) -> Result<Option<Solution>, PnpError> {
         let mut m = *m;
-        let exact_opts;
-        let opts = if m.exact {
-            exact_opts = ReprojOptions {
-                exact_start: true,
-                ..*opts
-            };
-            &exact_opts
-        } else {
-            opts
+        // S9 (or S10) is told whether `m` is an exact fit.
+        let opts = &ReprojOptions {
+            exact_start: m.exact,
+            ..*opts
         };
         // S7's depth test at `m`, when it is still to be made (`front_check`): counted by S9's
         // first pass when S9 runs from `m` (the default mode without S10), else by S7 now
