@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use eopnp::colmap::{
     parse_model_buffered, read_model, read_model_binary, read_model_text, register_image,
-    write_model_binary, Location, Model, ModelError, ModelFormat, ReadLimits,
+    write_model_binary, Location, Model, ModelError, ModelFormat, ReadLimits, Registrar,
 };
 use eopnp::{Refinement, Solver};
 
@@ -71,11 +71,47 @@ fn correspondences_are_the_same_with_sparse_point_ids() {
             *id = id.map(spread);
         }
     }
-    for id in m.images.keys() {
+    // A registrar looks the points up in its own table (dense ids) or in the map (sparse):
+    // the same correspondences, also from buffers reused across images, in any order.
+    let (mut dense_reg, mut sparse_reg) = (Registrar::new(&m), Registrar::new(&sparse));
+    for id in m.images.keys().chain(m.images.keys().rev()) {
         let dense = m.correspondences(*id);
         assert!(!dense.0.is_empty());
         assert_eq!(dense, sparse.correspondences(*id), "image {id}");
+        for reg in [&mut dense_reg, &mut sparse_reg] {
+            let (w, p) = reg.correspondences(*id).expect("known image");
+            assert_eq!((w, p), (&dense.0[..], &dense.1[..]), "image {id}");
+        }
     }
+    assert!(matches!(
+        dense_reg.correspondences(999),
+        Err(eopnp::colmap::RegisterError::UnknownImage(999))
+    ));
+}
+
+/// A registrar registers as `register_image` does: the same registration, bit for bit but the
+/// time, for every image, plain and with RANSAC, in any order and repeatedly.
+#[test]
+fn registrar_registers_as_register_image() {
+    let m = text_model();
+    let solver = Solver::default();
+    let ransac = eopnp::ransac::Ransac::default();
+    let mut registrar = Registrar::new(&m);
+    for id in m.images.keys().rev().chain(m.images.keys()) {
+        for r in [None, Some(&ransac)] {
+            let mut a = register_image(&m, *id, &solver, r).expect("registers");
+            let b = registrar.register(*id, &solver, r).expect("registers");
+            a.micros = b.micros;
+            if let (Some(sa), Some(sb)) = (&mut a.ransac, &b.ransac) {
+                sa.micros = sb.micros;
+            }
+            assert_eq!(format!("{a:?}"), format!("{b:?}"), "image {id}");
+        }
+    }
+    assert!(matches!(
+        registrar.register(999, &solver, None),
+        Err(eopnp::colmap::RegisterError::UnknownImage(999))
+    ));
 }
 
 /// Default mode (reprojection refinement, pixel-weighted): every image, all correspondences,

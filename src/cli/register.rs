@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::experiment::{self, ImageProblem, Outliers};
-use crate::colmap::{self, Limit, Model, ModelErrorKind, ModelFormat, RegisterError, Registration};
+use crate::colmap::{
+    self, Limit, Model, ModelErrorKind, ModelFormat, RegisterError, Registrar, Registration,
+};
 use crate::ransac::Ransac;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
@@ -40,6 +42,7 @@ impl super::RegisterOptions {
 /// robust estimate, on the model's correspondences or, with `--outliers`, on a copy with
 /// injected wrong 3D points.
 fn estimate(
+    registrar: &mut Registrar<'_>,
     model: &Model,
     image_id: u32,
     opts: &RegisterOptions,
@@ -50,7 +53,7 @@ fn estimate(
     let spec = opts.outlier_spec();
     if spec.is_none() {
         let ransac = opts.ransac.then(|| opts.ransac_options());
-        let run = || colmap::register_image(model, image_id, &solver, ransac.as_ref());
+        let mut run = || registrar.register(image_id, &solver, ransac.as_ref());
         let result = run().and_then(|mut best| {
             for _ in 0..2 {
                 best.micros = best.micros.min(run()?.micros);
@@ -386,11 +389,12 @@ pub(crate) fn run(
     let bar = progress_bar(model.images.len() as u64);
     let started = Instant::now();
     let mut rows: Vec<Row> = Vec::with_capacity(model.images.len());
+    let mut registrar = Registrar::new(&model);
     for (id, img) in &model.images {
         if started.elapsed() >= PROGRESS_AFTER && std::io::stderr().is_terminal() {
             bar.set_draw_target(ProgressDrawTarget::stderr());
         }
-        let (result, extra) = estimate(&model, *id, opts);
+        let (result, extra) = estimate(&mut registrar, &model, *id, opts);
         rows.push((*id, img.name.clone(), result, extra));
         bar.inc(1);
     }

@@ -1,7 +1,8 @@
 //! COLMAP sparse reconstructions: readers for the text (`cameras.txt`, `images.txt`,
 //! `points3D.txt`) and binary (`cameras.bin`, `images.bin`, `points3D.bin`) formats, an atomic
 //! writer of both ([`write_model`]: reading back gives the identical [`Model`]), and
-//! [`register_image`], which re-estimates an image's pose from its 2D-3D correspondences.
+//! [`register_image`], which re-estimates an image's pose from its 2D-3D correspondences
+//! ([`Registrar`] for many images of one model).
 //!
 //! Conventions are COLMAP's: an image's pose `(q, t)` maps world to camera,
 //! `x_cam = R(q) X + t`, with `q = (qw, qx, qy, qz)` a Hamilton quaternion; pixels follow
@@ -15,7 +16,9 @@
 //! (binary), its kind ([`ModelErrorKind`]: a limit hit names the limit) and the reason.
 //!
 //! ```
-//! use eopnp::colmap::{parse_model_text, read_model, register_image, write_model, ModelFormat};
+//! use eopnp::colmap::{
+//!     parse_model_text, read_model, register_image, write_model, ModelFormat, Registrar,
+//! };
 //! use eopnp::ransac::Ransac;
 //! use eopnp::Solver;
 //! use nalgebra::{Point3, UnitQuaternion, Vector3};
@@ -48,6 +51,13 @@
 //! assert!(plain.rotation_error_deg < 1e-9 && plain.rmse_px < 1e-6);
 //! assert_eq!(robust.inliers, 10);
 //!
+//! // Many images of one model: a registrar builds its table of the 3D points once.
+//! let mut registrar = Registrar::new(&model);
+//! for id in model.images.keys() {
+//!     let reg = registrar.register(*id, &Solver::default(), None)?;
+//!     assert!(reg.rotation_error_deg < 1e-9);
+//! }
+//!
 //! // Write it (atomically) and read it back.
 //! let dir = std::env::temp_dir().join(format!("eopnp-colmap-doc-{}", std::process::id()));
 //! write_model(&model, &dir, ModelFormat::Binary)?;
@@ -74,9 +84,9 @@ pub use model::{
     quaternion_to_matrix, Image, Location, Model, ModelError, ModelErrorKind, Point3D,
     RegisterError,
 };
-#[cfg(feature = "cli")]
+#[cfg(any(feature = "cli", test))]
 pub(crate) use register::pixel_rmse;
-pub use register::{register_image, Registration};
+pub use register::{register_image, Registrar, Registration};
 pub use write::{encode_model, write_model, write_model_binary, write_model_with, Overwrite};
 
 /// The on-disk format of a model.

@@ -86,40 +86,92 @@ impl Model {
 
     /// The 2D-3D correspondences of an image: world points and their observed (distorted)
     /// pixels, in the order of the image's observations. Empty for an unknown image id.
-    /// (Every referenced 3D point exists: [`super::read_model`] checks this.)
+    /// (Every referenced 3D point exists: [`super::read_model`] checks this.) For several
+    /// images of one model, [`super::Registrar::correspondences`] looks the points up in a
+    /// table built once.
     #[must_use]
     pub fn correspondences(&self, image_id: u32) -> (Vec<Point3<f64>>, Vec<Point2<f64>>) {
         let Some(img) = self.images.get(&image_id) else {
             return (Vec::new(), Vec::new());
         };
-        // Sized once, to the triangulated observations (a model's images often have several
-        // times as many keypoints as 3D points: buffers for all of them, reallocated by every
-        // call, were mapped fresh from the system and page-faulted), filled in order.
+        // The table pays for itself within the call when the point ids are not much larger
+        // than the image's observation count (COLMAP numbers points from 1).
+        // The buffers sized once, to the triangulated observations (a model's images often have
+        // several times as many keypoints as 3D points).
         let n = img.points2d.iter().filter(|(_, id)| id.is_some()).count();
         let (mut world, mut pixels) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        // A model whose point ids are not much larger than the image's observation count
-        // (COLMAP numbers points from 1): the points in a table indexed by id, filled by one
-        // in-order walk, O(n) per call in all (the table has at most 4 n + 1 entries); a
-        // lookup in the map costs several times an index. Otherwise the map itself.
-        let max_id = self.points.keys().next_back().copied().unwrap_or(0);
-        let table = (max_id <= 4 * n as u64).then(|| {
-            let mut table: Vec<Option<&Point3<f64>>> = vec![None; max_id as usize + 1];
-            for (id, p) in &self.points {
-                table[*id as usize] = Some(&p.xyz);
-            }
-            table
-        });
-        let point = |id: u64| match &table {
-            Some(t) => t.get(id as usize).copied().flatten().copied(),
-            None => self.points.get(&id).map(|p| p.xyz),
-        };
-        for (px, id) in &img.points2d {
-            if let Some(x) = id.and_then(point) {
+        PointLookup::new(self, 4 * n).gather(img, &mut world, &mut pixels);
+        (world, pixels)
+    }
+}
+
+/// The 3D points of a model by id: a table indexed by id, filled by one in-order walk of the
+/// map, when the largest id is at most `max_table` (a lookup in the map costs several times
+/// an index); otherwise the map itself.
+pub(super) struct PointLookup<'m> {
+    points: &'m BTreeMap<u64, Point3D>,
+    table: Option<Vec<Option<&'m Point3<f64>>>>,
+}
+
+impl<'m> PointLookup<'m> {
+    pub(super) fn new(model: &'m Model, max_table: usize) -> Self {
+        let max_id = model.points.keys().next_back().copied().unwrap_or(0);
+        let table = usize::try_from(max_id)
+            .ok()
+            .filter(|&m| m <= max_table)
+            .map(|m| {
+                let mut table = vec![None; m + 1];
+                for (id, p) in &model.points {
+                    // In range: `id <= max_id = m`.
+                    table[*id as usize] = Some(&p.xyz);
+                }
+                table
+            });
+        PointLookup {
+            points: &model.points,
+            table,
+        }
+    }
+
+    /// Appends `img`'s correspondences to `world` and `pixels`, in the order of its
+    /// observations.
+    pub(super) fn gather(
+        &self,
+        img: &Image,
+        world: &mut Vec<Point3<f64>>,
+        pixels: &mut Vec<Point2<f64>>,
+    ) {
+        let mut add = |x: Option<Point3<f64>>, px: &Point2<f64>| {
+            if let Some(x) = x {
                 world.push(x);
                 pixels.push(*px);
             }
+        };
+        // The lookup chosen once, not per observation.
+        match &self.table {
+            Some(t) => {
+                for (px, id) in &img.points2d {
+                    if let Some(id) = *id {
+                        add(
+                            usize::try_from(id)
+                                .ok()
+                                .and_then(|i| t.get(i))
+                                .copied()
+                                .flatten()
+                                .copied(),
+                            px,
+                        );
+                    }
+                }
+            }
+            None => {
+                for (px, id) in &img.points2d {
+                    if let Some(id) = id {
+                        add(self.points.get(id).map(|p| p.xyz), px);
+                    }
+                }
+            }
         }
-        (world, pixels)
     }
 }
 

@@ -1,12 +1,14 @@
 //! Registration: an image's pose re-estimated from its 2D-3D correspondences alone, plain or
 //! robust, and compared with the model's.
 
+use core::ops::ControlFlow;
 use std::time::Instant;
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-use super::model::{Model, RegisterError};
+use super::model::{Image, Model, PointLookup, RegisterError};
 use crate::camera::{Camera, Project, ProjectionJob};
+use crate::numeric::lanes::{dispatched, lane_sum, unweighted_blocks, Block, LANES};
 use crate::ransac::{Ransac, RansacStats};
 use crate::{Solution, Solver};
 
@@ -57,16 +59,22 @@ pub(crate) fn pixel_rmse(
     t: &Vector3<f64>,
 ) -> f64 {
     // The camera unpacked and its model dispatched once, not per point.
-    cam.projector().with_projection(Rmse {
+    let (sum, count) = cam.projector().with_projection(Rmse {
         world,
         pixels,
         keep,
         r,
         t,
-    })
+    });
+    if count == 0 {
+        f64::NAN
+    } else {
+        (sum / count as f64).sqrt()
+    }
 }
 
-/// [`pixel_rmse`]'s loop, for one lens model.
+/// [`pixel_rmse`]'s pass, for one lens model: the sum of the squared pixel residuals and their
+/// number.
 struct Rmse<'a> {
     world: &'a [Point3<f64>],
     pixels: &'a [Point2<f64>],
@@ -76,33 +84,186 @@ struct Rmse<'a> {
 }
 
 impl ProjectionJob for Rmse<'_> {
-    type Output = f64;
+    type Output = (f64, usize);
 
-    fn run<P: Project + Copy>(self, projection: P) -> f64 {
-        let (mut s, mut k) = (0.0, 0usize);
-        for (i, (x, px)) in self.world.iter().zip(self.pixels).enumerate() {
-            if self.keep.is_some_and(|m| !m[i]) {
-                continue;
+    fn run<P: Project + Copy>(self, projection: P) -> (f64, usize) {
+        let pose = ((*self.r).into(), (*self.t).into());
+        match self.keep {
+            None => squared_residuals::<P, false>(&projection, &pose, self.world, self.pixels, &[]),
+            Some(k) => squared_residuals::<P, true>(&projection, &pose, self.world, self.pixels, k),
+        }
+    }
+}
+
+dispatched! {
+    /// The sum of the squared pixel residuals of the correspondences (those with `keep[i]`
+    /// when `KEEP`) under the pose `(r, t)` (`r` column-major: `r[j]` is column `j`), and their
+    /// number. Lane `l` sums the points `l, l + LANES, ...`. Built for the processor
+    /// ([`crate::numeric::lanes::dispatched`]).
+    fn squared_residuals[P: Project, const KEEP: bool][P, KEEP](
+        projection: &P,
+        pose: &([[f64; 3]; 3], [f64; 3]),
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        keep: &[bool],
+    ) -> (f64, usize) = squared_residuals_body;
+}
+
+#[inline(always)]
+fn squared_residuals_body<P: Project, const KEEP: bool>(
+    projection: &P,
+    pose: &([[f64; 3]; 3], [f64; 3]),
+    world: &[Point3<f64>],
+    pixels: &[Point2<f64>],
+    keep: &[bool],
+) -> (f64, usize) {
+    let (r, t) = pose;
+    let (mut sum, mut count) = ([0.0; LANES], [0usize; LANES]);
+    // Lane l of a block that starts at point `start`, gathered by `unweighted_blocks` (the
+    // points transposed, so that the lanes run as one packed computation).
+    let mut lane = |blk: &Block, start: usize, l: usize| {
+        let x = [blk.x[0][l], blk.x[1][l], blk.x[2][l]];
+        let p = |j: usize| r[0][j] * x[0] + r[1][j] * x[1] + r[2][j] * x[2] + t[j];
+        let (px, py, pz) = (p(0), p(1), p(2));
+        let (u, v) = projection.project(px / pz, py / pz);
+        let (ex, ey) = (u - blk.m[0][l], v - blk.m[1][l]);
+        let e = ex * ex + ey * ey;
+        // A select, so that a point at depth 0 outside the selection cannot poison the sum.
+        let kept = !KEEP || keep.get(start + l).copied().unwrap_or(false);
+        sum[l] += if kept { e } else { 0.0 };
+        count[l] += usize::from(kept);
+    };
+    let mut start = 0;
+    let rest = unweighted_blocks(world, pixels, |blk| {
+        for l in 0..LANES {
+            lane(blk, start, l);
+        }
+        start += LANES;
+        ControlFlow::<()>::Continue(())
+    });
+    if let ControlFlow::Continue((blk, filled)) = rest {
+        for l in 0..filled {
+            lane(&blk, start, l);
+        }
+    }
+    (lane_sum(&sum), count.iter().sum())
+}
+
+/// Registers images of one model ([`Registrar::register`]): the model's 3D points are looked
+/// up in a table indexed by id, built once, and each image's correspondences are gathered
+/// into buffers that keep their capacity from image to image. [`register_image`] is one
+/// image with a registrar of its own.
+///
+/// See the [module documentation](super) for a runnable example.
+pub struct Registrar<'m> {
+    model: &'m Model,
+    points: PointLookup<'m>,
+    world: Vec<Point3<f64>>,
+    pixels: Vec<Point2<f64>>,
+}
+
+impl<'m> Registrar<'m> {
+    /// A registrar for `model`: one walk of its 3D points into a table indexed by id (when
+    /// the largest id is at most four times their number, as in COLMAP's numbering from 1;
+    /// otherwise the points are looked up in [`Model::points`]).
+    #[must_use]
+    pub fn new(model: &'m Model) -> Self {
+        Registrar {
+            model,
+            points: PointLookup::new(model, 4 * model.points.len()),
+            world: Vec::new(),
+            pixels: Vec::new(),
+        }
+    }
+
+    /// The 2D-3D correspondences of an image, as [`Model::correspondences`] gives them (world
+    /// points and their observed pixels, in the order of the image's observations), valid
+    /// until the next call.
+    ///
+    /// # Errors
+    /// [`RegisterError::UnknownImage`] if the model has no image `image_id`.
+    // The pair of slices mirrors `Model::correspondences`'s pair of vectors.
+    #[allow(clippy::type_complexity)]
+    pub fn correspondences(
+        &mut self,
+        image_id: u32,
+    ) -> Result<(&[Point3<f64>], &[Point2<f64>]), RegisterError> {
+        let img = self
+            .model
+            .images
+            .get(&image_id)
+            .ok_or(RegisterError::UnknownImage(image_id))?;
+        self.gather(img);
+        Ok((&self.world, &self.pixels))
+    }
+
+    /// The correspondences of `img` into the buffers: their capacity, kept from image to image,
+    /// made room for every observation (the pages of what is not written are not touched), so
+    /// that they do not grow point by point.
+    fn gather(&mut self, img: &Image) {
+        self.world.clear();
+        self.pixels.clear();
+        self.world.reserve(img.points2d.len());
+        self.pixels.reserve(img.points2d.len());
+        self.points.gather(img, &mut self.world, &mut self.pixels);
+    }
+
+    /// Re-estimates the pose of image `image_id` and compares it with the model's: as
+    /// [`register_image`].
+    ///
+    /// # Errors
+    /// As [`register_image`].
+    pub fn register(
+        &mut self,
+        image_id: u32,
+        solver: &Solver,
+        ransac: Option<&Ransac>,
+    ) -> Result<Registration, RegisterError> {
+        let (img, cam) = self.model.image_and_camera(image_id)?;
+        self.gather(img);
+        let (world, pixels) = (&self.world[..], &self.pixels[..]);
+
+        let start = Instant::now();
+        let (solution, mask, stats) = match ransac {
+            None => (solver.solve_pixels(world, pixels, cam)?, None, None),
+            Some(r) => {
+                let s = r.estimate_pixels(solver, cam, world, pixels)?;
+                (s.solution, Some(s.inliers), Some(s.stats))
             }
-            let p = self.r * x.coords + self.t;
-            let (qx, qy) = projection.project(p.x / p.z, p.y / p.z);
-            s += (Point2::new(qx, qy) - px).norm_squared();
-            k += 1;
-        }
-        if k == 0 {
-            f64::NAN
-        } else {
-            (s / k as f64).sqrt()
-        }
+        };
+        let micros = start.elapsed().as_secs_f64() * 1e6;
+
+        let (r_ref, t_ref) = img.pose();
+        let r = solution.rotation;
+        let t = solution.pose.translation.vector;
+        let keep = mask.as_deref();
+        Ok(Registration {
+            image_id,
+            name: img.name.clone(),
+            n: world.len(),
+            inliers: mask
+                .as_ref()
+                .map_or(solution.used, |m| m.iter().filter(|x| **x).count()),
+            skipped: solution.skipped,
+            ransac: stats,
+            rotation_error_deg: crate::metrics::rotation_error_deg(&r, &r_ref),
+            translation_error_pct: crate::metrics::translation_error_pct(&t, &t_ref),
+            rmse_px: pixel_rmse(cam, world, pixels, keep, &r, &t),
+            model_rmse_px: pixel_rmse(cam, world, pixels, keep, &r_ref, &t_ref),
+            solution,
+            micros,
+        })
     }
 }
 
 /// Re-estimates the pose of image `image_id` from its 2D-3D correspondences and compares it
 /// with the model's pose: with `ransac = None` by `solver` on all correspondences
-/// ([`Solver::solve_pixels`]: the pixels are undistorted with the image's camera, so the
-/// minimised error is, to first order, the pixel reprojection error that COLMAP's bundle
+/// ([`Solver::solve_pixels`]: in the default mode the pose minimises the pixel reprojection
+/// error through the image's camera, distortion included, the error that COLMAP's bundle
 /// adjustment minimises), or robustly by [`Ransac::estimate_pixels`] with `solver` for the
-/// local optimisation and the final fit. The time reported includes the undistortion.
+/// local optimisation and the final fit. The time reported includes the undistortion. For
+/// several images of one model, a [`Registrar`] builds the table of the model's 3D points once
+/// instead of once per call.
 ///
 /// See the [module documentation](super) for a runnable example.
 ///
@@ -115,37 +276,5 @@ pub fn register_image(
     solver: &Solver,
     ransac: Option<&Ransac>,
 ) -> Result<Registration, RegisterError> {
-    let (img, cam) = model.image_and_camera(image_id)?;
-    let (world, pixels) = model.correspondences(image_id);
-
-    let start = Instant::now();
-    let (solution, mask, stats) = match ransac {
-        None => (solver.solve_pixels(&world, &pixels, cam)?, None, None),
-        Some(r) => {
-            let s = r.estimate_pixels(solver, cam, &world, &pixels)?;
-            (s.solution, Some(s.inliers), Some(s.stats))
-        }
-    };
-    let micros = start.elapsed().as_secs_f64() * 1e6;
-
-    let (r_ref, t_ref) = img.pose();
-    let r = solution.rotation;
-    let t = solution.pose.translation.vector;
-    let keep = mask.as_deref();
-    Ok(Registration {
-        image_id,
-        name: img.name.clone(),
-        n: world.len(),
-        inliers: mask
-            .as_ref()
-            .map_or(solution.used, |m| m.iter().filter(|x| **x).count()),
-        skipped: solution.skipped,
-        ransac: stats,
-        rotation_error_deg: crate::metrics::rotation_error_deg(&r, &r_ref),
-        translation_error_pct: crate::metrics::translation_error_pct(&t, &t_ref),
-        rmse_px: pixel_rmse(cam, &world, &pixels, keep, &r, &t),
-        model_rmse_px: pixel_rmse(cam, &world, &pixels, keep, &r_ref, &t_ref),
-        solution,
-        micros,
-    })
+    Registrar::new(model).register(image_id, solver, ransac)
 }

@@ -67,3 +67,91 @@ fn text_names_that_read_back() {
         assert!(!text_name_ok(bad), "{bad:?}");
     }
 }
+
+/// `pixel_rmse`'s vectorised pass against the per-point formula: every length from 0 to 11
+/// (full blocks and every partial one), with and without a selection, a point at depth 0
+/// outside the selection (it must not poison the sum), both builds of the pass.
+#[test]
+fn pixel_rmse_matches_the_per_point_formula() {
+    use crate::camera::Camera;
+    use nalgebra::{Point2, Point3, Rotation3, Vector3};
+    let cam = Camera::from_colmap(
+        "OPENCV",
+        640,
+        480,
+        vec![500.0, 510.0, 320.0, 240.0, -0.2, 0.05, 0.001, -0.002],
+    )
+    .unwrap();
+    let r = *Rotation3::from_euler_angles(0.1, -0.2, 0.3).matrix();
+    let t = Vector3::new(0.1, -0.2, 5.0);
+    for n in 0..12usize {
+        let world: Vec<Point3<f64>> = (0..n)
+            .map(|i| {
+                Point3::new(
+                    (i % 3) as f64 - 1.0,
+                    (i % 4) as f64 * 0.4 - 0.6,
+                    (i % 5) as f64 * 0.3,
+                )
+            })
+            .collect();
+        let pixels: Vec<Point2<f64>> = world
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                let p = r * x.coords + t;
+                cam.project(Point2::new(p.x / p.z, p.y / p.z))
+                    + nalgebra::Vector2::new(0.3 * (i as f64).sin(), -0.2)
+            })
+            .collect();
+        let mut world_bad = world.clone();
+        let keep: Vec<bool> = (0..n).map(|i| i % 3 != 1).collect();
+        if n > 1 {
+            // Point 1 (not kept) at depth 0.
+            let p = r.transpose() * (Vector3::new(0.5, 0.5, 0.0) - t);
+            world_bad[1] = Point3::from(p);
+        }
+        let expected = |w: &[Point3<f64>], sel: Option<&[bool]>| {
+            let (mut s, mut k) = (0.0, 0usize);
+            for (i, (x, m)) in w.iter().zip(&pixels).enumerate() {
+                if sel.is_some_and(|s| !s[i]) {
+                    continue;
+                }
+                let p = r * x.coords + t;
+                s += (cam.project(Point2::new(p.x / p.z, p.y / p.z)) - m).norm_squared();
+                k += 1;
+            }
+            if k == 0 {
+                f64::NAN
+            } else {
+                (s / k as f64).sqrt()
+            }
+        };
+        for baseline in [false, true] {
+            let run = |w: &[Point3<f64>], sel: Option<&[bool]>| {
+                if baseline {
+                    crate::numeric::lanes::with_baseline(|| {
+                        pixel_rmse(&cam, w, &pixels, sel, &r, &t)
+                    })
+                } else {
+                    pixel_rmse(&cam, w, &pixels, sel, &r, &t)
+                }
+            };
+            for (w, sel) in [
+                (&world, None),
+                (&world, Some(&keep[..])),
+                (&world_bad, Some(&keep[..])),
+            ] {
+                let (got, want) = (run(w, sel), expected(w, sel));
+                if want.is_nan() {
+                    assert!(got.is_nan(), "n = {n}: {got}");
+                } else {
+                    assert!(got.is_finite(), "n = {n}: {got}");
+                    assert!(
+                        (got - want).abs() <= 1e-13 * want.max(1e-3),
+                        "n = {n}: {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+}
