@@ -356,6 +356,7 @@ struct Prepared {
 }
 
 /// S1 + S2: the working frame, with the moment sums in it; `M` and `G`.
+#[inline(always)]
 fn prepare(
     opts: &Options,
     world: &[Point3<f64>],

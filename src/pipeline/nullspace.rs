@@ -93,6 +93,7 @@ fn probe_shift(scale: f64) -> f64 {
 /// noise-free input and at N = 4 and 5 in general position, where M has a null space (of
 /// dimension 1, 4 and 2: the factorisation fails at pivot 8, 5 and 7). The inertia count runs
 /// otherwise.
+#[inline(always)]
 pub(crate) fn probe(m: &SMatrix<f64, 9, 9>, scale: f64) -> Probe {
     let tau = probe_shift(scale);
     let shifted = linalg::cholesky_shifted_or_pivot(m, tau);
