@@ -8,7 +8,7 @@ inlier masks). Poses map world to camera: ``x_cam = R @ X + t``.
 """
 
 import os
-from typing import Any, Literal, Mapping, Sequence, TypedDict, Union, final
+from typing import Any, Iterable, Literal, Mapping, Sequence, TypedDict, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -507,6 +507,26 @@ def register_image(
     """Re-estimates an image's pose from its correspondences (plain, or RANSAC with
     ``ransac=True`` / options) and compares it with the model's. Raises UnknownIdError."""
 
+def register_images(
+    model: Model,
+    image_ids: Iterable[int] | None = None,
+    *,
+    ransac: _RansacArg | bool = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    loss: _Loss = None,
+    threads: int | None = None,
+) -> list[Registration | PnpError]:
+    """``register_image`` on many images (None: every image, in id order), in parallel
+    (``threads`` as ``solve_batch``), the GIL released; each thread builds the table of the
+    model's 3D points once. Returns one entry per id: its ``Registration``, or the exception
+    ``register_image`` would raise for it (an instance, not raised). Equal to
+    ``register_image`` one by one but the times."""
+
 __all__ = [
     "BatchResult",
     "Camera",
@@ -530,6 +550,7 @@ __all__ = [
     "read_colmap_model",
     "refine",
     "register_image",
+    "register_images",
     "solve",
     "solve_all",
     "solve_batch",

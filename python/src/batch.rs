@@ -331,7 +331,11 @@ impl Input<'_> {
 static POOLS: Mutex<Option<HashMap<usize, Arc<ThreadPool>>>> = Mutex::new(None);
 
 /// Runs `f` on rayon's global pool (`threads` None) or on a cached pool of `threads` threads.
-fn run<T: Send>(py: Python<'_>, threads: Option<i64>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
+pub(crate) fn in_pool<T: Send>(
+    py: Python<'_>,
+    threads: Option<i64>,
+    f: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
     let Some(n) = threads else {
         return Ok(py.detach(f));
     };
@@ -428,7 +432,7 @@ pub(crate) fn solve_batch<'py>(
     let batch = gather(py, problems, camera)?;
     let cams: Vec<&Camera> = batch.cameras.iter().map(|c| &c.get().inner).collect();
     let inputs = batch.inputs(&cams);
-    let results = run(py, threads, || {
+    let results = in_pool(py, threads, || {
         inputs
             .par_iter()
             .map(|p| p.solve(&solver).map(|s| PySolution::from(&s)))
@@ -658,7 +662,7 @@ pub(crate) fn solve_batch_arrays<'py>(
             }),
         )
     };
-    let errors = run(py, threads, || {
+    let errors = in_pool(py, threads, || {
         let cov = match cov {
             Some((c, s)) => Either::Left(c.par_chunks_mut(36).zip(s.par_iter_mut()).map(Some)),
             None => Either::Right((0..b).into_par_iter().map(|_| None)),
@@ -764,7 +768,7 @@ pub(crate) fn solve_ransac_batch<'py>(
     let batch = gather(py, problems, camera)?;
     let cams: Vec<&Camera> = batch.cameras.iter().map(|c| &c.get().inner).collect();
     let inputs = batch.inputs(&cams);
-    let results = run(py, threads, || {
+    let results = in_pool(py, threads, || {
         inputs
             .par_iter()
             .enumerate()

@@ -1,13 +1,18 @@
 //! COLMAP models: `eopnp.read_colmap_model`, `eopnp.Model`, `eopnp.Image` and
-//! `eopnp.register_image` (`eopnp.Registration`).
+//! `eopnp.register_image` and `eopnp.register_images` (`eopnp.Registration`).
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use eopnp::colmap::{self, Image, Model};
+use eopnp::colmap::{self, Image, Model, Registrar, Registration};
+use eopnp::ransac::Ransac;
+use eopnp::Solver;
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
+use rayon::prelude::*;
+
+use crate::batch::in_pool;
 
 use crate::camera::PyCamera;
 use crate::convert::{array1, array2};
@@ -326,17 +331,34 @@ pub(crate) fn register_image(
     exhaustive: bool,
     loss: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyRegistration> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance: None,
-    }
-    .solver(py)?;
+    let (solver, ransac) = registration_options(
+        py,
+        ransac,
+        SolverOptions {
+            refinement,
+            planar,
+            newton_iterations,
+            newton_step_tolerance,
+            reprojection_iterations,
+            exhaustive,
+            loss,
+            covariance: None,
+        },
+    )?;
+    let m = Arc::clone(&model.get().inner);
+    let reg = py
+        .detach(|| colmap::register_image(&m, image_id, &solver, ransac.as_ref()))
+        .map_err(|e| register_error(py, &e))?;
+    to_py(py, reg)
+}
+
+/// The solver and the RANSAC options of ``register_image``'s arguments.
+fn registration_options(
+    py: Python<'_>,
+    ransac: Option<&Bound<'_, PyAny>>,
+    options: SolverOptions<'_, '_>,
+) -> PyResult<(Solver, Option<Ransac>)> {
+    let solver = options.solver(py)?;
     // `ransac`: None or False (plain), True (defaults), RansacOptions or a dict.
     let ransac = match ransac {
         None => None,
@@ -349,10 +371,11 @@ pub(crate) fn register_image(
         }
         Some(r) => Some(ransac_arg(py, Some(r))?),
     };
-    let m = Arc::clone(&model.get().inner);
-    let reg = py
-        .detach(|| colmap::register_image(&m, image_id, &solver, ransac.as_ref()))
-        .map_err(|e| register_error(py, &e))?;
+    Ok((solver, ransac))
+}
+
+/// A ``Registration`` of `reg`.
+fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
     let stats = match reg.ransac {
         None => None,
         Some(s) => {
@@ -381,4 +404,82 @@ pub(crate) fn register_image(
         model_rmse_px: reg.model_rmse_px,
         micros: reg.micros,
     })
+}
+
+/// Registers many images of a model (``register_image`` on each), in parallel, the GIL
+/// released for the whole call: each thread looks the model's 3D points up in a table it
+/// builds once (``register_image`` builds one per call).
+///
+/// Args:
+///     model: a ``Model`` from ``read_colmap_model``.
+///     image_ids: the images (any iterable of ids), or None for every image in id order.
+///     ransac, refinement, planar, newton_iterations, newton_step_tolerance,
+///         reprojection_iterations, exhaustive, loss: as ``register_image``.
+///     threads: None (rayon's global pool) or the number of threads, as ``solve_batch``.
+///
+/// Returns:
+///     list: one entry per id, in order: its ``Registration``, or the exception
+///     ``register_image`` would raise for it (an instance, not raised). Equal to
+///     ``register_image`` one by one but the times, whatever ``threads``.
+///
+/// Raises:
+///     InvalidOptionError: an option out of range or a bad ``threads``.
+#[pyfunction]
+#[pyo3(signature = (model, image_ids = None, *, ransac = None, refinement = "ml",
+    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
+    reprojection_iterations = None, exhaustive = false, loss = None, threads = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn register_images<'py>(
+    py: Python<'py>,
+    model: &Bound<'py, PyModel>,
+    image_ids: Option<&Bound<'py, PyAny>>,
+    ransac: Option<&Bound<'py, PyAny>>,
+    refinement: &str,
+    planar: &str,
+    newton_iterations: Option<i64>,
+    newton_step_tolerance: Option<f64>,
+    reprojection_iterations: Option<i64>,
+    exhaustive: bool,
+    loss: Option<&Bound<'py, PyAny>>,
+    threads: Option<i64>,
+) -> PyResult<Bound<'py, PyList>> {
+    let (solver, ransac) = registration_options(
+        py,
+        ransac,
+        SolverOptions {
+            refinement,
+            planar,
+            newton_iterations,
+            newton_step_tolerance,
+            reprojection_iterations,
+            exhaustive,
+            loss,
+            covariance: None,
+        },
+    )?;
+    let m = Arc::clone(&model.get().inner);
+    let ids: Vec<u32> = match image_ids {
+        None => m.images.keys().copied().collect(),
+        // Each id as `register_image`'s `image_id` argument is extracted.
+        Some(ids) => ids
+            .try_iter()?
+            .map(|id| id?.extract::<u32>())
+            .collect::<PyResult<_>>()?,
+    };
+    let results = in_pool(py, threads, || {
+        ids.par_iter()
+            .map_init(
+                || Registrar::new(&m),
+                |r, id| r.register(*id, &solver, ransac.as_ref()),
+            )
+            .collect::<Vec<_>>()
+    })?;
+    let out = PyList::empty(py);
+    for r in results {
+        match r {
+            Ok(reg) => out.append(to_py(py, reg)?)?,
+            Err(e) => out.append(register_error(py, &e).into_value(py))?,
+        }
+    }
+    Ok(out)
 }

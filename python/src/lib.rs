@@ -40,6 +40,7 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch::problem_seed, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::read_colmap_model, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::register_image, m)?)?;
+    m.add_function(wrap_pyfunction!(colmap::register_images, m)?)?;
     m.add_function(wrap_pyfunction!(solution::_solution_from_state, m)?)?;
     m.add_class::<solution::PySolution>()?;
     m.add_class::<camera::PyCamera>()?;

@@ -65,6 +65,49 @@ def test_register_every_image(model):
         assert sol == reg.solution
 
 
+def _same_registration(a, b):
+    """Equal but the times."""
+    assert (a.image_id, a.name, a.n, a.inliers, a.skipped) == (b.image_id, b.name, b.n, b.inliers,
+                                                              b.skipped)
+    assert a.solution == b.solution
+    assert (a.rotation_error_deg, a.translation_error_pct, a.rmse_px, a.model_rmse_px) == (
+        b.rotation_error_deg, b.translation_error_pct, b.rmse_px, b.model_rmse_px)
+    if a.ransac is None or b.ransac is None:
+        assert a.ransac is None and b.ransac is None
+    else:
+        assert {k: v for k, v in a.ransac.items() if k != "micros"} == {
+            k: v for k, v in b.ransac.items() if k != "micros"}
+
+
+@pytest.mark.parametrize("threads", [None, 1, 2])
+def test_register_images_equals_register_image(model, threads):
+    regs = eopnp.register_images(model, threads=threads)
+    assert [r.image_id for r in regs] == list(model.image_ids)
+    for r in regs:
+        _same_registration(r, eopnp.register_image(model, r.image_id))
+    # Any iterable of ids, in its order, repeats allowed; options as register_image's.
+    ids = [3, 1, 3]
+    robust = eopnp.register_images(model, iter(ids), ransac={"threshold_px": 4.0},
+                                   threads=threads)
+    assert len(robust) == 3
+    for i, r in zip(ids, robust):
+        _same_registration(r, eopnp.register_image(model, i, ransac={"threshold_px": 4.0}))
+
+
+def test_register_images_reports_each_failure(model):
+    out = eopnp.register_images(model, [1, 999, 2])
+    assert isinstance(out[0], eopnp.Registration) and isinstance(out[2], eopnp.Registration)
+    assert isinstance(out[1], eopnp.UnknownIdError)
+    with pytest.raises(eopnp.UnknownIdError) as e:
+        eopnp.register_image(model, 999)
+    assert str(out[1]) == str(e.value)
+    assert eopnp.register_images(model, []) == []
+    with pytest.raises(eopnp.InvalidOptionError):
+        eopnp.register_images(model, threads=0)
+    with pytest.raises(eopnp.InvalidOptionError):
+        eopnp.register_images(model, refinement="nonsense")
+
+
 def test_register_ransac(model):
     for ransac in [True, eopnp.RansacOptions(), {"threshold_px": 4.0}]:
         reg = eopnp.register_image(model, 3, ransac=ransac)
