@@ -108,6 +108,7 @@ impl Model {
 /// The 3D points of a model by id: a table indexed by id, filled by one in-order walk of the
 /// map, when the largest id is at most `max_table` (a lookup in the map costs several times
 /// an index); otherwise the map itself.
+#[derive(Debug)]
 pub(super) struct PointLookup<'m> {
     points: &'m BTreeMap<u64, Point3D>,
     table: Option<Vec<Option<&'m Point3<f64>>>>,

@@ -155,6 +155,7 @@ fn squared_residuals_body<P: Project, const KEEP: bool>(
 /// image with a registrar of its own.
 ///
 /// See the [module documentation](super) for a runnable example.
+#[derive(Debug)]
 pub struct Registrar<'m> {
     model: &'m Model,
     points: PointLookup<'m>,
