@@ -94,10 +94,10 @@ impl Model {
         let Some(img) = self.images.get(&image_id) else {
             return (Vec::new(), Vec::new());
         };
-        // The table pays for itself within the call when the point ids are not much larger
-        // than the image's observation count (COLMAP numbers points from 1).
-        // The buffers sized once, to the triangulated observations (a model's images often have
-        // several times as many keypoints as 3D points).
+        // The vectors sized once, to the triangulated observations (a model's images often have
+        // several times as many keypoints as 3D points); the table of points pays for itself
+        // within the call when their ids are not much larger than that count (COLMAP numbers
+        // points from 1).
         let n = img.points2d.iter().filter(|(_, id)| id.is_some()).count();
         let (mut world, mut pixels) = (Vec::with_capacity(n), Vec::with_capacity(n));
         PointLookup::new(self, 4 * n).gather(img, &mut world, &mut pixels);

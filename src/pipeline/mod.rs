@@ -166,7 +166,9 @@ pub(crate) fn run(
                 search.refine(&r0, f0, source)
             };
             if let Some(m) = m {
-                let bound = sigma.is_some_and(|s| certificate::below_spectral_bound(m.f, s, scale));
+                // An exact fit passed the bound at this very f (m.f = f0) above.
+                let bound = m.exact
+                    || sigma.is_some_and(|s| certificate::below_spectral_bound(m.f, s, scale));
                 if bound || is_certified(&m.r) {
                     if let Some(sol) = out.finish_if_in_front(&m, opts.refinement, reproj)? {
                         return Ok(sol);
