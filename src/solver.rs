@@ -644,8 +644,9 @@ impl Solver {
         Ok(self.with_covariance(sol, &u.world, &u.image, &weight, Metric::Camera(camera)))
     }
 
-    /// `sol` with its covariance when [`Solver::covariance`] asks for it.
-    fn with_covariance(
+    /// `sol` with its covariance when [`Solver::covariance`] asks for it (also RANSAC's, from
+    /// its inliers).
+    pub(crate) fn with_covariance(
         &self,
         mut sol: Solution,
         world: &[Point3<f64>],

@@ -1,10 +1,12 @@
 //! The pose covariance against Monte Carlo: over many noise draws of one problem, the
 //! estimates' spread matches the predicted covariance (whitened chi-square and the eigenvalues
 //! of the whitened empirical covariance), for normalised input, pixel input through a
-//! distorted camera, and the estimated noise level.
+//! distorted camera, and the estimated noise level; and RANSAC's pose carries the covariance
+//! of its inliers.
 use eopnp::camera::Camera;
 use eopnp::covariance::NoiseModel;
-use eopnp::Solver;
+use eopnp::ransac::Ransac;
+use eopnp::{Solution, Solver};
 use eopnp_testkit::{self as common, Problem, ProblemOptions, RotationKind, Scene};
 use nalgebra::{Matrix6, Point2, Rotation3, Vector6};
 use rand_distr::{Distribution, Normal};
@@ -112,5 +114,93 @@ fn covariance_matches_monte_carlo_through_distortion() {
         &cam,
         1.0,
         NoiseModel::Sigma(1.0),
+    );
+}
+
+/// `max |a - b| / max |b|` of two covariance matrices.
+fn relative_difference(a: &Solution, b: &Solution) -> f64 {
+    let (a, b) = (a.covariance.unwrap().matrix, b.covariance.unwrap().matrix);
+    (a - b).amax() / b.amax()
+}
+
+/// RANSAC's pose carries the covariance its solver asks for: that of the returned pose from its
+/// inliers with their weights, as a solve of the same points with the outliers' weights set to
+/// 0 reports it; for normalised input (where the two solves are the same computation) and for
+/// pixels through a distorting camera (where RANSAC's fits start from first-order weighted
+/// points and the solve does not, so the poses agree to the refinement's convergence). Without
+/// the option, no covariance.
+#[test]
+fn ransac_pose_carries_the_covariance_of_its_inliers() {
+    let n = 60;
+    let p = Problem::generate(&ProblemOptions {
+        n,
+        sigma_px: 1.0,
+        scene: Scene::General,
+        rotation: RotationKind::Uniform,
+        seed: common::trial_seed("covariance_ransac", 1),
+    });
+    // Every fifth correspondence moved by about 50 px (at f = 800).
+    let wrong = |i: usize| i.is_multiple_of(5);
+    let image: Vec<Point2<f64>> = p
+        .image
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            if wrong(i) {
+                Point2::new(m.x + 0.05, m.y - 0.04)
+            } else {
+                *m
+            }
+        })
+        .collect();
+    let weights: Vec<f64> = (0..n).map(|i| 1.0 + 0.5 * (i % 3) as f64).collect();
+    let ransac = Ransac::default().threshold_px(4.0).seed(3);
+    let masked = |inliers: &[bool]| -> Vec<f64> {
+        (0..n)
+            .map(|i| if inliers[i] { weights[i] } else { 0.0 })
+            .collect()
+    };
+
+    let solver = Solver::default().covariance(Some(NoiseModel::Sigma(1.0 / 800.0)));
+    let r = ransac
+        .estimate(&solver, &p.world, &image, (800.0, 800.0), Some(&weights))
+        .unwrap();
+    assert!((0..n).all(|i| !(wrong(i) && r.inliers[i])));
+    assert!(r.num_inliers >= 40, "{}", r.num_inliers);
+    let direct = solver
+        .solve_weighted(&p.world, &image, &masked(&r.inliers))
+        .unwrap();
+    assert!((r.solution.rotation - direct.rotation).amax() < 1e-12);
+    let d = relative_difference(&r.solution, &direct);
+    assert!(d < 1e-12, "normalised: {d:e}");
+    let plain = ransac
+        .estimate(
+            &Solver::default(),
+            &p.world,
+            &image,
+            (800.0, 800.0),
+            Some(&weights),
+        )
+        .unwrap();
+    assert!(plain.solution.covariance.is_none());
+
+    let cam =
+        Camera::from_colmap("RADIAL", 640, 480, vec![800.0, 320.0, 240.0, -0.25, 0.05]).unwrap();
+    let solver = Solver::default().covariance(Some(NoiseModel::Estimated));
+    let pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
+    let r = ransac
+        .estimate_pixels_weighted(&solver, &cam, &p.world, &pixels, &weights)
+        .unwrap();
+    assert!((0..n).all(|i| !(wrong(i) && r.inliers[i])));
+    assert!(r.num_inliers >= 40, "{}", r.num_inliers);
+    let direct = solver
+        .solve_pixels_weighted(&p.world, &pixels, &cam, &masked(&r.inliers))
+        .unwrap();
+    assert!((r.solution.rotation - direct.rotation).amax() < 1e-9);
+    let d = relative_difference(&r.solution, &direct);
+    assert!(d < 1e-6, "pixels: {d:e}");
+    println!(
+        "RANSAC covariance against the inliers' solve: pixels {d:.2e} relative, sigma {:.4} px",
+        r.solution.covariance.unwrap().sigma
     );
 }

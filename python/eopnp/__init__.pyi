@@ -457,6 +457,7 @@ def solve_ransac_batch(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     loss: _Loss = None,
+    covariance: _Covariance = None,
     threads: int | None = None,
 ) -> list[tuple[Solution, _RansacInfo] | PnpError]:
     """``solve_ransac`` on many problems in parallel: entry ``i`` is what ``solve_ransac``
@@ -481,12 +482,13 @@ def solve_ransac(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     loss: _Loss = None,
+    covariance: _Covariance = None,
 ) -> tuple[Solution, _RansacInfo]:
     """Robust pose by RANSAC: pixels with ``camera``, or normalised points with
     ``focal=(fx, fy)`` (exactly one). Returns the pose and the info dict (inlier mask,
     iterations, inlier ratio, cost, RMSE). ``loss``: of the fits' final refinement (pixels with
-    ``camera``, normalised units with ``focal``). Raises NoConsensusError if no pose has 4
-    inliers."""
+    ``camera``, normalised units with ``focal``). ``covariance``: as ``solve``, the returned
+    pose's covariance from its inliers. Raises NoConsensusError if no pose has 4 inliers."""
 
 def read_colmap_model(path: str | os.PathLike[str]) -> Model:
     """Reads a COLMAP model directory (text or binary). Raises ModelError."""

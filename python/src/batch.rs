@@ -712,7 +712,7 @@ pub(crate) fn solve_batch_arrays<'py>(
 ///         points (exactly one of ``camera`` and ``focal``).
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
 ///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, loss: as ``solve_ransac``.
+///         exhaustive, loss, covariance: as ``solve_ransac``.
 ///     threads: as ``solve_batch``.
 ///
 /// Returns:
@@ -725,7 +725,8 @@ pub(crate) fn solve_batch_arrays<'py>(
 #[pyfunction]
 #[pyo3(signature = (problems, *, camera = None, focal = None, ransac = None, refinement = "ml",
     planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, loss = None, threads = None))]
+    reprojection_iterations = None, exhaustive = false, loss = None, covariance = None,
+    threads = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_ransac_batch<'py>(
     py: Python<'py>,
@@ -740,6 +741,7 @@ pub(crate) fn solve_ransac_batch<'py>(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     loss: Option<&Bound<'py, PyAny>>,
+    covariance: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = SolverOptions {
@@ -750,7 +752,7 @@ pub(crate) fn solve_ransac_batch<'py>(
         reprojection_iterations,
         exhaustive,
         loss,
-        covariance: None,
+        covariance,
     }
     .solver(py)?;
     let ransac = ransac_arg(py, ransac)?;

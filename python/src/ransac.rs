@@ -309,6 +309,10 @@ fn rmse_px(
 ///     loss: the loss of the fits' final refinement (the local optimisations and the final
 ///         fit on the inliers), as ``solve``: ``s`` in pixels with ``camera``, in normalised
 ///         units with ``focal``. The inlier classification is unchanged.
+///     covariance: as ``solve``: ``Solution.covariance`` of the returned pose from its
+///         inliers (with their weights), the noise in pixels with ``camera`` and in normalised
+///         units with ``focal`` (pycolmap's ``estimate_and_refine_absolute_pose(...,
+///         return_covariance=True)``).
 ///
 /// Returns:
 ///     (Solution, dict): the pose fitted to the inliers, and ``info``: ``inliers`` (bool
@@ -325,7 +329,7 @@ fn rmse_px(
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, focal = None, ransac = None,
     refinement = "ml", planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, loss = None))]
+    reprojection_iterations = None, exhaustive = false, loss = None, covariance = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_ransac<'py>(
     py: Python<'py>,
@@ -342,6 +346,7 @@ pub(crate) fn solve_ransac<'py>(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     loss: Option<&Bound<'py, PyAny>>,
+    covariance: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
     let solver = SolverOptions {
         refinement,
@@ -351,7 +356,7 @@ pub(crate) fn solve_ransac<'py>(
         reprojection_iterations,
         exhaustive,
         loss,
-        covariance: None,
+        covariance,
     }
     .solver(py)?;
     let ransac = ransac_arg(py, ransac)?;

@@ -84,6 +84,62 @@ def test_covariance_options(rng):
             eopnp.solve(world, image, covariance=bad)
 
 
+def test_ransac_covariance_is_that_of_its_inliers(rng):
+    """solve_ransac(covariance=...): the returned pose's covariance from its inliers, as
+    solve() reports it on the same points with the outliers' weights set to 0 (normalised
+    input: the same computation, to the last bits; pixels through a distorting camera: the
+    fits start differently and agree to the refinement's convergence). solve_ransac_batch
+    gives each problem's one-call result; without the keyword, no covariance."""
+    n = 60
+    world, image, _, _ = problem(rng, n, sigma_px=1.0)
+    wrong = np.arange(n) % 5 == 0
+    image = image.copy()
+    image[wrong] += [0.05, -0.04]  # about 50 px at f = 800
+    weights = 1.0 + 0.5 * (np.arange(n) % 3)
+    opts = {"threshold_px": 4.0, "seed": 3}
+    sol, info = eopnp.solve_ransac(
+        world, image, weights, focal=800.0, ransac=opts, covariance=1.0 / 800
+    )
+    inl = info["inliers"]
+    assert not (inl & wrong).any() and inl.sum() >= 40
+    direct = eopnp.solve(world, image, np.where(inl, weights, 0.0), covariance=1.0 / 800)
+    np.testing.assert_allclose(sol.R, direct.R, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sol.covariance, direct.covariance, rtol=1e-10, atol=0)
+    assert sol.sigma == 1.0 / 800
+    plain, _ = eopnp.solve_ransac(world, image, weights, focal=800.0, ransac=opts)
+    assert plain.covariance is None and plain.sigma is None
+
+    pixels = CAM.project(image)
+    sol, info = eopnp.solve_ransac(
+        world, pixels, weights, camera=CAM, ransac=opts, covariance="estimated"
+    )
+    inl = info["inliers"]
+    assert not (inl & wrong).any() and inl.sum() >= 40
+    direct = eopnp.solve(
+        world, pixels, np.where(inl, weights, 0.0), camera=CAM, covariance="estimated"
+    )
+    np.testing.assert_allclose(sol.R, direct.R, rtol=0, atol=1e-9)
+    scale = np.abs(direct.covariance).max()
+    assert np.abs(sol.covariance - direct.covariance).max() < 1e-6 * scale
+    assert sol.sigma == pytest.approx(direct.sigma, rel=1e-6)
+
+    batch = eopnp.solve_ransac_batch(
+        [(world, pixels, weights)] * 2, camera=CAM, ransac=opts, covariance="estimated"
+    )
+    for i, (s, _) in enumerate(batch):
+        one, _ = eopnp.solve_ransac(
+            world,
+            pixels,
+            weights,
+            camera=CAM,
+            ransac={**opts, "seed": eopnp.problem_seed(3, i)},
+            covariance="estimated",
+        )
+        assert s == one and np.array_equal(s.covariance, one.covariance)
+    with pytest.raises(eopnp.InvalidOptionError, match="covariance"):
+        eopnp.solve_ransac(world, image, focal=800.0, covariance=-1.0)
+
+
 def test_against_pycolmap(rng):
     pycolmap = pytest.importorskip("pycolmap")
     world, image, _, _ = problem(rng, 40)

@@ -68,6 +68,7 @@ use rand_pcg::Pcg64;
 
 use super::p3p::p3p;
 use crate::camera::Camera;
+use crate::covariance::Metric;
 use crate::error::{InputKind, PnpError};
 use crate::pipeline::PixelInputs;
 use crate::solver::undistort_all;
@@ -271,6 +272,11 @@ impl Ransac {
     /// per-point weight (1 if `None`; [`Ransac::estimate_pixels`] passes the lens distortion's
     /// local scale, as [`Solver::solve_pixels`]). EOPnP fits minimise the same error.
     ///
+    /// When `solver` asks for the pose covariance ([`Solver::covariance`]), the returned
+    /// solution carries it: the covariance of the returned pose from its inliers (with their
+    /// weights), in normalised image units, exactly what [`Solver::solve_weighted`] with that
+    /// option reports for the same pose and points.
+    ///
     /// # Errors
     /// [`PnpError::LengthMismatch`], [`PnpError::WeightsLength`], [`PnpError::TooFewPoints`]
     /// (fewer than 4), [`PnpError::NonFinite`], [`PnpError::InvalidWeight`],
@@ -288,7 +294,11 @@ impl Ransac {
         weights: Option<&[f64]>,
     ) -> Result<RansacSolution, PnpError> {
         let pixel = solver.normalised_loss(image, weights);
-        self.estimate_with(solver, world, image, focal, weights, pixel)
+        let mut sol = self.estimate_with(solver, world, image, focal, weights, pixel)?;
+        let weight = |i: usize| inlier_weight(&sol.inliers, weights, i);
+        sol.solution =
+            solver.with_covariance(sol.solution, world, image, &weight, Metric::Identity);
+        Ok(sol)
     }
 
     /// [`Ransac::estimate`] with S10's observations of every point (`pixel`) for the fits.
@@ -485,7 +495,9 @@ impl Ransac {
     /// [`Ransac::estimate`] runs in normalised coordinates with the camera's focal lengths, so
     /// the threshold applies to (first-order) pixel reprojection errors through the lens
     /// distortion. A pixel that cannot be undistorted is an outlier (`false` in the mask).
-    /// The time in the statistics includes the undistortion.
+    /// The time in the statistics includes the undistortion. With [`Solver::covariance`], the
+    /// covariance of the returned pose from its inliers, in pixels through the camera (as
+    /// [`Solver::solve_pixels_weighted`] reports it for the same pose and points).
     ///
     /// # Errors
     /// As [`Ransac::estimate`].
@@ -539,6 +551,16 @@ impl Ransac {
             u.weights.as_deref(),
             Some(px),
         )?;
+        // The covariance from the inliers with the caller's weights, not the first-order
+        // distortion weights of the fits (as `Solver::solve_pixels`).
+        let weight = |k: usize| inlier_weight(&sol.inliers, u.user_weights.as_deref(), k);
+        sol.solution = solver.with_covariance(
+            sol.solution,
+            &u.world,
+            &u.image,
+            &weight,
+            Metric::Camera(camera),
+        );
         if let Some(used) = &u.used {
             let mut full = vec![false; world.len()];
             for (k, &i) in used.iter().enumerate() {
@@ -550,6 +572,16 @@ impl Ransac {
         sol.solution.skipped = world.len() - u.image.len();
         sol.stats.micros = start.elapsed().as_secs_f64() * 1e6;
         Ok(sol)
+    }
+}
+
+/// The weight of correspondence `i` in the covariance of a RANSAC pose: its caller's weight
+/// (1 without weights) if it is an inlier, 0 otherwise.
+fn inlier_weight(inliers: &[bool], weights: Option<&[f64]>, i: usize) -> f64 {
+    if inliers[i] {
+        weights.map_or(1.0, |w| w[i])
+    } else {
+        0.0
     }
 }
 
