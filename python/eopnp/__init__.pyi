@@ -505,9 +505,11 @@ def register_image(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     loss: _Loss = None,
+    covariance: _Covariance = None,
 ) -> Registration:
     """Re-estimates an image's pose from its correspondences (plain, or RANSAC with
-    ``ransac=True`` / options) and compares it with the model's. Raises UnknownIdError."""
+    ``ransac=True`` / options) and compares it with the model's (``covariance``: as ``solve``,
+    in pixels; with RANSAC from the inliers). Raises UnknownIdError."""
 
 def register_images(
     model: Model,
@@ -521,6 +523,7 @@ def register_images(
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
     loss: _Loss = None,
+    covariance: _Covariance = None,
     threads: int | None = None,
 ) -> list[Registration | PnpError]:
     """``register_image`` on many images (None: every image, in id order), in parallel

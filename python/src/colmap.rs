@@ -305,6 +305,8 @@ impl PyRegistration {
 ///         ``solve_ransac``.
 ///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
 ///         exhaustive, loss: as ``solve`` (``loss``'s scale in pixels).
+///     covariance: as ``solve`` (the noise in pixels): ``Registration.solution.covariance``,
+///         from every correspondence used, or with RANSAC from the inliers.
 ///
 /// Returns:
 ///     Registration: the pose, its errors against the model's, RANSAC's statistics.
@@ -316,7 +318,7 @@ impl PyRegistration {
 #[pyfunction]
 #[pyo3(signature = (model, image_id, *, ransac = None, refinement = "ml", planar = "auto",
     newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false, loss = None))]
+    exhaustive = false, loss = None, covariance = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn register_image(
     py: Python<'_>,
@@ -330,6 +332,7 @@ pub(crate) fn register_image(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     loss: Option<&Bound<'_, PyAny>>,
+    covariance: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyRegistration> {
     let (solver, ransac) = registration_options(
         py,
@@ -342,7 +345,7 @@ pub(crate) fn register_image(
             reprojection_iterations,
             exhaustive,
             loss,
-            covariance: None,
+            covariance,
         },
     )?;
     let m = Arc::clone(&model.get().inner);
@@ -414,7 +417,7 @@ fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
 ///     model: a ``Model`` from ``read_colmap_model``.
 ///     image_ids: the images (any iterable of ids), or None for every image in id order.
 ///     ransac, refinement, planar, newton_iterations, newton_step_tolerance,
-///         reprojection_iterations, exhaustive, loss: as ``register_image``.
+///         reprojection_iterations, exhaustive, loss, covariance: as ``register_image``.
 ///     threads: None (rayon's global pool) or the number of threads, as ``solve_batch``.
 ///
 /// Returns:
@@ -427,7 +430,8 @@ fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
 #[pyfunction]
 #[pyo3(signature = (model, image_ids = None, *, ransac = None, refinement = "ml",
     planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, loss = None, threads = None))]
+    reprojection_iterations = None, exhaustive = false, loss = None, covariance = None,
+    threads = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn register_images<'py>(
     py: Python<'py>,
@@ -441,6 +445,7 @@ pub(crate) fn register_images<'py>(
     reprojection_iterations: Option<i64>,
     exhaustive: bool,
     loss: Option<&Bound<'py, PyAny>>,
+    covariance: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyList>> {
     let (solver, ransac) = registration_options(
@@ -454,7 +459,7 @@ pub(crate) fn register_images<'py>(
             reprojection_iterations,
             exhaustive,
             loss,
-            covariance: None,
+            covariance,
         },
     )?;
     let m = Arc::clone(&model.get().inner);

@@ -121,3 +121,21 @@ def test_register_ransac(model):
     assert eopnp.register_image(model, 3, ransac=False).ransac is None
     alg = eopnp.register_image(model, 3, refinement="algebraic")
     assert alg.rotation_error_deg < 0.05
+
+
+def test_register_covariance(model):
+    """covariance= of register_image / register_images: the registration's pose carries the
+    covariance solve / solve_ransac report on the image's correspondences (pixels)."""
+    world, pixels = model.correspondences(2)
+    cam = model.camera_of(2)
+    reg = eopnp.register_image(model, 2, covariance=1.0)
+    assert reg.solution == eopnp.solve(world, pixels, camera=cam, covariance=1.0)
+    assert reg.solution.covariance.shape == (6, 6) and reg.solution.sigma == 1.0
+    robust = eopnp.register_image(model, 2, ransac=True, covariance="estimated")
+    sol, _ = eopnp.solve_ransac(world, pixels, camera=cam, covariance="estimated")
+    assert robust.solution == sol and sol.covariance is not None
+    regs = eopnp.register_images(model, [2], ransac=True, covariance="estimated", threads=1)
+    _same_registration(regs[0], robust)
+    assert eopnp.register_image(model, 2).solution.covariance is None
+    with pytest.raises(eopnp.InvalidOptionError, match="covariance"):
+        eopnp.register_image(model, 2, covariance=0.0)
