@@ -102,7 +102,9 @@ impl Solver {
         self
     }
 
-    /// Maximum Levenberg-Marquardt iterations of the reprojection refinement (S9). Default: `50`.
+    /// Maximum Levenberg-Marquardt iterations of the reprojection refinement (S9, and S10
+    /// through a camera). Default: `200` (a run from a start in a flat valley of the error can
+    /// need more than 50, docs/algorithm.md S4'''; a run that converges sooner stops sooner).
     #[must_use]
     pub fn reprojection_iterations(mut self, n: u32) -> Self {
         self.opts.reproj.max_iterations = n;

@@ -36,13 +36,53 @@ const TRIALS: u64 = 1_500;
 const COST_REL: f64 = 1e-9;
 
 fn problem(name: &str, n: usize, scene: Scene, trial: u64) -> Problem {
+    seeded(n, scene, trial_seed(name, trial))
+}
+
+fn seeded(n: usize, scene: Scene, seed: u64) -> Problem {
     Problem::generate(&ProblemOptions {
         n,
         sigma_px: 2.0,
         scene,
         rotation: RotationKind::Uniform,
-        seed: trial_seed(name, trial),
+        seed,
     })
+}
+
+/// Problems of the 50,000-problem `tail` sets (`SMALL_N_NAME=tail/N/SCENE cargo run --release
+/// --example small_n -- N SCENE 50000 check`) whose pose was above LM-from-GT's cost before
+/// the two changes that fixed them: (N, scene, seed, what was wrong).
+const FIXED_TAIL: [(usize, Scene, u64, &str); 5] = [
+    // S9's iteration bound was 50: the run from the right start stopped in a flat valley
+    // (1.1e-3, 2.2e-5 and 3.6e-6 above LM-from-GT's cost); it is 200 now.
+    (4, Scene::General, 0x3e91_779a_d570_a8c8, "iteration bound"),
+    (4, Scene::General, 0x8196_e884_51c3_b210, "iteration bound"),
+    (4, Scene::General, 0xb0b9_6fa0_0d4a_581b, "iteration bound"),
+    // Only the fifth start (by cost) reaches the global minimum; the best four end in one
+    // higher minimum (cost 4.4 and 1.2 times LM-from-GT's). Planar N = 5 refines five now.
+    (5, Scene::Planar, 0x6419_b70c_67ef_68ad, "fifth start"),
+    (5, Scene::Planar, 0xbcf6_77f6_4225_cc20, "fifth start"),
+];
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release-mode suite: cargo test --release --test small_n"
+)]
+fn tail_problems_reach_the_global_minimum() {
+    let solver = Solver::default();
+    for (n, scene, seed, why) in FIXED_TAIL {
+        let p = seeded(n, scene, seed);
+        let lm = p.lm_from_gt();
+        let s = solver.solve(&p.world, &p.image).expect("solves");
+        let (r, t) = pose_of(&s);
+        let cost = reprojection_cost(&p.world, &p.pixels, &r, &t, PIXEL_CAMERA);
+        assert!(
+            cost <= lm.cost * (1.0 + COST_REL),
+            "N={n} {scene:?} seed {seed:#x} ({why}): cost {cost:.9e} px^2, LM from the ground truth {:.9e}",
+            lm.cost
+        );
+    }
 }
 
 #[test]

@@ -67,7 +67,7 @@ pub(crate) fn check_finite(
 ///     planar: planar branch selection: "auto" (default), "planar" or "nonplanar".
 ///     newton_iterations: maximum damped-Newton iterations per candidate (default 50).
 ///     newton_step_tolerance: Newton stops when the step falls to this (default 1e-12).
-///     reprojection_iterations: maximum Levenberg-Marquardt iterations (default 50).
+///     reprojection_iterations: maximum Levenberg-Marquardt iterations (default 200).
 ///     exhaustive: refine every start of every generator (default False: a start certified
 ///         globally optimal ends the search).
 ///     covariance: None (default: no covariance), "estimated" (the noise estimated from the
