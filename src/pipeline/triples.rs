@@ -5,7 +5,7 @@
 //! small, one of the up to four poses of a triple lies in the basin of the maximum-likelihood
 //! pose.
 //!
-//! [`starts`] solves P3P on triples of the active points (all 4 at N = 4, 5 of the 10 at
+//! [`starts`] solves P3P on triples of the active points (all 4 at N = 4, 3 of the 10 at
 //! N = 5), scores every pose by the number of points in front of it and its reprojection error
 //! over all points ([`SmallProblem::score`], in S1's weight unit and S9's row weights), merges
 //! the poses that lie within [`SAME_START`] of each other (keeping the better one) and returns
@@ -23,13 +23,16 @@ use crate::numeric::p3p::{p3p_unpolished, MAX_P3P_SOLUTIONS};
 pub(crate) const MAX_SMALL_N: usize = 5;
 /// The triples of 4 points: all of them.
 const TRIPLES_4: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
-/// The triples of 5 points: the 5 of consecutive points, cyclically (each point in 3 of them,
-/// each pair in 1 or 2). Measured against all 10 (`examples/small_n.rs`, sigma = 2 px, 6,000
-/// problems per scene type, and 12,000 more): no minimum missed either way, with about 35 %
-/// fewer instructions per solve.
-const TRIPLES_5: [[usize; 3]; 5] = [[0, 1, 2], [1, 2, 3], [2, 3, 4], [0, 3, 4], [0, 1, 4]];
-/// The most triples used.
-const MAX_TRIPLES: usize = 5;
+/// The triples of 5 points: 3 of the 10, consecutive points (the middle point in all three,
+/// the end points in one). Fewer starts, and fewer of them in the basins of higher minima: on
+/// 206,000 seeded problems per scene type the search missed the global minimum in 0 general
+/// (the best 3 starts refined) and 1 planar problem (the best 5), where with the 5 cyclically
+/// consecutive triples (the best 2 refined, 5 in planar scenes) it missed 4 and 4, for 8 %
+/// (general) and 5 % (planar) fewer instructions per solve (docs/algorithm.md S4''', larger
+/// sets).
+const TRIPLES_5: [[usize; 3]; 3] = [[0, 1, 2], [1, 2, 3], [2, 3, 4]];
+/// The most triples used (N = 4).
+const MAX_TRIPLES: usize = TRIPLES_4.len();
 /// Upper bound on the number of starts: every pose of every triple, and the driver's p1 start
 /// in planar scenes ([`add`]).
 pub(crate) const MAX_STARTS: usize = MAX_TRIPLES * MAX_P3P_SOLUTIONS + 1;
@@ -137,14 +140,13 @@ impl Start {
 /// How many of the best starts S9 refines (measured with `examples/small_n.rs`, sigma = 2 px:
 /// the fewest that never missed the minimum in 6,000 seeded problems per scene type, with
 /// margin): every distinct start at N = 4 (with 4 starts, 2 of 6,000 general problems missed
-/// it; with 6, 2 of 6,000 planar ones), 2 at N = 5 in non-planar scenes (none missed it with
-/// one) and 5 in planar ones (with 3, 1 of 6,000 missed it; with 4, none of 6,000 but 3 of
-/// the 50,000 of the `tail` set, up to 4.4 times LM-from-GT's cost: their best four starts
-/// end in one higher minimum; docs/algorithm.md S4''').
+/// it; with 6, 2 of 6,000 planar ones); at N = 5, measured on larger sets with the starts of
+/// [`TRIPLES_5`] (docs/algorithm.md S4''', larger sets), 3 in non-planar scenes (with 2, 3 of
+/// 150,000 problems missed it) and 5 in planar ones (with 4, 4 of 150,000).
 pub(crate) fn refined(sp: &SmallProblem, planar: bool) -> usize {
     match (sp.p.len(), planar) {
         (0..=4, _) => MAX_STARTS,
-        (_, false) => 2,
+        (_, false) => 3,
         (_, true) => 5,
     }
 }
