@@ -1,8 +1,9 @@
 //! Small fixed-size linear algebra for the fast path: Cholesky factorisation (also the
 //! positive-definiteness test of the certificates and of `M - tau I`), the smallest
-//! eigenvector of the 9x9 positive semidefinite `M` by inverse iteration, and the number of
+//! eigenvector of the 9x9 positive semidefinite `M` by inverse iteration, the number of
 //! eigenvalues below a threshold (LDL^T inertia with diagonal pivoting, Sturm count as the
-//! fallback). No allocation; every loop has a fixed bound.
+//! fallback), and S9's damped 6 x 6 solve (`L D L^T`, no square root). No allocation; every
+//! loop has a fixed bound.
 
 use nalgebra::{SMatrix, SVector};
 
@@ -373,16 +374,102 @@ fn sturm_count_below(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
     count
 }
 
-/// Solves `(H + lam I) delta = -g` by a 6 x 6 Cholesky factorisation; `None` if `H + lam I`
-/// is not (numerically) positive definite, including NaN entries.
+/// Solves `(H + lam I) delta = -g` by a 6 x 6 `L D L^T` factorisation ([`ldl_rows`]); `None`
+/// if `H + lam I` is not (numerically) positive definite, including NaN entries.
+///
+/// `L D L^T`, not Cholesky: the factorisation has no square root. At N = 4 and 5 an S9
+/// iteration is one chain of dependent operations (this solve, the step's rotation, the
+/// pass over the points, the normal equations, the next solve), and the Cholesky factor's six
+/// square roots, each followed by the division by it, were the longest links of the chain:
+/// with `L D L^T` (the same instruction count) a general N = 4 solve took about 7 % less time
+/// (docs/speed-log.md).
 // Not inlined: compiled once, its loops unroll the same whatever the caller (inlined into
-// S9's loop, the same code measured 300 to 620 instructions per call from build to build).
+// S9's loop, the Cholesky version measured 300 to 620 instructions per call from build to
+// build).
 #[inline(never)]
 pub(crate) fn solve_damped6(h: &[[f64; 6]; 6], lam: f64, g: &[f64; 6]) -> Option<[f64; 6]> {
-    let l = cholesky_rows::<6>(|i, j| if i == j { h[i][i] + lam } else { h[i][j] }).ok()?;
+    let f = ldl_rows::<6>(|i, j| if i == j { h[i][i] + lam } else { h[i][j] }).ok()?;
     let mut delta = g.map(|x| -x);
-    cholesky_solve(&l, &mut delta);
+    ldl_solve(&f, &mut delta);
     Some(delta)
+}
+
+/// An `L D L^T` factor: the rows of the unit lower triangular `L` below the diagonal
+/// (`rows[i][j]`, `j < i`; the rest zero) and the reciprocals of the pivots `D`.
+struct Ldl<const D: usize> {
+    rows: [[f64; D]; D],
+    inv_pivot: [f64; D],
+}
+
+/// The `L D L^T` factor of the symmetric matrix with lower-triangle entries `a(i, j)`,
+/// `j <= i`, or the index of the first pivot that is not positive (also for a NaN entry):
+/// the pivots are the squares of the Cholesky factor's diagonal, so the test is that of
+/// [`cholesky_rows`]. Column by column, as [`cholesky_rows`].
+#[inline(always)]
+fn ldl_rows<const D: usize>(a: impl Fn(usize, usize) -> f64) -> Result<Ldl<D>, usize> {
+    const { assert!(D <= 12) };
+    let mut f = Ldl {
+        rows: [[0.0f64; D]; D],
+        inv_pivot: [0.0f64; D],
+    };
+    let mut pivot = [0.0f64; D];
+    for_each_const!(J in [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11] {
+        if J < D {
+            ldl_column::<D, J>(&mut f, &mut pivot, &a)?;
+        }
+    });
+    Ok(f)
+}
+
+/// Column `J` of [`ldl_rows`]: with `v_k = L_Jk d_k`, the pivot `d_J = a_JJ - sum_k L_Jk v_k`,
+/// then the entries below it, `L_iJ = (a_iJ - sum_k L_ik v_k) / d_J`.
+#[inline(always)]
+fn ldl_column<const D: usize, const J: usize>(
+    f: &mut Ldl<D>,
+    pivot: &mut [f64; D],
+    a: &impl Fn(usize, usize) -> f64,
+) -> Result<(), usize> {
+    let (head, below) = f.rows.split_at_mut(J + 1);
+    let rj = &head[J][..J];
+    let v: [f64; D] = core::array::from_fn(|k| if k < J { rj[k] * pivot[k] } else { 0.0 });
+    let d = dot_down(a(J, J), rj, &v[..J]);
+    if !(d > 0.0) {
+        return Err(J);
+    }
+    pivot[J] = d;
+    // One division per column: the entries below the pivot are independent products.
+    let inv = 1.0 / d;
+    f.inv_pivot[J] = inv;
+    for (i, ri) in (J + 1..D).zip(below.iter_mut()) {
+        ri[J] = dot_down(a(i, J), &ri[..J], &v[..J]) * inv;
+    }
+    Ok(())
+}
+
+/// Solves `L D L^T x = b` in place: the substitution with `L`, the multiplication by
+/// `D^-1`, the substitution with `L^T`.
+#[inline(always)]
+fn ldl_solve<const D: usize>(f: &Ldl<D>, x: &mut [f64; D]) {
+    let rows = &f.rows;
+    const { assert!(D <= 12) };
+    for_each_const!(I in [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11] {
+        if I < D {
+            let (done, rest) = x.split_at_mut(I);
+            rest[0] = dot_down(rest[0], &rows[I][..I], done);
+        }
+    });
+    for (xi, inv) in x.iter_mut().zip(&f.inv_pivot) {
+        *xi *= inv;
+    }
+    for_each_const!(I in [11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0] {
+        if I < D {
+            let (head, done) = x.split_at_mut(I + 1);
+            head[I] = done
+                .iter()
+                .zip(&rows[I + 1..])
+                .fold(head[I], |s, (xk, rk)| s - rk[I] * xk);
+        }
+    });
 }
 
 #[cfg(test)]
