@@ -473,52 +473,60 @@ pub(crate) fn min_eigenvalue_sym3(h: &Matrix3<f64>) -> f64 {
     a[(0, 0)].min(a[(1, 1)]).min(a[(2, 2)]) * scale
 }
 
-/// Cholesky factor `L` (lower) of a symmetric 3 x 3 matrix; `None` unless positive definite
-/// (every pivot > 0 and finite).
-#[inline]
-pub(crate) fn cholesky3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
-    let mut l = Matrix3::<f64>::zeros();
-    for j in 0..3 {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= l[(j, k)] * l[(j, k)];
-        }
-        if !(d > 0.0 && d.is_finite()) {
-            return None;
-        }
-        let djj = d.sqrt();
-        l[(j, j)] = djj;
-        for i in (j + 1)..3 {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= l[(i, k)] * l[(j, k)];
-            }
-            l[(i, j)] = s / djj;
-        }
-    }
-    Some(l)
+/// The `L D L^T` factor of a symmetric 3 x 3 matrix ([`ldl3`]): `L`'s entries below the
+/// diagonal and the reciprocals of the pivots.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ldl3 {
+    l10: f64,
+    l20: f64,
+    l21: f64,
+    inv_d: [f64; 3],
 }
 
-/// Solve `L L^T x = b`.
+/// The `L D L^T` factor of the symmetric 3 x 3 `a` (its lower triangle read); `None` unless
+/// positive definite (every pivot > 0 and finite: Cholesky's test). No square root, and a
+/// reciprocal per pivot that the solve multiplies by: S6's damped Newton step is one chain of
+/// dependent operations (the factorisation, the solve, the trial rotation, its cost), which
+/// the Cholesky factor lengthened by three square roots and nine divisions.
 #[inline]
-pub(crate) fn cholesky3_solve(l: &Matrix3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
-    let mut y = Vector3::zeros();
-    for i in 0..3 {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= l[(i, k)] * y[k];
-        }
-        y[i] = s / l[(i, i)];
+pub(crate) fn ldl3(a: &Matrix3<f64>) -> Option<Ldl3> {
+    let pivot_ok = |d: f64| d > 0.0 && d.is_finite();
+    let d0 = a[(0, 0)];
+    if !pivot_ok(d0) {
+        return None;
     }
-    let mut x = Vector3::zeros();
-    for i in (0..3).rev() {
-        let mut s = y[i];
-        for k in (i + 1)..3 {
-            s -= l[(k, i)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
+    let i0 = 1.0 / d0;
+    let (v10, v20) = (a[(1, 0)], a[(2, 0)]);
+    let (l10, l20) = (v10 * i0, v20 * i0);
+    let d1 = a[(1, 1)] - l10 * v10;
+    if !pivot_ok(d1) {
+        return None;
     }
-    x
+    let i1 = 1.0 / d1;
+    let v21 = a[(2, 1)] - l20 * v10;
+    let l21 = v21 * i1;
+    let d2 = a[(2, 2)] - l20 * v20 - l21 * v21;
+    if !pivot_ok(d2) {
+        return None;
+    }
+    Some(Ldl3 {
+        l10,
+        l20,
+        l21,
+        inv_d: [i0, i1, 1.0 / d2],
+    })
+}
+
+/// Solves `L D L^T x = b` with [`ldl3`]'s factor.
+#[inline]
+pub(crate) fn ldl3_solve(f: &Ldl3, b: &Vector3<f64>) -> Vector3<f64> {
+    let y0 = b[0];
+    let y1 = b[1] - f.l10 * y0;
+    let y2 = b[2] - f.l20 * y0 - f.l21 * y1;
+    let x2 = y2 * f.inv_d[2];
+    let x1 = y1 * f.inv_d[1] - f.l21 * x2;
+    let x0 = y0 * f.inv_d[0] - f.l10 * x1 - f.l20 * x2;
+    Vector3::new(x0, x1, x2)
 }
 
 /// Reciprocal condition number of a 3x3 matrix (smallest / largest singular value; 0 for a

@@ -54,20 +54,22 @@ pub(crate) fn cgr_to_rotation(s: &Vector3<f64>) -> Matrix3<f64> {
 ///
 /// Evaluated through the unit quaternion `(cos(t/2), sin(t/2) w / t)`, `t = |w|`; below
 /// `t/2 = 1/4` (every step of the refinements but the first from a poor start) `sin(t/2) /
-/// (t/2)` and `cos(t/2)` come from their Taylor series ([`trig::sinc_cos_small`], within 1
-/// ulp), above from libm.
+/// (t/2)` and `cos(t/2)` come from their Taylor series in `(t/2)^2 = |w|^2 / 4`
+/// ([`trig::sinc_cos_small`], within 1 ulp; no square root on the refinement's chain of
+/// dependent operations), above from libm.
 pub(crate) fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
     // Euler-Rodrigues form: q = (cos(t/2), sin(t/2) w / t), R = (q0^2 - v'v) I + 2 v v' + 2 q0 [v]x.
     // This is orthonormal to rounding even at large angles (the I + a K + b K^2 form loses
     // ~1e-15 at t = 3).
     let t2 = w.norm_squared();
-    let t = t2.sqrt();
-    let h = 0.5 * t;
+    // (t/2)^2.
+    let h2 = 0.25 * t2;
     // sin(h) / t = 0.5 sin(h) / h.
-    let (k, q0) = if h <= trig::SMALL_ANGLE {
-        let (sinc, cos) = trig::sinc_cos_small(h);
+    let (k, q0) = if h2 <= trig::SMALL_ANGLE * trig::SMALL_ANGLE {
+        let (sinc, cos) = trig::sinc_cos_small(h2);
         (0.5 * sinc, cos)
     } else {
+        let h = 0.5 * t2.sqrt();
         (0.5 * h.sin() / h, h.cos())
     };
     let v = w * k;

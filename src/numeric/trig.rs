@@ -23,8 +23,9 @@
 //! Within 2.90 ulp of the exact value over 40,000 uniform angles (numpy against mpmath, as
 //! Horner's rule) and within 4 ulp of `f64::tan` (tested).
 //!
-//! [`sinc_cos_small`]: `sin(a) / a` and `cos(a)` for `|a| <= 1/4` by 7 terms of the same
-//! series, for the exponential map of the refinement's steps (`numeric::rotation::exp_so3`).
+//! [`sinc_cos_small`]: `sin(a) / a` and `cos(a)` for `|a| <= 1/4`, from `a^2`, by 7 terms of
+//! the same series, for the exponential map of the refinement's steps
+//! (`numeric::rotation::exp_so3`).
 
 /// `pi / 2` as the sum of two doubles (the nearest double, and the rest).
 const PIO2_HI: f64 = core::f64::consts::FRAC_PI_2;
@@ -112,13 +113,12 @@ fn series_sum<const N: usize>(c: &[f64; N], z: f64) -> f64 {
 /// below `2^-64` of the sums).
 pub(crate) const SMALL_ANGLE: f64 = 0.25;
 
-/// `(sin(a) / a, cos(a))` for `|a| <= SMALL_ANGLE`, by the first 7 terms of each Taylor
-/// series (Horner's rule in `a^2`): the half-angle functions of the exponential map of S9's
-/// and S10's steps, without two calls of libm. Within 1 ulp of `f64::sin(a) / a` and
-/// `f64::cos` (tested).
+/// `(sin(a) / a, cos(a))` for `|a| <= SMALL_ANGLE`, from `z = a^2` (both are even: the angle
+/// itself, a square root away, is not needed), by the first 7 terms of each Taylor series
+/// (Horner's rule in `z`): the half-angle functions of the exponential map of S9's and S10's
+/// steps, without two calls of libm. Within 1 ulp of `f64::sin(a) / a` and `f64::cos` (tested).
 #[inline(always)]
-pub(crate) fn sinc_cos_small(a: f64) -> (f64, f64) {
-    let z = a * a;
+pub(crate) fn sinc_cos_small(z: f64) -> (f64, f64) {
     let s = SIN_COEFFS[..7].iter().rev().fold(0.0, |p, &k| p * z + k);
     let c = COS_COEFFS[..7].iter().rev().fold(0.0, |p, &k| p * z + k);
     (s, c)

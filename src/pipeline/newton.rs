@@ -11,11 +11,11 @@
 //! | `H` | `H_C - 4 f I`, the exact Hessian of `F_k(s) = f(R(s) R_k)` at 0 (T3) |
 //! | `shift` | `max(0, -lambda_min(H))`, smallest eigenvalue by 3 x 3 Jacobi (T4) |
 //! | `mu` | damping: `lambda = mu * scale + shift`, `scale = trace(M)` |
-//! | `d` | step `-(H + lambda I)^-1 g` (hand-written 3 x 3 Cholesky) |
+//! | `d` | step `-(H + lambda I)^-1 g` (hand-written 3 x 3 `L D L^T`, [`ldl3`]) |
 //!
 //! Acceptance: `f' < f`, or `f' <= f + accept_floor * scale` and `|g'| < |g|` (the rounding
 //! floor of T5, needed to reach ~1e-13 deg on noise-free data). `mu` x10 after a rejected step
-//! (or a failed Cholesky), /10 (floor 1e-15) after an accepted one; stop when no step is
+//! (or a failed factorisation), /10 (floor 1e-15) after an accepted one; stop when no step is
 //! accepted before `mu > mu_max`, when `|d| <= step_tolerance`, when quadratic convergence
 //! predicts the next step at or below `step_tolerance / 1000` (`|d_k|^3 / |d_k-1|^2` for two
 //! consecutive undamped Newton steps (H positive definite, mu <= mu0), with
@@ -30,7 +30,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::numeric::bounds::{Bound, Budget};
 use crate::numeric::lanes::dispatched;
-use crate::numeric::mat3::{cholesky3, cholesky3_solve, min_eigenvalue_sym3};
+use crate::numeric::mat3::{ldl3, ldl3_solve, min_eigenvalue_sym3};
 use crate::numeric::rotation::cgr_to_rotation;
 
 /// Options of [`refine_so3`] (docs/algorithm.md S0 table).
@@ -228,9 +228,9 @@ pub(crate) fn refine_so3_until(
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         let (g, h) = model.take().unwrap_or_else(|| local_model(rows, &r));
-        // shift = max(0, -lambda_min(H)); a successful Cholesky of H proves lambda_min > 0
-        // (shift 0), so the eigenvalue is only computed for an indefinite H.
-        let shift = if cholesky3(&h).is_some() {
+        // shift = max(0, -lambda_min(H)); a successful factorisation of H proves
+        // lambda_min > 0 (shift 0), so the eigenvalue is only computed for an indefinite H.
+        let shift = if ldl3(&h).is_some() {
             0.0
         } else {
             (-min_eigenvalue_sym3(&h)).max(0.0)
@@ -247,11 +247,11 @@ pub(crate) fn refine_so3_until(
                 break;
             }
             let a = h + Matrix3::identity() * (mu * scale + shift);
-            let Some(l) = cholesky3(&a) else {
+            let Some(l) = ldl3(&a) else {
                 mu *= 10.0;
                 continue;
             };
-            let d = -cholesky3_solve(&l, &g);
+            let d = -ldl3_solve(&l, &g);
             let rn = cgr_to_rotation(&d) * r;
             let fnew = cost_at(m45, &rn);
             if fnew < f {
