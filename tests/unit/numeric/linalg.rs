@@ -1,5 +1,15 @@
 use super::*;
 
+/// Uniform numbers in [-1, 1) from a seeded xorshift generator.
+fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
 /// Random orthogonal 9x9 matrices from a seeded generator.
 fn random_orthogonal(next: &mut impl FnMut() -> f64) -> SMatrix<f64, 9, 9> {
     SMatrix::<f64, 9, 9>::from_fn(|_, _| next()).qr().q()
@@ -10,13 +20,7 @@ fn random_orthogonal(next: &mut impl FnMut() -> f64) -> SMatrix<f64, 9, 9> {
 fn ldlt_inertia_agrees_with_the_sturm_count_on_semidefinite_matrices() {
     // The solver's use: M positive semidefinite, tau = 1e-10 trace(M), k eigenvalues at or
     // near 0 (k = 0..6), the others spread over [1e-6, 1] times the largest.
-    let mut seed = 0x2545_F491_4F6C_DD1Du64;
-    let mut next = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    };
+    let mut next = uniform(0x2545_F491_4F6C_DD1D);
     let tiny = [0.0, 1e-16, 1e-14, 1e-12, 3e-11, 3e-10, 1e-9];
     let mut fast = [0usize; 7];
     #[allow(clippy::needless_range_loop)]
@@ -122,13 +126,7 @@ fn non_finite_input_gives_none() {
 /// has a NaN entry.
 #[test]
 fn damped_solve_solves_positive_definite_systems_and_refuses_the_others() {
-    let mut seed = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    };
+    let mut next = uniform(0x9E37_79B9_7F4A_7C15);
     for trial in 0..500 {
         let q = SMatrix::<f64, 6, 6>::from_fn(|_, _| next()).qr().q();
         let decades = 12.0 * (trial as f64 / 500.0);
