@@ -381,7 +381,7 @@ fn sturm_count_below(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
 /// iteration is one chain of dependent operations (this solve, the step's rotation, the
 /// pass over the points, the normal equations, the next solve), and the Cholesky factor's six
 /// square roots, each followed by the division by it, were the longest links of the chain:
-/// with `L D L^T` (the same instruction count) a general N = 4 solve took about 7 % less time
+/// with `L D L^T` (the same instruction count) a general N = 4 solve took about 6 % less time
 /// (docs/speed-log.md).
 // Not inlined: compiled once, its loops unroll the same whatever the caller (inlined into
 // S9's loop, the Cholesky version measured 300 to 620 instructions per call from build to
