@@ -324,82 +324,105 @@ pub(super) fn radial_undistortion<L: Lens, const FISHEYE: bool>(
 ) {
     const RADIUS: f64 = 0.1; // iterative_undistortion's trust region
     let mut rd = [0.0; GROUP];
-    let mut scale2 = [0.0; GROUP];
+    // The convergence check's bound on the squared residual.
+    let mut tol2 = [0.0; GROUP];
     for l in 0..GROUP {
         let r2 = x0[l][0] * x0[l][0] + x0[l][1] * x0[l][1];
         rd[l] = r2.sqrt();
-        scale2[l] = if r2 > 1.0 { r2 } else { 1.0 };
+        tol2[l] = RESIDUAL_TOL * RESIDUAL_TOL * if r2 > 1.0 { r2 } else { 1.0 };
     }
+    // The state of a lane is its radius alone: it stays put once the residual passes the
+    // check (the rest of the check, `det J > 0` and `1 + g > 0`, is made once, below), and
+    // becomes NaN where the one-pixel iteration would stop without converging (a failed or
+    // negligible step): the check then fails, and `iterative_undistortion` decides. The
+    // lanes past `n` start at NaN. Bitwise `&`, not `&&`, and selects instead of branches,
+    // so that the lanes run as one packed iteration.
     let mut r = rd;
-    // Per lane: still iterating; converged (with det J there). Bitwise `&`, not `&&`, and
-    // selects instead of branches, so that the lanes run as one packed iteration.
-    let mut live = [false; GROUP];
-    let mut ok = [false; GROUP];
-    let mut det_out = [0.0; GROUP];
-    for a in live.iter_mut().take(n) {
-        *a = true;
+    for x in r.iter_mut().skip(n) {
+        *x = f64::NAN;
     }
-    let mut steps = limit(Bound::Undistort) + 1;
-    while steps > 0 && live.iter().any(|&a| a) {
-        steps -= 1;
-        let last = steps == 0;
-        // The next radii and determinants, every entry written: a select per lane. (Updated
-        // in place, `r[l] = if stepping { r_new } else { r[l] }` became a masked store that
-        // the next step loads again; 2-5 % slower per image on the bundled model.)
+    for _ in 0..limit(Bound::Undistort) {
+        // The next radii, every entry written (a select per lane; updated in place,
+        // `r[l] = if stepping { r_new } else { r[l] }` became a masked store that the next
+        // step loads again, 2-5 % slower per image on the bundled model), and whether any
+        // lane stepped.
         let mut r_next = [0.0; GROUP];
-        let mut det_next = [0.0; GROUP];
+        let mut stepped = false;
         for l in 0..GROUP {
+            // On the ray, det J = (d/dr) (1 + g) ([`Lens::RADIAL`]).
             let ([xr, _], j, radial) = d.apply(r[l], 0.0);
             let f = xr - rd[l];
-            let det = j[0] * j[3] - j[1] * j[2];
-            let conv =
-                (f * f <= RESIDUAL_TOL * RESIDUAL_TOL * scale2[l]) & (det > 0.0) & (radial > 0.0);
-            let finite = (det.abs() < f64::INFINITY) & (f.abs() < f64::INFINITY);
-            let can_step = !last & finite & (det != 0.0);
-            // The step along the ray, clamped to the trust region.
+            let det = j[0] * radial;
+            let (ff, dd) = (f * f, det * det);
+            let conv = ff <= tol2[l];
+            // f and det J finite and det J non-zero, tested on their squares: this stops
+            // wherever the one-pixel iteration's test would, and a little earlier (|det J|
+            // below about 1e-154, |f| above about 1e154), which only leaves the lane to it.
+            // (`< f64::MAX`, not `< INFINITY`: that LLVM makes integer compares.)
+            let finite = (dd > 0.0) & (dd < f64::MAX) & (ff < f64::MAX);
+            // The step along the ray, clamped to the trust region max(0.1 |r|, 0.1)
+            // (iterative_undistortion compares squares).
             let st = f / j[0];
-            // radius max(0.1 |r|, 0.1) (iterative_undistortion compares squares).
             let x = RADIUS * r[l].abs();
             let c = if x > RADIUS { x } else { RADIUS };
-            let clamped = if st > 0.0 { c } else { -c };
-            let st = if st.abs() > c { clamped } else { st };
+            let st = if st < c { st } else { c };
+            let st = if st > -c { st } else { -c };
             let r_new = r[l] - st;
             let x = r_new * r_new;
             let negligible = st * st <= STEP_TOL * STEP_TOL * (if x > 1.0 { x } else { 1.0 });
-            let done = live[l] & conv;
-            ok[l] |= done;
-            det_next[l] = if done { det } else { det_out[l] };
-            let stepping = live[l] & !conv & can_step & !negligible;
-            r_next[l] = if stepping { r_new } else { r[l] };
-            live[l] = stepping;
+            let go = !conv & finite & !negligible;
+            let next = if go { r_new } else { f64::NAN };
+            r_next[l] = if conv { r[l] } else { next };
+            stepped |= go;
         }
         r = r_next;
-        det_out = det_next;
+        if !stepped {
+            break;
+        }
     }
+    // The whole convergence check at each lane's last radius (after the last step allowed,
+    // as the one-pixel iteration's at its last iterate), and its point: into arrays, so that
+    // the loop is packed, then written out. (With `det J` and `1 + g` kept per lane inside
+    // the steps, and masks for "live" and "converged", the steps took about twice the
+    // instructions.)
+    let (mut u, mut v, mut det, mut ok) =
+        ([0.0; GROUP], [0.0; GROUP], [0.0; GROUP], [false; GROUP]);
     for l in 0..GROUP {
+        let ([xr, _], j, radial) = d.apply(r[l], 0.0);
+        let f = xr - rd[l];
+        det[l] = j[0] * radial;
         // (u, v) = r x0 / |x0| (x0 itself at the centre, where r = 0).
-        let s = if rd[l] > 0.0 { r[l] / rd[l] } else { 1.0 };
-        let (mut u, mut v, mut det) = (x0[l][0] * s, x0[l][1] * s, det_out[l]);
-        let mut ok = ok[l] & (u.abs() < f64::INFINITY) & (v.abs() < f64::INFINITY);
+        let q = r[l] / if rd[l] > 0.0 { rd[l] } else { 1.0 };
+        let s = if rd[l] > 0.0 { q } else { 1.0 };
+        (u[l], v[l]) = (x0[l][0] * s, x0[l][1] * s);
+        ok[l] = (f * f <= tol2[l])
+            & (det[l] > 0.0)
+            & (radial > 0.0)
+            & (u[l].abs() < f64::INFINITY)
+            & (v[l].abs() < f64::INFINITY);
         if FISHEYE {
             // The equidistant map's inverse, as Projector::undistort_with: theta =
             // |(u, v)| = |r|, the normalised radius tan(theta), the determinant divided by
             // s (1 + tan^2) with s = tan(theta) / theta. Beyond the hemisphere: left to the
             // one-pixel path, which reports it.
             let theta = r[l].abs();
-            ok &= theta < core::f64::consts::FRAC_PI_2;
-            let t = tan_quadrant(if ok { theta } else { 0.0 });
+            ok[l] &= theta < core::f64::consts::FRAC_PI_2;
+            let t = tan_quadrant(if ok[l] { theta } else { 0.0 });
             let moved = theta > f64::EPSILON;
             let s = if moved { t / theta } else { 1.0 };
-            u *= s;
-            v *= s;
-            det = if moved {
-                det / (s * (1.0 + t * t))
-            } else {
-                det
-            };
+            u[l] *= s;
+            v[l] *= s;
+            let q = det[l] / (s * (1.0 + t * t));
+            det[l] = if moved { q } else { det[l] };
         }
-        out[l] = RadialLane { u, v, det, ok };
+    }
+    for l in 0..GROUP {
+        out[l] = RadialLane {
+            u: u[l],
+            v: v[l],
+            det: det[l],
+            ok: ok[l],
+        };
     }
 }
 
