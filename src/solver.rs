@@ -85,6 +85,11 @@ impl Solver {
         self
     }
 
+    /// The cost this solver minimises (set by [`Solver::refinement`]).
+    pub(crate) fn minimises(&self) -> Refinement {
+        self.opts.refinement
+    }
+
     /// Maximum damped-Newton iterations per candidate in S6. Default: `50`.
     #[must_use]
     pub fn newton_iterations(mut self, n: u32) -> Self {

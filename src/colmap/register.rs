@@ -10,7 +10,7 @@ use super::model::{Image, Model, PointLookup, RegisterError};
 use crate::camera::{Camera, Project, ProjectionJob};
 use crate::numeric::lanes::{dispatched, lane_sum, unweighted_blocks, Block, LANES};
 use crate::ransac::{Ransac, RansacStats};
-use crate::{Solution, Solver};
+use crate::{Refinement, Solution, Solver};
 
 /// The result of [`register_image`].
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -238,6 +238,19 @@ impl<'m> Registrar<'m> {
         let r = solution.rotation;
         let t = solution.pose.translation.vector;
         let keep = mask.as_deref();
+        // The estimate's RMS pixel error: in the default mode, on every correspondence, the
+        // solution reports it (S9's or S10's last pass, through the camera: `reprojection_rmse`
+        // is it divided by `max(fx, fy)`); otherwise (RANSAC's inliers, pixels left out, the
+        // algebraic mode's first-order error) one pass of its own.
+        let (fx, fy) = cam.intrinsics_scale();
+        let rmse_px = if ransac.is_none()
+            && solution.skipped == 0
+            && solver.minimises() == Refinement::Reprojection
+        {
+            solution.reprojection_rmse * fx.max(fy)
+        } else {
+            pixel_rmse(cam, world, pixels, keep, &r, &t)
+        };
         Ok(Registration {
             image_id,
             name: img.name.clone(),
@@ -249,7 +262,7 @@ impl<'m> Registrar<'m> {
             ransac: stats,
             rotation_error_deg: crate::metrics::rotation_error_deg(&r, &r_ref),
             translation_error_pct: crate::metrics::translation_error_pct(&t, &t_ref),
-            rmse_px: pixel_rmse(cam, world, pixels, keep, &r, &t),
+            rmse_px,
             model_rmse_px: pixel_rmse(cam, world, pixels, keep, &r_ref, &t_ref),
             solution,
             micros,

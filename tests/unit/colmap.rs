@@ -155,3 +155,46 @@ fn pixel_rmse_matches_the_per_point_formula() {
         }
     }
 }
+
+/// A registration's RMS pixel error, which in the default mode comes from the solution (S9's or
+/// S10's last pass), against `pixel_rmse`'s own pass at the same pose: the bundled model's
+/// images through their `SIMPLE_RADIAL` camera (S10) and through a pinhole camera with the same
+/// intrinsics (S9), with the squared loss and a robust one (S10 either way); with RANSAC and
+/// in the algebraic mode the registrar runs the pass itself, so these agree by construction.
+#[test]
+fn registration_rmse_is_the_pixel_rmse_of_its_pose() {
+    use crate::camera::Camera;
+    use crate::{Loss, Solver};
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-boxes");
+    let model = read_model(dir).unwrap();
+    let mut pinhole = model.clone();
+    for cam in pinhole.cameras.values_mut() {
+        let (f, _) = cam.intrinsics_scale();
+        let (w, h) = (cam.width(), cam.height());
+        let p = cam.params().to_vec();
+        *cam = Camera::from_colmap("SIMPLE_PINHOLE", w, h, vec![f, p[1], p[2]]).unwrap();
+    }
+    let solvers = [Solver::default(), Solver::default().loss(Loss::Huber(2.0))];
+    let mut checked = 0;
+    for m in [&model, &pinhole] {
+        let mut reg = Registrar::new(m);
+        for (&id, img) in &m.images {
+            let cam = &m.cameras[&img.camera_id];
+            for solver in &solvers {
+                let got = reg.register(id, solver, None).unwrap();
+                assert_eq!(got.skipped, 0);
+                let (world, pixels) = m.correspondences(id);
+                let r = got.solution.rotation;
+                let t = got.solution.pose.translation.vector;
+                let want = pixel_rmse(cam, &world, &pixels, None, &r, &t);
+                assert!(
+                    (got.rmse_px - want).abs() <= 1e-12 * want,
+                    "image {id}: {} vs {want}",
+                    got.rmse_px
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 24);
+}
