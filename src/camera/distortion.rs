@@ -391,7 +391,8 @@ pub(super) fn radial_undistortion<L: Lens, const FISHEYE: bool>(
         let ([xr, _], j, radial) = d.apply(r[l], 0.0);
         let f = xr - rd[l];
         det[l] = j[0] * radial;
-        // (u, v) = r x0 / |x0| (x0 itself at the centre, where r = 0).
+        // (u, v) = r x0 / |x0| (x0 itself at the centre, where r = 0); the division made
+        // for every lane and its result selected, so that the loop stays packed.
         let q = r[l] / if rd[l] > 0.0 { rd[l] } else { 1.0 };
         let s = if rd[l] > 0.0 { q } else { 1.0 };
         (u[l], v[l]) = (x0[l][0] * s, x0[l][1] * s);

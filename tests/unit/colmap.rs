@@ -167,13 +167,9 @@ fn registration_rmse_is_the_pixel_rmse_of_its_pose() {
     use crate::camera::Camera;
     use crate::{Loss, Solver};
     use nalgebra::{Point2, Point3, Rotation3, UnitQuaternion, Vector3};
-    let mut state = 0x2545_F491_4F6C_DD1Du64;
-    let mut rnd = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(0x2545_F491);
+    let mut rnd = move || rng.random_range(-0.5..0.5);
     let radial =
         Camera::from_colmap("SIMPLE_RADIAL", 1280, 960, vec![900.0, 640.0, 480.0, -0.12]).unwrap();
     let pinhole =
