@@ -100,7 +100,7 @@ impl Model {
         // points from 1).
         let n = img.points2d.iter().filter(|(_, id)| id.is_some()).count();
         let (mut world, mut pixels) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        PointLookup::new(self, 4 * n).gather(img, &mut world, &mut pixels);
+        PointLookup::new(self, 4 * n, false).gather(img, &mut world, &mut pixels);
         (world, pixels)
     }
 }
@@ -108,26 +108,53 @@ impl Model {
 /// The 3D points of a model by id: a table indexed by id, filled by one in-order walk of the
 /// map, when the largest id is at most `max_table` (a lookup in the map costs several times
 /// an index); otherwise the map itself.
+///
+/// A table built for many images ([`super::Registrar`]) holds the coordinates: a lookup is
+/// one load from a compact array instead of two dependent ones, the second into nodes spread
+/// over the map (the bundled model's gathering took a third less time). A table built for
+/// one image holds references: a quarter of the size, which for a one-off table matters more
+/// (the allocator hands a larger one back to the system when it is freed, and the next call
+/// pays the page faults again: `Model::correspondences` took twice the time with values).
 #[derive(Debug)]
 pub(super) struct PointLookup<'m> {
     points: &'m BTreeMap<u64, Point3D>,
-    table: Option<Vec<Option<&'m Point3<f64>>>>,
+    table: Table<'m>,
+}
+
+/// [`PointLookup`]'s table.
+#[derive(Debug)]
+enum Table<'m> {
+    Coordinates(Vec<Option<Point3<f64>>>),
+    References(Vec<Option<&'m Point3<f64>>>),
+    None,
 }
 
 impl<'m> PointLookup<'m> {
-    pub(super) fn new(model: &'m Model, max_table: usize) -> Self {
+    /// A table of coordinates when `many` (it serves many images), else of references.
+    pub(super) fn new(model: &'m Model, max_table: usize, many: bool) -> Self {
         let max_id = model.points.keys().next_back().copied().unwrap_or(0);
-        let table = usize::try_from(max_id)
+        let size = usize::try_from(max_id)
             .ok()
             .filter(|&m| m <= max_table)
-            .map(|m| {
-                let mut table = vec![None; m + 1];
+            .map(|m| m + 1);
+        // In range below: `id <= max_id < size`.
+        let table = match size {
+            None => Table::None,
+            Some(size) if many => {
+                let mut table = vec![None; size];
                 for (id, p) in &model.points {
-                    // In range: `id <= max_id = m`.
+                    table[*id as usize] = Some(p.xyz);
+                }
+                Table::Coordinates(table)
+            }
+            Some(size) => {
+                let mut table = vec![None; size];
+                for (id, p) in &model.points {
                     table[*id as usize] = Some(&p.xyz);
                 }
-                table
-            });
+                Table::References(table)
+            }
+        };
         PointLookup {
             points: &model.points,
             table,
@@ -142,36 +169,43 @@ impl<'m> PointLookup<'m> {
         world: &mut Vec<Point3<f64>>,
         pixels: &mut Vec<Point2<f64>>,
     ) {
-        let mut add = |x: Option<Point3<f64>>, px: &Point2<f64>| {
-            if let Some(x) = x {
-                world.push(x);
-                pixels.push(*px);
-            }
-        };
         // The lookup chosen once, not per observation.
         match &self.table {
-            Some(t) => {
-                for (px, id) in &img.points2d {
-                    if let Some(id) = *id {
-                        add(
-                            usize::try_from(id)
-                                .ok()
-                                .and_then(|i| t.get(i))
-                                .copied()
-                                .flatten()
-                                .copied(),
-                            px,
-                        );
-                    }
-                }
+            Table::Coordinates(t) => gather_with(img, world, pixels, |id| {
+                usize::try_from(id)
+                    .ok()
+                    .and_then(|i| t.get(i))
+                    .copied()
+                    .flatten()
+            }),
+            Table::References(t) => gather_with(img, world, pixels, |id| {
+                usize::try_from(id)
+                    .ok()
+                    .and_then(|i| t.get(i))
+                    .copied()
+                    .flatten()
+                    .copied()
+            }),
+            Table::None => {
+                gather_with(img, world, pixels, |id| self.points.get(&id).map(|p| p.xyz))
             }
-            None => {
-                for (px, id) in &img.points2d {
-                    if let Some(id) = id {
-                        add(self.points.get(id).map(|p| p.xyz), px);
-                    }
-                }
-            }
+        }
+    }
+}
+
+/// The observations of `img` with a 3D point that `lookup` finds, appended to `world` and
+/// `pixels`.
+#[inline(always)]
+fn gather_with(
+    img: &Image,
+    world: &mut Vec<Point3<f64>>,
+    pixels: &mut Vec<Point2<f64>>,
+    lookup: impl Fn(u64) -> Option<Point3<f64>>,
+) {
+    for (px, id) in &img.points2d {
+        if let Some(x) = id.and_then(&lookup) {
+            world.push(x);
+            pixels.push(*px);
         }
     }
 }

@@ -164,14 +164,20 @@ pub struct Registrar<'m> {
 }
 
 impl<'m> Registrar<'m> {
-    /// A registrar for `model`: one walk of its 3D points into a table indexed by id (when
-    /// the largest id is at most four times their number, as in COLMAP's numbering from 1;
-    /// otherwise the points are looked up in [`Model::points`]).
+    /// A registrar for `model`: one walk of its 3D points into a table of their coordinates
+    /// indexed by id (when the largest id is at most four times their number, as in COLMAP's
+    /// numbering from 1; otherwise the points are looked up in [`Model::points`]).
     #[must_use]
     pub fn new(model: &'m Model) -> Self {
+        Self::with_table(model, true)
+    }
+
+    /// A registrar whose table serves many images (`many`: coordinates) or one (references,
+    /// see [`PointLookup`]).
+    fn with_table(model: &'m Model, many: bool) -> Self {
         Registrar {
             model,
-            points: PointLookup::new(model, 4 * model.points.len()),
+            points: PointLookup::new(model, 4 * model.points.len(), many),
             world: Vec::new(),
             pixels: Vec::new(),
         }
@@ -290,5 +296,5 @@ pub fn register_image(
     solver: &Solver,
     ransac: Option<&Ransac>,
 ) -> Result<Registration, RegisterError> {
-    Registrar::new(model).register(image_id, solver, ransac)
+    Registrar::with_table(model, false).register(image_id, solver, ransac)
 }
