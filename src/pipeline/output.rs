@@ -151,10 +151,10 @@ impl Output<'_> {
 
     /// [`Output::finish`] for a minimum whose S7 depth test (more than half of the points in
     /// front, [`in_front`]) is still to be made: `Ok(None)` if it fails. In the default mode
-    /// S9's first pass, which evaluates every depth at the minimum anyway, counts them (the
-    /// same count: the same operations), so the test costs no pass of its own; in the
-    /// algebraic mode the pass of the reported reprojection error counts them (the same
-    /// operations again); with S10, [`in_front`] makes it.
+    /// the first pass of S9 (or S10), which evaluates every depth at the minimum anyway,
+    /// counts them (the same count: the same operations on the same points), so the test
+    /// costs no pass of its own; in the algebraic mode the pass of the reported reprojection
+    /// error counts them (the same operations again).
     pub(crate) fn finish_if_in_front(
         &self,
         m: &Minimum,
@@ -193,19 +193,35 @@ impl Output<'_> {
             exact_start: m.exact,
             ..*opts
         };
-        // S7's depth test at `m`, when it is still to be made (`front_check`): counted by S9's
-        // first pass when S9 runs from `m` (the default mode without S10), else by S7 now
-        // (S10's passes may skip other points than S7's weights: the caller's weights against
-        // the first-order ones).
+        // S7's depth test at `m`, when it is still to be made (`front_check`): counted by the
+        // first pass of S9 or S10, which start from `m`, in the default mode, by the pass of
+        // the reported error in the algebraic mode. S10's count is S7's when its weights are
+        // S7's (`solve_pixels`: the caller's, or none); otherwise (RANSAC's fits: the
+        // first-order weights for S1-S7, whose zeros may differ where a product underflows)
+        // S7 counts before S10.
         let refines_pixels = self.pixel.is_some_and(|px| px.refine);
-        let s9_counts = front_check && mode == Refinement::Reprojection && !refines_pixels;
+        let s10_weights_are_s7s = self
+            .pixel
+            .is_some_and(|px| match (px.weights, self.weights) {
+                (None, None) => true,
+                (Some(a), Some(b)) => core::ptr::eq(a, b),
+                _ => false,
+            });
+        let refinement_counts = front_check
+            && mode == Refinement::Reprojection
+            && (!refines_pixels || s10_weights_are_s7s);
         let error_counts = front_check && mode == Refinement::Algebraic;
-        if front_check && !s9_counts && !error_counts {
+        if front_check && !refinement_counts && !error_counts {
             if !in_front(self.world, self.weights, self.fr, &m.r, &m.t) {
                 return Ok(None);
             }
             m.cheirality = Some(true);
         }
+        // The test from a first pass's count at `m` (`None`: the pass did not count).
+        let front_at_m = |count: Option<usize>| match count {
+            Some(count) => self.fr.most_in_front(count),
+            None => in_front(self.world, self.weights, self.fr, &m.r, &m.t),
+        };
         let (mut r, mut t) = (m.r, m.t);
         if let Some(o) = s9.filter(|_| refines_pixels) {
             // S10 starts from S9's pose.
@@ -231,6 +247,13 @@ impl Output<'_> {
             if let Some(px) = self.pixel.filter(|px| px.refine) {
                 let po = pixel::refine_pixels(self.world, px, self.fr, &r, &t, opts);
                 let out = &po.out;
+                // S10 ran from `m` (with `front_check`: not from an S9 outcome).
+                if refinement_counts {
+                    if !front_at_m(out.start_in_front) {
+                        return Ok(None);
+                    }
+                    m.cheirality = Some(true);
+                }
                 let finite = out.r.iter().all(|x| x.is_finite())
                     && out.t.iter().all(|x| x.is_finite())
                     && out.e.is_finite();
@@ -263,13 +286,9 @@ impl Output<'_> {
                     opts,
                 ),
             };
-            if s9_counts {
+            if refinement_counts && !refines_pixels {
                 // S9 ran from `m`: its first pass counted the depths there.
-                let front = match out.start_in_front {
-                    Some(count) => self.fr.most_in_front(count),
-                    None => in_front(self.world, self.weights, self.fr, &m.r, &m.t),
-                };
-                if !front {
+                if !front_at_m(out.start_in_front) {
                     return Ok(None);
                 }
                 m.cheirality = Some(true);

@@ -93,3 +93,81 @@ fn reprojection_error_counts_the_points_in_front_as_s7() {
         "{checked} checked, {mixed} mixed"
     );
 }
+
+/// S10's first pass counts the points in front of its start as S7 does (`count_in_front`, to
+/// the unit), with and without weights (zeros among them), through a lens with distortion, at
+/// poses that put about half of the points behind the camera: `finish_with` takes S7's depth
+/// test from it. (It fails if the pass counts a point of weight 0, a lane of the partial block
+/// twice, or uses another depth.)
+#[test]
+fn s10_counts_the_points_in_front_as_s7() {
+    use crate::camera::Camera;
+    use crate::pipeline::options::Loss;
+    use crate::pipeline::pixel::{refine_pixels, PixelInputs};
+    use crate::pipeline::reprojection::ReprojOptions;
+    let cam = Camera::from_colmap("SIMPLE_RADIAL", 640, 480, vec![500.0, 320.0, 240.0, -0.1])
+        .expect("a valid camera");
+    let mut rng = Pcg64::seed_from_u64(0x510_f407);
+    let (mut mixed, mut checked) = (0, 0);
+    for trial in 0..400 {
+        let n = 4 + trial % 37;
+        let world: Vec<Point3<f64>> = (0..n)
+            .map(|_| {
+                Point3::new(
+                    rng.random_range(-3.0..3.0),
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-1.0..1.0),
+                )
+            })
+            .collect();
+        let image: Vec<Point2<f64>> = (0..n)
+            .map(|_| Point2::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5)))
+            .collect();
+        let pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
+        let weights: Option<Vec<f64>> = (trial % 2 == 1).then(|| {
+            (0..n)
+                .map(|k| {
+                    if k % 5 == 2 {
+                        0.0
+                    } else {
+                        rng.random_range(0.1..3.0)
+                    }
+                })
+                .collect()
+        });
+        let Ok(fr) = working_frame(&world, &image, weights.as_deref(), true) else {
+            continue;
+        };
+        let w = Vector3::new(
+            rng.random_range(-3.0..3.0),
+            rng.random_range(-3.0..3.0),
+            rng.random_range(-3.0..3.0),
+        );
+        let r = exp_so3(&w);
+        let t = Vector3::new(
+            rng.random_range(-0.5..0.5),
+            rng.random_range(-0.5..0.5),
+            rng.random_range(-0.3..1.5),
+        );
+        let px = PixelInputs {
+            pixels: &pixels,
+            weights: weights.as_deref(),
+            projector: cam.projector(),
+            loss: Loss::Squared,
+            refine: true,
+            scale: 500.0,
+        };
+        let po = refine_pixels(&world, &px, &fr, &r, &t, &ReprojOptions::default());
+        let a = (r * fr.rw).row(2).transpose() / fr.d;
+        let want = count_in_front(&world, weights.as_deref(), &a, &fr.c, t.z);
+        assert_eq!(po.out.start_in_front, Some(want), "trial {trial}");
+        if want > 0 && want < fr.n_active {
+            mixed += 1;
+        }
+        checked += 1;
+    }
+    assert!(
+        checked > 300 && mixed > 100,
+        "{checked} checked, {mixed} mixed"
+    );
+}
