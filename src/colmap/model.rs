@@ -137,23 +137,10 @@ impl<'m> PointLookup<'m> {
             .ok()
             .filter(|&m| m <= max_table)
             .map(|m| m + 1);
-        // In range below: `id <= max_id < size`.
         let table = match size {
             None => Table::None,
-            Some(size) if many => {
-                let mut table = vec![None; size];
-                for (id, p) in &model.points {
-                    table[*id as usize] = Some(p.xyz);
-                }
-                Table::Coordinates(table)
-            }
-            Some(size) => {
-                let mut table = vec![None; size];
-                for (id, p) in &model.points {
-                    table[*id as usize] = Some(&p.xyz);
-                }
-                Table::References(table)
-            }
+            Some(size) if many => Table::Coordinates(table_of(model, size, |p| p.xyz)),
+            Some(size) => Table::References(table_of(model, size, |p| &p.xyz)),
         };
         PointLookup {
             points: &model.points,
@@ -171,26 +158,37 @@ impl<'m> PointLookup<'m> {
     ) {
         // The lookup chosen once, not per observation.
         match &self.table {
-            Table::Coordinates(t) => gather_with(img, world, pixels, |id| {
-                usize::try_from(id)
-                    .ok()
-                    .and_then(|i| t.get(i))
-                    .copied()
-                    .flatten()
-            }),
-            Table::References(t) => gather_with(img, world, pixels, |id| {
-                usize::try_from(id)
-                    .ok()
-                    .and_then(|i| t.get(i))
-                    .copied()
-                    .flatten()
-                    .copied()
-            }),
+            Table::Coordinates(t) => gather_with(img, world, pixels, |id| entry(t, id)),
+            Table::References(t) => gather_with(img, world, pixels, |id| entry(t, id).copied()),
             Table::None => {
                 gather_with(img, world, pixels, |id| self.points.get(&id).map(|p| p.xyz))
             }
         }
     }
+}
+
+/// A table of `size` entries by point id, `entry(p)` at the id of each point `p` of `model`
+/// (one in-order walk of the map; `size` above the largest id).
+fn table_of<'m, T: Clone>(
+    model: &'m Model,
+    size: usize,
+    entry: impl Fn(&'m Point3D) -> T,
+) -> Vec<Option<T>> {
+    let mut table = vec![None; size];
+    for (id, p) in &model.points {
+        table[*id as usize] = Some(entry(p));
+    }
+    table
+}
+
+/// The entry of point `id` in a table by id (`None` beyond it).
+#[inline(always)]
+fn entry<T: Copy>(table: &[Option<T>], id: u64) -> Option<T> {
+    usize::try_from(id)
+        .ok()
+        .and_then(|i| table.get(i))
+        .copied()
+        .flatten()
 }
 
 /// The observations of `img` with a 3D point that `lookup` finds, appended to `world` and

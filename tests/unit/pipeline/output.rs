@@ -6,6 +6,62 @@ use crate::pipeline::select::count_in_front;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
+/// A problem for the depth counts: world points, image points, weights, their working frame
+/// and a working-frame pose `(R, t)`.
+type DepthCase = (
+    Vec<Point3<f64>>,
+    Vec<Point2<f64>>,
+    Option<Vec<f64>>,
+    WorkingFrame,
+    Matrix3<f64>,
+    Vector3<f64>,
+);
+
+/// A random [`DepthCase`]: `4 + trial % 37` points (every fourth problem nearly flat), weights
+/// in every other problem (every fifth point's 0), and a pose that leaves points on both
+/// sides of the camera; `None` if the points have no working frame.
+fn depth_case(rng: &mut Pcg64, trial: usize) -> Option<DepthCase> {
+    let n = 4 + trial % 37;
+    let world: Vec<Point3<f64>> = (0..n)
+        .map(|_| {
+            Point3::new(
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-2.0..2.0),
+                rng.random_range(-1.0..1.0) * if trial.is_multiple_of(4) { 1e-3 } else { 1.0 },
+            )
+        })
+        .collect();
+    let image: Vec<Point2<f64>> = (0..n)
+        .map(|_| Point2::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5)))
+        .collect();
+    let weights: Option<Vec<f64>> = (trial % 2 == 1).then(|| {
+        (0..n)
+            .map(|k| {
+                if k % 5 == 2 {
+                    0.0
+                } else {
+                    rng.random_range(0.1..3.0)
+                }
+            })
+            .collect()
+    });
+    let fr = working_frame(&world, &image, weights.as_deref(), true).ok()?;
+    let w = Vector3::new(
+        rng.random_range(-3.0..3.0),
+        rng.random_range(-3.0..3.0),
+        rng.random_range(-3.0..3.0),
+    );
+    let r = exp_so3(&w);
+    // Depths of the working frame's points (order 1) about t_z: a small t_z leaves points on
+    // both sides.
+    let t = Vector3::new(
+        rng.random_range(-0.5..0.5),
+        rng.random_range(-0.5..0.5),
+        rng.random_range(-0.3..1.5),
+    );
+    Some((world, image, weights, fr, r, t))
+}
+
 /// The output pass's count of the points in front (the algebraic mode's depth test) is
 /// `count_in_front`'s to the unit, and its error is the world-frame reprojection error to
 /// rounding, with and without weights (zeros among them), at poses that put about half of
@@ -17,46 +73,9 @@ fn reprojection_error_counts_the_points_in_front_as_s7() {
     let mut rng = Pcg64::seed_from_u64(0x07_5eed);
     let (mut mixed, mut checked) = (0, 0);
     for trial in 0..400 {
-        let n = 4 + trial % 37;
-        let world: Vec<Point3<f64>> = (0..n)
-            .map(|_| {
-                Point3::new(
-                    rng.random_range(-3.0..3.0),
-                    rng.random_range(-2.0..2.0),
-                    rng.random_range(-1.0..1.0) * if trial % 4 == 0 { 1e-3 } else { 1.0 },
-                )
-            })
-            .collect();
-        let image: Vec<Point2<f64>> = (0..n)
-            .map(|_| Point2::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5)))
-            .collect();
-        let weights: Option<Vec<f64>> = (trial % 2 == 1).then(|| {
-            (0..n)
-                .map(|k| {
-                    if k % 5 == 2 {
-                        0.0
-                    } else {
-                        rng.random_range(0.1..3.0)
-                    }
-                })
-                .collect()
-        });
-        let Ok(fr) = working_frame(&world, &image, weights.as_deref(), true) else {
+        let Some((world, image, weights, fr, r, t)) = depth_case(&mut rng, trial) else {
             continue;
         };
-        let w = Vector3::new(
-            rng.random_range(-3.0..3.0),
-            rng.random_range(-3.0..3.0),
-            rng.random_range(-3.0..3.0),
-        );
-        let r = exp_so3(&w);
-        // Depths of the working frame's points (order 1) about t_z: a small t_z leaves
-        // points on both sides.
-        let t = Vector3::new(
-            rng.random_range(-0.5..0.5),
-            rng.random_range(-0.5..0.5),
-            rng.random_range(-0.3..1.5),
-        );
         let pose = Composed::new(&r, &fr.rw, fr.d, &t);
         let inv = 1.0 / fr.weight_unit;
         let run = || reprojection_error(&world, &image, weights.as_deref(), inv, &pose, &fr.c);
@@ -110,45 +129,10 @@ fn s10_counts_the_points_in_front_as_s7() {
     let mut rng = Pcg64::seed_from_u64(0x510_f407);
     let (mut mixed, mut checked) = (0, 0);
     for trial in 0..400 {
-        let n = 4 + trial % 37;
-        let world: Vec<Point3<f64>> = (0..n)
-            .map(|_| {
-                Point3::new(
-                    rng.random_range(-3.0..3.0),
-                    rng.random_range(-2.0..2.0),
-                    rng.random_range(-1.0..1.0),
-                )
-            })
-            .collect();
-        let image: Vec<Point2<f64>> = (0..n)
-            .map(|_| Point2::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5)))
-            .collect();
-        let pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
-        let weights: Option<Vec<f64>> = (trial % 2 == 1).then(|| {
-            (0..n)
-                .map(|k| {
-                    if k % 5 == 2 {
-                        0.0
-                    } else {
-                        rng.random_range(0.1..3.0)
-                    }
-                })
-                .collect()
-        });
-        let Ok(fr) = working_frame(&world, &image, weights.as_deref(), true) else {
+        let Some((world, image, weights, fr, r, t)) = depth_case(&mut rng, trial) else {
             continue;
         };
-        let w = Vector3::new(
-            rng.random_range(-3.0..3.0),
-            rng.random_range(-3.0..3.0),
-            rng.random_range(-3.0..3.0),
-        );
-        let r = exp_so3(&w);
-        let t = Vector3::new(
-            rng.random_range(-0.5..0.5),
-            rng.random_range(-0.5..0.5),
-            rng.random_range(-0.3..1.5),
-        );
+        let pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
         let px = PixelInputs {
             pixels: &pixels,
             weights: weights.as_deref(),
