@@ -167,16 +167,16 @@ impl<'m> PointLookup<'m> {
     }
 }
 
-/// A table of `size` entries by point id, `entry(p)` at the id of each point `p` of `model`
+/// A table of `size` entries by point id, `value(p)` at the id of each point `p` of `model`
 /// (one in-order walk of the map; `size` above the largest id).
 fn table_of<'m, T: Clone>(
     model: &'m Model,
     size: usize,
-    entry: impl Fn(&'m Point3D) -> T,
+    value: impl Fn(&'m Point3D) -> T,
 ) -> Vec<Option<T>> {
     let mut table = vec![None; size];
     for (id, p) in &model.points {
-        table[*id as usize] = Some(entry(p));
+        table[*id as usize] = Some(value(p));
     }
     table
 }
