@@ -208,10 +208,8 @@ impl<'m> Registrar<'m> {
     /// made room for every observation (the pages of what is not written are not touched), so
     /// that they do not grow point by point.
     fn gather(&mut self, img: &Image) {
-        self.world.clear();
-        self.pixels.clear();
-        self.world.reserve(img.points2d.len());
-        self.pixels.reserve(img.points2d.len());
+        emptied_with_room(&mut self.world, img.points2d.len());
+        emptied_with_room(&mut self.pixels, img.points2d.len());
         self.points.gather(img, &mut self.world, &mut self.pixels);
     }
 
@@ -273,6 +271,15 @@ impl<'m> Registrar<'m> {
             solution,
             micros,
         })
+    }
+}
+
+/// `buffer` emptied, with room for `n` elements: a larger one allocated afresh when needed
+/// (`reserve` on the emptied vector would copy its old contents over).
+fn emptied_with_room<T>(buffer: &mut Vec<T>, n: usize) {
+    buffer.clear();
+    if buffer.capacity() < n {
+        *buffer = Vec::with_capacity(n);
     }
 }
 

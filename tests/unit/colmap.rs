@@ -240,3 +240,75 @@ fn registration_rmse_is_the_pixel_rmse_of_its_pose() {
     }
     assert_eq!(checked, 12);
 }
+
+/// `PointLookup::gather` appends the observations with a known 3D point, in order, with every
+/// kind of table (coordinates, references, the map), whether the vectors have room for all of
+/// them (written in place), for none (pushed) or for some (written, then pushed), after what
+/// they already hold.
+#[test]
+fn gathering_appends_in_order_whatever_the_room() {
+    use super::model::PointLookup;
+    use nalgebra::{Point2, Point3};
+    let mut model = Model::default();
+    for id in [2u64, 3, 5, 8, 13] {
+        let xyz = Point3::new(id as f64, -(id as f64), 0.5 * id as f64);
+        let p = Point3D {
+            id,
+            xyz,
+            rgb: [0; 3],
+            error: 0.0,
+            track: Vec::new(),
+        };
+        model.points.insert(id, p);
+    }
+    // Known ids, untriangulated keypoints and ids the model does not have, mixed.
+    let ids = [
+        Some(3),
+        None,
+        Some(4),
+        Some(13),
+        Some(2),
+        None,
+        Some(99),
+        Some(8),
+        Some(3),
+    ];
+    let points2d: Vec<_> = ids
+        .iter()
+        .enumerate()
+        .map(|(k, id)| (Point2::new(k as f64, 10.0 * k as f64), *id))
+        .collect();
+    let image = Image {
+        id: 1,
+        q: [1.0, 0.0, 0.0, 0.0],
+        t: nalgebra::Vector3::zeros(),
+        camera_id: 1,
+        name: "1.jpg".into(),
+        points2d,
+    };
+    let held = (Point3::new(7.0, 7.0, 7.0), Point2::new(-1.0, -1.0));
+    let mut want = (vec![held.0], vec![held.1]);
+    for (px, id) in &image.points2d {
+        if let Some(p) = id.and_then(|id| model.points.get(&id)) {
+            want.0.push(p.xyz);
+            want.1.push(*px);
+        }
+    }
+    assert_eq!(want.0.len(), 6);
+    // (largest id for a table, a table of coordinates)
+    for (max_table, many) in [(100, true), (100, false), (0, true)] {
+        let lookup = PointLookup::new(&model, max_table, many);
+        for room in [0, 3, 4, 5, 20] {
+            let mut world = Vec::with_capacity(1 + room);
+            let mut pixels = Vec::with_capacity(1 + room);
+            world.push(held.0);
+            pixels.push(held.1);
+            lookup.gather(&image, &mut world, &mut pixels);
+            assert_eq!(
+                (&world, &pixels),
+                (&want.0, &want.1),
+                "{max_table} {many} {room}"
+            );
+        }
+    }
+}
