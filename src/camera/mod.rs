@@ -69,7 +69,7 @@ mod opencv;
 
 use distortion::{
     iterative_undistortion, radial_chunk, tilt_matrix, with_lens, Distortion, Fisheye, FullOpenCv,
-    Lens, NoDistortion, OpenCv, Radial, RadialLane, SimpleRadial, ThinPrismTilted, RADIAL_CHUNK,
+    Lens, NoDistortion, OpenCv, Radial, SimpleRadial, ThinPrismTilted, RADIAL_CHUNK,
 };
 pub use model::{CameraError, CameraModel, SUPPORTED_MODELS};
 
@@ -515,7 +515,7 @@ impl Projector {
     /// Every pixel through [`Projector::undistort_weighted`] with the model dispatched once,
     /// in bulk: entry `i` of `out` (and of `weights`, when given) becomes pixel `i`'s point
     /// (and weight); `failed(i)` is called, in order, for each pixel that has none (any error
-    /// of `undistort_weighted`), whose entries are left as they were. `out` and `weights` are
+    /// of `undistort_weighted`), whose entries are then unspecified. `out` and `weights` are
     /// as long as `pixels`.
     pub(crate) fn undistort_into(
         &self,
@@ -586,31 +586,26 @@ impl Projector {
             }
             return;
         }
-        let mut lanes = [RadialLane::default(); RADIAL_CHUNK];
+        let mut dets = [0.0; RADIAL_CHUNK];
         for (c, (chunk, outs)) in pixels
             .chunks(RADIAL_CHUNK)
             .zip(out.chunks_mut(RADIAL_CHUNK))
             .enumerate()
         {
-            if self.fisheye {
-                radial_chunk::<L, true>(&lens, self.focal, self.centre, chunk, &mut lanes);
+            let mut undecided = if self.fisheye {
+                radial_chunk::<L, true>(&lens, self.focal, self.centre, chunk, outs, &mut dets)
             } else {
-                radial_chunk::<L, false>(&lens, self.focal, self.centre, chunk, &mut lanes);
+                radial_chunk::<L, false>(&lens, self.focal, self.centre, chunk, outs, &mut dets)
+            };
+            let i0 = c * RADIAL_CHUNK;
+            // weight_of's outcome: the weight |det J| (finite where the lane decided).
+            for (j, d) in dets.iter().take(chunk.len()).enumerate() {
+                weights.set(i0 + j, d.abs());
             }
-            for (j, ((px, lane), o)) in chunk.iter().zip(&lanes).zip(outs).enumerate() {
-                let i = c * RADIAL_CHUNK + j;
-                if !lane.ok {
-                    one(i, *px, o, &mut weights, &mut failed);
-                    continue;
-                }
-                // weight_of's outcome: the weight |det J|, none if it is not finite.
-                let w = lane.det.abs();
-                if w.is_finite() {
-                    *o = Point2::new(lane.u, lane.v);
-                    weights.set(i, w);
-                } else {
-                    failed(i);
-                }
+            while undecided != 0 {
+                let j = undecided.trailing_zeros() as usize;
+                undecided &= undecided - 1;
+                one(i0 + j, chunk[j], &mut outs[j], &mut weights, &mut failed);
             }
         }
     }
