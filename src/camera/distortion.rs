@@ -306,8 +306,8 @@ pub(super) fn iterative_undistortion<L: Lens>(d: &L, x0: (f64, f64)) -> Option<(
 /// [`super::Projector::undistort_weighted`] refuses).
 ///
 /// The map's last evaluation at every lane is kept (the loop ends after evaluating the map
-/// at the final radii, when no lane needs a step), so that the final check does not evaluate
-/// it again; the points are written straight to `out`, and the mask of the undecided lanes
+/// at the final radii: when no lane needs a step, or at the iteration bound), so that the
+/// final check does not evaluate it again; the points are written straight to `out`, and the mask of the undecided lanes
 /// is formed only when some lane is. (Against a loop that stepped before checking and a
 /// final evaluation of its own, with a record of four values per lane: the undistortion of
 /// the bundled model's 6 images 0.955M -> 0.769M instructions.)
@@ -474,8 +474,8 @@ fn radial_chunk_body<L: Lens, const FISHEYE: bool>(
         .zip(dets.chunks_exact_mut(GROUP))
         .enumerate()
     {
-        // The points in the camera's normalised units, coordinate by coordinate (a whole
-        // group through fixed-size arrays, so that the loops are packed).
+        // The points in the camera's normalised units, a whole group through fixed-size
+        // arrays (so that the loops are packed), as are the results below.
         let mut x0 = [[0.0; 2]; GROUP];
         let at = |p: &Point2<f64>| [(p.x - centre.0) / focal.0, (p.y - centre.1) / focal.1];
         if let Ok(b) = <&[Point2<f64>; GROUP]>::try_from(block) {
