@@ -17,7 +17,8 @@
 //! - `register_image`: [`register_image`], a table of the model's 3D points of its own.
 //!
 //! The fastest of the K calls per image is kept, and the images are summed; each row is given
-//! with its ratio to `solve`. R runs (default 1) print a line each.
+//! with its ratio to `solve`, and then with the smallest and largest ratio of one image's
+//! time to that image's solve. R runs (default 1) print two lines each.
 //!
 //! With `--part NAME` (one of the rows), only that row runs, each image once, for
 //! `valgrind --tool=callgrind --toggle-collect='*register_speed*part*'`: the instructions of
@@ -127,6 +128,8 @@ fn main() {
     );
     for _ in 0..runs {
         let mut total = [0.0; ROWS.len()];
+        // Per row, the smallest and largest ratio of an image's time to its solve's.
+        let mut spread = [(f64::INFINITY, 0.0f64); ROWS.len()];
         for im in &images {
             let mut best = [f64::INFINITY; ROWS.len()];
             for _ in 0..calls {
@@ -136,8 +139,9 @@ fn main() {
                     *b = b.min(start.elapsed().as_secs_f64() * 1e6);
                 }
             }
-            for (t, b) in total.iter_mut().zip(best) {
+            for ((t, s), b) in total.iter_mut().zip(&mut spread).zip(best) {
                 *t += b;
+                *s = (s.0.min(b / best[0]), s.1.max(b / best[0]));
             }
         }
         let line: Vec<String> = ROWS
@@ -146,5 +150,12 @@ fn main() {
             .map(|(name, t)| format!("{name} {t:.1} ({:.2}x)", t / total[0]))
             .collect();
         println!("{}", line.join("  "));
+        let line: Vec<String> = ROWS
+            .iter()
+            .zip(spread)
+            .skip(1)
+            .map(|(name, (lo, hi))| format!("{name} {lo:.2}-{hi:.2}x"))
+            .collect();
+        println!("  per image: {}", line.join("  "));
     }
 }
