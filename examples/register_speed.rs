@@ -31,12 +31,13 @@ use nalgebra::{Point2, Point3};
 use std::hint::black_box;
 use std::time::Instant;
 
-/// One image: its id, the correspondences (world points, pixels, pixels undistorted) and
-/// its camera.
+/// One image: its id, the correspondences (world points and pixels), those whose pixel
+/// undistorts (world points and undistorted pixels), and its camera.
 struct Image<'m> {
     id: u32,
     world: Vec<Point3<f64>>,
     pixels: Vec<Point2<f64>>,
+    solve_world: Vec<Point3<f64>>,
     normalised: Vec<Point2<f64>>,
     camera: &'m Camera,
 }
@@ -54,7 +55,7 @@ const ROWS: [&str; 5] = [
 fn part(row: usize, im: &Image, model: &Model, registrar: &mut Registrar, solver: &Solver) {
     match row {
         0 => {
-            black_box(solver.solve(black_box(&im.world), black_box(&im.normalised))).ok();
+            black_box(solver.solve(black_box(&im.solve_world), black_box(&im.normalised))).ok();
         }
         1 => {
             black_box(solver.solve_pixels(black_box(&im.world), black_box(&im.pixels), im.camera))
@@ -72,41 +73,60 @@ fn part(row: usize, im: &Image, model: &Model, registrar: &mut Registrar, solver
     }
 }
 
+/// The message on standard error, and exit status 2.
+fn fail(message: &str) -> ! {
+    eprintln!("register_speed: {message}");
+    std::process::exit(2)
+}
+
 fn main() {
     let mut dir = concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-boxes").to_string();
     let (mut calls, mut runs, mut only) = (30usize, 1usize, None);
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
-        let mut value = |what: &str| args.next().unwrap_or_else(|| panic!("{a}: {what}"));
+        let mut value = || {
+            args.next()
+                .unwrap_or_else(|| fail(&format!("{a} needs a value")))
+        };
+        let count = |v: String| match v.parse::<usize>() {
+            Ok(k) if k > 0 => k,
+            _ => fail(&format!("{a}: a positive number, got {v:?}")),
+        };
         match a.as_str() {
-            "--calls" => calls = value("a number").parse().expect("--calls: a number"),
-            "--runs" => runs = value("a number").parse().expect("--runs: a number"),
+            "--calls" => calls = count(value()),
+            "--runs" => runs = count(value()),
             "--part" => {
-                let name = value("a row");
+                let name = value();
                 only = Some(
                     ROWS.iter()
                         .position(|r| *r == name)
-                        .unwrap_or_else(|| panic!("--part: one of {ROWS:?}")),
+                        .unwrap_or_else(|| fail(&format!("--part: one of {ROWS:?}"))),
                 );
             }
             _ => dir = a,
         }
     }
-    let model = read_model(&dir).unwrap_or_else(|e| panic!("{e}"));
+    let model = read_model(&dir).unwrap_or_else(|e| fail(&e.to_string()));
     let images: Vec<Image> = model
         .images
         .keys()
         .map(|&id| {
-            let (_, camera) = model.image_and_camera(id).unwrap_or_else(|e| panic!("{e}"));
+            let (_, camera) = model
+                .image_and_camera(id)
+                .unwrap_or_else(|e| fail(&e.to_string()));
             let (world, pixels) = model.correspondences(id);
-            let normalised = pixels
+            // The solve's points: those whose pixel undistorts (solve_pixels leaves the
+            // others out too).
+            let (solve_world, normalised) = world
                 .iter()
-                .map(|px| camera.undistort(*px).unwrap_or_else(|e| panic!("{e}")))
-                .collect();
+                .zip(&pixels)
+                .filter_map(|(w, px)| camera.undistort(*px).ok().map(|m| (*w, m)))
+                .unzip();
             Image {
                 id,
                 world,
                 pixels,
+                solve_world,
                 normalised,
                 camera,
             }
