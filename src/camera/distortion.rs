@@ -291,9 +291,10 @@ pub(super) fn iterative_undistortion<L: Lens>(d: &L, x0: (f64, f64)) -> Option<(
 /// [`iterative_undistortion`] of a radial map (`L::RADIAL`) for up to [`GROUP`] points `x0`
 /// at once (the first `n`), into `out` and `dets` (the undistorted point and `det J`; for the
 /// fisheye models, the normalised point and `det J` times that of the equidistant map, as
-/// [`super::Projector::undistort`]'s): Newton's iteration from `x0` stays on the ray of `x0`, so with
-/// `(u, v) = r x0 / |x0|` it is Newton's iteration on the undistorted radius `r`, `r -> r -
-/// (r (1 + g) - |x0|) / (d/dr)` (the generated kernel evaluated at `(r, 0)`), with the same
+/// [`super::Projector::undistort`]'s): Newton's iteration from `x0` stays on the ray of
+/// `x0`, so with `(u, v) = r x0 / |x0|` it is Newton's iteration on the undistorted radius
+/// `r`, `r -> r - (r (1 + g) - |x0|) / (d/dr)` (the generated kernel evaluated at `(r, 0)`),
+/// with the same
 /// trust region (`|step| <= max(0.1 |r|, 0.1)`), the same convergence check at every iterate
 /// (`|r (1 + g) - |x0||` is the length of the residual `(u, v) + D(u, v) - x0`, and
 /// `det J = (d/dr) (1 + g)` at the point), and at most as many steps: the same iterates in
@@ -307,10 +308,11 @@ pub(super) fn iterative_undistortion<L: Lens>(d: &L, x0: (f64, f64)) -> Option<(
 ///
 /// The map's last evaluation at every lane is kept (the loop ends after evaluating the map
 /// at the final radii: when no lane needs a step, or at the iteration bound), so that the
-/// final check does not evaluate it again; the points are written straight to `out`, and the mask of the undecided lanes
-/// is formed only when some lane is. (Against a loop that stepped before checking and a
-/// final evaluation of its own, with a record of four values per lane: the undistortion of
-/// the bundled model's 6 images 0.955M -> 0.769M instructions.)
+/// final check does not evaluate it again; the points are written straight to `out`, and
+/// the mask of the undecided lanes is formed only when some lane is. (Against a loop that
+/// stepped before checking and a final evaluation of its own, with a record of four values
+/// per lane: the undistortion of the bundled model's 6 images 0.955M -> 0.769M
+/// instructions.)
 #[inline(always)]
 pub(super) fn radial_undistortion<L: Lens, const FISHEYE: bool>(
     d: &L,
