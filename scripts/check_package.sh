@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
 # Checks the published form of eopnp, from the repository root:
 #
-#   1. `cargo package` of eopnp-codegen and eopnp together, with verification (each .crate is
-#      unpacked and built on its own). Needs cargo >= 1.90: it packages workspace members that
+#   1. `cargo package` of eopnp-codegen, eopnp and eopnp-cli together, with verification (each
+#      .crate is unpacked and built on its own). Needs cargo >= 1.90: it packages workspace members that
 #      depend on each other by path + version before either is on crates.io, through a
 #      temporary local registry. Older cargo fails with "no matching package named
 #      `eopnp-codegen` found".
 #   2. Unpacks target/package/eopnp-<version>.crate into a temporary directory and builds a
-#      scratch binary crate outside the workspace that depends on it by path with
-#      `default-features = false` (a library user): clean debug and release builds, each with a
-#      fresh target directory, run (the binary solves a synthetic problem and asserts the
-#      pose), and prints their wall times.
+#      scratch binary crate outside the workspace that depends on it by path with its default
+#      features (what `cargo add eopnp` gives a library user): clean debug and release builds,
+#      each with a fresh target directory, run (the binary solves a synthetic problem and
+#      asserts the pose), and prints their wall times. Fails if the scratch crate's dependency
+#      tree holds a crate of the command line (clap, indicatif, serde, serde_json, csv-core).
 #   3. Runs the library's unit tests (the one test target the package keeps; its #[path]
 #      modules and data under tests/unit/, tests/data/ ship) in the unpacked package, with
 #      eopnp-codegen (a dev-dependency) from its unpacked .crate until it is on crates.io.
@@ -57,9 +58,12 @@ version=${pkgid##*[#@]}
 codegen_pkgid=$(cargo pkgid --offline -p eopnp-codegen)
 codegen_version=${codegen_pkgid##*[#@]}
 
-echo "== cargo package -p eopnp-codegen -p eopnp (verified)"
-cargo package "${package_flags[@]}" -p eopnp-codegen -p eopnp
-for crate in "eopnp-codegen-$codegen_version" "eopnp-$version"; do
+cli_pkgid=$(cargo pkgid --offline -p eopnp-cli)
+cli_version=${cli_pkgid##*[#@]}
+
+echo "== cargo package -p eopnp-codegen -p eopnp -p eopnp-cli (verified)"
+cargo package "${package_flags[@]}" -p eopnp-codegen -p eopnp -p eopnp-cli
+for crate in "eopnp-codegen-$codegen_version" "eopnp-$version" "eopnp-cli-$cli_version"; do
   file="$target_dir/package/$crate.crate"
   echo "$crate.crate: $(wc -c <"$file") bytes, $(tar -tzf "$file" | wc -l) files"
 done
@@ -80,7 +84,7 @@ edition = "2021"
 publish = false
 
 [dependencies]
-eopnp = { path = "$tmp/eopnp-$version", default-features = false$2 }
+eopnp = { path = "$tmp/eopnp-$version"$2 }
 nalgebra = "0.35"
 
 $3
@@ -145,9 +149,17 @@ if ! (cd "$tmp/eopnp-$version" && CARGO_TARGET_DIR="$target_dir" cargo test --of
 fi
 grep -E '^test result' "$unit_log"
 
-echo "== scratch crate: eopnp $version by path, default-features = false"
+echo "== scratch crate: eopnp $version by path, default features"
 user="$tmp/scratch"
 scratch_crate "$user" "" ""
+# The library's default features pull in none of the command line's dependencies.
+cli_deps=$(cd "$user" && cargo tree --offline -e normal --prefix none | sed -E 's/ .*//' |
+  grep -xE 'clap|indicatif|serde|serde_json|csv-core' | sort -u || true)
+if [[ -n "$cli_deps" ]]; then
+  echo "eopnp with its default features depends on the command line's crates: $cli_deps" >&2
+  exit 1
+fi
+echo "dependencies of eopnp with its default features: $(cd "$user" && cargo tree --offline -e normal --prefix none | sed -E 's/ .*//' | sort -u | grep -vx eopnp-scratch | tr '\n' ' ')"
 build_and_run "$user" debug
 debug_ms=$built_ms
 build_and_run "$user" release

@@ -36,7 +36,7 @@ target_dir=$(cargo metadata --format-version 1 --no-deps --offline |
 # integration tests. (`cargo build` would build it again: without the dev-dependencies, some
 # dependencies resolve to other features.)
 if $python_only; then
-  cargo build --release --all-features --bin eopnp --quiet
+  cargo build --release -p eopnp-cli --bin eopnp --quiet
 fi
 export EOPNP_CLI="$target_dir/release/eopnp"
 

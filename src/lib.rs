@@ -50,11 +50,6 @@
 #[cfg(feature = "rayon")]
 pub mod batch;
 pub mod camera;
-/// The `eopnp` command line (the binary is a thin `main` around [`cli::run`]). Public so that
-/// the fuzz targets can drive the input parsers; not a stable API.
-#[cfg(feature = "cli")]
-#[doc(hidden)]
-pub mod cli;
 pub mod colmap;
 pub mod covariance;
 mod error;

@@ -973,10 +973,10 @@ pub fn cli_input(data: &[u8]) {
     } else {
         (None, rest)
     };
-    let whole = eopnp::cli::input::parse_problem("fuzz", body, ext, camera);
+    let whole = eopnp_cli::input::parse_problem("fuzz", body, ext, camera);
     check_problem_reading(body, ext, camera, &whole);
     match whole {
-        Ok(problem) => match eopnp::cli::input::solve(&problem, &Solver::default()) {
+        Ok(problem) => match eopnp_cli::solve::solve(&problem, &Solver::default()) {
             Ok(json) => {
                 let v: serde_json::Value = serde_json::from_str(&json).expect("output is JSON");
                 assert!(v["translation"].is_array(), "pose JSON without translation");
@@ -1002,8 +1002,8 @@ pub fn cli_input(data: &[u8]) {
 
 /// Limits small enough for fuzzed inputs to reach: 1 KiB of input, lines (and JSON strings
 /// and numbers) of 48 bytes.
-pub fn small_input_limits() -> eopnp::cli::input::Limits {
-    eopnp::cli::input::Limits {
+pub fn small_input_limits() -> eopnp_cli::input::Limits {
+    eopnp_cli::input::Limits {
         max_input_bytes: 1024,
         max_line_bytes: 48,
     }
@@ -1020,9 +1020,9 @@ fn check_problem_reading(
     body: &[u8],
     ext: Option<&str>,
     camera: Option<&str>,
-    whole: &Result<eopnp::cli::input::Problem, eopnp::cli::Failure>,
+    whole: &Result<eopnp_cli::input::Problem, eopnp_cli::Failure>,
 ) {
-    use eopnp::cli::input::{read_problem_from, Limits};
+    use eopnp_cli::input::{read_problem_from, Limits};
     let capacity = 1 + body.len() % 7;
     let src = || std::io::BufReader::with_capacity(capacity, body);
     let buffered = read_problem_from("fuzz", src(), ext, camera, &Limits::default());

@@ -84,7 +84,7 @@ pub use model::{
     quaternion_to_matrix, Image, Location, Model, ModelError, ModelErrorKind, Point3D,
     RegisterError,
 };
-#[cfg(any(feature = "cli", test))]
+#[cfg(test)]
 pub(crate) use register::pixel_rmse;
 pub use register::{register_image, Registrar, Registration};
 pub use write::{encode_model, write_model, write_model_binary, write_model_with, Overwrite};

@@ -1,4 +1,6 @@
 use super::*;
+use crate::solve::solve;
+use eopnp::Solver;
 
 fn csv_error(body: &str) -> String {
     let text = format!("x,y,X,Y,Z\n{body}\n");

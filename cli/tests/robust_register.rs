@@ -12,7 +12,7 @@ use std::process::Command;
 type Errors = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
 
 fn run(fraction: f64) -> Errors {
-    let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/colmap-boxes");
+    let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../data/colmap-boxes");
     let out = Command::new(env!("CARGO_BIN_EXE_eopnp"))
         .arg("register")
         .arg(&model)

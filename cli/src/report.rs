@@ -5,8 +5,45 @@ use std::path::{Path, PathBuf};
 
 use serde_json::json;
 
-use crate::colmap::{self, Model, ModelFormat, RegisterError, Registration};
-use crate::ransac::RansacStats;
+use eopnp::colmap::{self, Model, ModelFormat, RegisterError, Registration};
+use eopnp::ransac::RansacStats;
+use eopnp::Solution;
+
+/// One image's estimate, as the report shows it: a library [`Registration`], or the outlier
+/// experiment's (`experiment::estimate`), whose pixel errors are over the true correspondences.
+#[derive(Clone, Debug)]
+pub(crate) struct Estimate {
+    /// The image's 2D-3D correspondences.
+    pub(crate) n: usize,
+    /// The correspondences the pose was fitted to (all, or RANSAC's inliers).
+    pub(crate) inliers: usize,
+    /// Correspondences left out: their pixel could not be undistorted.
+    pub(crate) skipped: usize,
+    pub(crate) solution: Solution,
+    pub(crate) ransac: Option<RansacStats>,
+    pub(crate) rotation_error_deg: f64,
+    pub(crate) translation_error_pct: f64,
+    pub(crate) rmse_px: f64,
+    pub(crate) model_rmse_px: f64,
+    pub(crate) micros: f64,
+}
+
+impl From<Registration> for Estimate {
+    fn from(r: Registration) -> Self {
+        Estimate {
+            n: r.n,
+            inliers: r.inliers,
+            skipped: r.skipped,
+            solution: r.solution,
+            ransac: r.ransac,
+            rotation_error_deg: r.rotation_error_deg,
+            translation_error_pct: r.translation_error_pct,
+            rmse_px: r.rmse_px,
+            model_rmse_px: r.model_rmse_px,
+            micros: r.micros,
+        }
+    }
+}
 
 /// Robust-mode extras of one image.
 #[derive(Clone, Debug)]
@@ -18,14 +55,14 @@ pub(super) struct Extra {
     /// Inliers that are true correspondences (`None` without `--ransac`).
     pub(super) true_inliers: Option<usize>,
     /// EOPnP on the true correspondences alone (with `--outliers`).
-    pub(super) floor: Option<Registration>,
+    pub(super) floor: Option<Estimate>,
 }
 
 /// Outcome for one image: the registration or why it failed, and the robust-mode extras.
 pub(super) type Row = (
     u32,
     String,
-    Result<Registration, RegisterError>,
+    Result<Estimate, RegisterError>,
     Option<Extra>,
 );
 

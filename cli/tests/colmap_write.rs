@@ -14,8 +14,8 @@ use eopnp::colmap::{
     Overwrite,
 };
 
-const TEXT_MODEL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-boxes");
-const BIN_MODEL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-boxes-bin");
+const TEXT_MODEL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../data/colmap-boxes");
+const BIN_MODEL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../data/colmap-boxes-bin");
 const FORMATS: [ModelFormat; 2] = [ModelFormat::Text, ModelFormat::Binary];
 
 /// A fresh, empty scratch directory for one test.

@@ -1,14 +1,19 @@
-//! Command-line interface of the `eopnp` binary.
+//! The `eopnp` command line: `eopnp register` (a COLMAP model's poses re-estimated and
+//! compared with the model's) and `eopnp solve` (one problem from a CSV or JSON file). The
+//! binary (`src/main.rs`) is a thin `main` around [`run`]; [`input`] is public for the fuzz
+//! harness (`fuzz/src/harness.rs`). Not a stable library API: use the `eopnp` crate.
 
 mod experiment;
 pub mod input;
 mod register;
 mod report;
+pub mod solve;
+mod source;
 
 use std::io::Write;
 use std::path::PathBuf;
 
-use crate::{Refinement, Solver};
+use eopnp::{Refinement, Solver};
 use clap::{Args, Parser, Subcommand};
 
 /// Camera pose from 2D-3D point correspondences (EOPnP, Zhou & Kaess 2019, plus a
@@ -281,9 +286,13 @@ pub(crate) fn emit(text: &str) -> Result<(), Failure> {
     }
 }
 
-/// The bundled model (`data/colmap-boxes`).
+/// The bundled model (`data/colmap-boxes` of the repository, this crate's parent directory).
 fn bundled_model() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/colmap-boxes")
+    let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    manifest
+        .parent()
+        .unwrap_or(manifest)
+        .join("data/colmap-boxes")
 }
 
 /// Runs the command line.
@@ -294,8 +303,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             let out = a.write.map(|dir| register::Output {
                 dir,
                 format: a.write_format.map(|f| match f {
-                    WriteFormat::Text => crate::colmap::ModelFormat::Text,
-                    WriteFormat::Binary => crate::colmap::ModelFormat::Binary,
+                    WriteFormat::Text => eopnp::colmap::ModelFormat::Text,
+                    WriteFormat::Binary => eopnp::colmap::ModelFormat::Binary,
                 }),
             });
             register::run(&a.model_dir, &a.opts, out.as_ref(), false)
@@ -311,7 +320,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 ..input::Limits::default()
             };
             let problem = input::read_problem(&a.file, a.format, a.camera.as_deref(), &limits)?;
-            let json = input::solve(&problem, &solver)?;
+            let json = solve::solve(&problem, &solver)?;
             emit(&json)
         }
     }

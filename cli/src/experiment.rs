@@ -5,13 +5,15 @@
 
 use std::time::Instant;
 
+use eopnp::camera::Camera;
+use eopnp::colmap::{Model, RegisterError};
+use eopnp::ransac::{Ransac, RansacSolution};
+use eopnp::{Solution, Solver};
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg64;
 
-use crate::colmap::{pixel_rmse, Model, RegisterError, Registration};
-use crate::robust::ransac::{index, Ransac, RansacSolution};
-use crate::{Solution, Solver};
+use crate::report::Estimate;
 
 /// Replaces `round(fraction * N)` of the correspondences' world points, chosen uniformly
 /// without replacement, by wrong ones: a uniformly chosen point of `cloud` plus Gaussian noise
@@ -113,79 +115,101 @@ pub(crate) fn image_problem(
 
 /// RANSAC ([`Ransac::estimate_pixels`]) on the image's correspondences, optionally with
 /// injected outliers ([`image_problem`]).
-/// `registration.inliers` is the RANSAC inlier count; the pixel RMSEs are over the true
+/// `estimate.inliers` is the RANSAC inlier count; the pixel RMSEs are over the true
 /// correspondences.
 ///
 /// # Errors
-/// As [`crate::colmap::register_image`].
+/// As [`eopnp::colmap::register_image`].
 pub(crate) fn ransac_on_problem(
     model: &Model,
     image_id: u32,
     problem: &ImageProblem,
     ransac: &Ransac,
     solver: &Solver,
-) -> Result<(Registration, RansacSolution), RegisterError> {
+) -> Result<(Estimate, RansacSolution), RegisterError> {
     let (_, cam) = model.image_and_camera(image_id)?;
     let sol = ransac.estimate_pixels(solver, cam, &problem.world, &problem.pixels)?;
-    let mut reg = registration(model, image_id, problem, &sol.solution, sol.num_inliers)?;
+    let mut reg = estimate(model, image_id, problem, &sol.solution, sol.num_inliers)?;
     reg.micros = sol.stats.micros;
     reg.ransac = Some(sol.stats);
     Ok((reg, sol))
 }
 
-/// A [`Registration`] of `solution` for image `image_id` (errors against the model's pose,
-/// pixel RMSEs over the true correspondences of `problem`).
+/// The [`Estimate`] of `solution` for image `image_id`: errors against the model's pose (as
+/// the library's `Registration` measures them), pixel RMSEs over the true correspondences of
+/// `problem`.
 ///
 /// # Errors
 /// [`RegisterError::UnknownImage`], [`RegisterError::UnknownCamera`].
-pub(crate) fn registration(
+pub(crate) fn estimate(
     model: &Model,
     image_id: u32,
     problem: &ImageProblem,
     solution: &Solution,
     inliers: usize,
-) -> Result<Registration, RegisterError> {
+) -> Result<Estimate, RegisterError> {
     let (img, cam) = model.image_and_camera(image_id)?;
     let (r_ref, t_ref) = img.pose();
     let r = solution.rotation;
     let t = solution.pose.translation.vector;
-    let rmse = |r: &Matrix3<f64>, t: &Vector3<f64>| {
-        pixel_rmse(
-            cam,
-            &problem.world,
-            &problem.pixels,
-            Some(&problem.truth),
-            r,
-            t,
-        )
-    };
-    Ok(Registration {
-        image_id,
-        name: img.name.clone(),
+    let rmse = |r: &Matrix3<f64>, t: &Vector3<f64>| true_rmse(cam, problem, r, t);
+    Ok(Estimate {
         n: problem.world.len(),
         inliers,
         skipped: solution.skipped,
         ransac: None,
         solution: *solution,
-        rotation_error_deg: crate::metrics::rotation_error_deg(&r, &r_ref),
-        translation_error_pct: crate::metrics::translation_error_pct(&t, &t_ref),
+        rotation_error_deg: rotation_error_deg(&r, &r_ref),
+        translation_error_pct: 100.0 * (t - t_ref).norm() / t_ref.norm(),
         rmse_px: rmse(&r, &t),
         model_rmse_px: rmse(&r_ref, &t_ref),
         micros: 0.0,
     })
 }
 
+/// The largest angle, in degrees, between corresponding columns of two rotations, each as
+/// `atan2(|a x b|, a . b)`: the paper's metric, as the library reports it.
+fn rotation_error_deg(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    (0..3)
+        .map(|k| {
+            let (x, y) = (a.column(k), b.column(k));
+            x.cross(&y).norm().atan2(x.dot(&y))
+        })
+        .fold(0.0, f64::max)
+        .to_degrees()
+}
+
+/// RMS pixel reprojection error of pose `(r, t)` through the camera over the true
+/// correspondences of `problem` (NaN if there is none).
+fn true_rmse(cam: &Camera, problem: &ImageProblem, r: &Matrix3<f64>, t: &Vector3<f64>) -> f64 {
+    let (mut sum, mut count) = (0.0, 0usize);
+    for ((x, u), ok) in problem.world.iter().zip(&problem.pixels).zip(&problem.truth) {
+        if *ok {
+            let p = r * x.coords + t;
+            sum += (cam.project(Point2::new(p.x / p.z, p.y / p.z)) - u).norm_squared();
+            count += 1;
+        }
+    }
+    (sum / count as f64).sqrt()
+}
+
+/// A uniform index in `0..n` from one draw (Lemire's multiply-shift), as the library's RANSAC
+/// draws its samples.
+fn index(rng: &mut Pcg64, n: usize) -> usize {
+    ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
+}
+
 /// The floor of an image problem: EOPnP ([`Solver::solve_pixels`] with `solver`) on the
-/// true correspondences only, as a [`Registration`].
+/// true correspondences only, as an [`Estimate`].
 ///
 /// # Errors
-/// As [`crate::colmap::register_image`].
+/// As [`eopnp::colmap::register_image`].
 pub(crate) fn floor(
     model: &Model,
     image_id: u32,
     problem: &ImageProblem,
     solver: &Solver,
-) -> Result<Registration, RegisterError> {
+) -> Result<Estimate, RegisterError> {
     let (_, cam) = model.image_and_camera(image_id)?;
     let (mut w, mut p) = (Vec::new(), Vec::new());
     for ((x, px), ok) in problem
@@ -202,7 +226,7 @@ pub(crate) fn floor(
     let start = Instant::now();
     let sol = solver.solve_pixels(&w, &p, cam)?;
     let micros = start.elapsed().as_secs_f64() * 1e6;
-    let mut reg = registration(model, image_id, problem, &sol, sol.used)?;
+    let mut reg = estimate(model, image_id, problem, &sol, sol.used)?;
     reg.micros = micros;
     Ok(reg)
 }

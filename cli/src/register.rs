@@ -6,14 +6,12 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::experiment::{self, ImageProblem, Outliers};
-use crate::colmap::{
-    self, Limit, Model, ModelErrorKind, ModelFormat, RegisterError, Registrar, Registration,
-};
-use crate::ransac::Ransac;
+use eopnp::colmap::{self, Limit, Model, ModelErrorKind, ModelFormat, RegisterError, Registrar};
+use eopnp::ransac::Ransac;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
-use super::report::{format_name, to_json, to_table, Extra, Row, Written};
+use super::report::{format_name, to_json, to_table, Estimate, Extra, Row, Written};
 use super::{emit, Failure, RegisterOptions};
 
 /// Show the progress bar once a run has taken this long (short runs never show one).
@@ -46,14 +44,18 @@ fn estimate(
     model: &Model,
     image_id: u32,
     opts: &RegisterOptions,
-) -> (Result<Registration, RegisterError>, Option<Extra>) {
+) -> (Result<Estimate, RegisterError>, Option<Extra>) {
     // The solve is deterministic; the time reported is the best of three runs, as a shared
     // machine's scheduling noise otherwise dominates single ~1 ms measurements.
     let solver = opts.solver();
     let spec = opts.outlier_spec();
     if spec.is_none() {
         let ransac = opts.ransac.then(|| opts.ransac_options());
-        let mut run = || registrar.register(image_id, &solver, ransac.as_ref());
+        let mut run = || {
+            registrar
+                .register(image_id, &solver, ransac.as_ref())
+                .map(Estimate::from)
+        };
         let result = run().and_then(|mut best| {
             for _ in 0..2 {
                 best.micros = best.micros.min(run()?.micros);
@@ -107,8 +109,8 @@ fn plain_on_problem(
     model: &Model,
     image_id: u32,
     problem: &ImageProblem,
-    solver: &crate::Solver,
-) -> Result<Registration, RegisterError> {
+    solver: &eopnp::Solver,
+) -> Result<Estimate, RegisterError> {
     let cam = model
         .images
         .get(&image_id)
@@ -123,7 +125,7 @@ fn plain_on_problem(
         sol = Some(s);
     }
     let s = sol.ok_or(RegisterError::UnknownImage(image_id))?;
-    let mut reg = experiment::registration(model, image_id, problem, &s, s.used)?;
+    let mut reg = experiment::estimate(model, image_id, problem, &s, s.used)?;
     reg.micros = best;
     Ok(reg)
 }

@@ -10,7 +10,7 @@
 //! Exit codes: 0 success, 1 the solver failed on valid input, 2 bad input (unreadable or
 //! malformed file, with the line number and the reason; bad arguments).
 
-use eopnp::cli;
+use eopnp_cli as cli;
 
 use std::process::ExitCode;
 

@@ -45,7 +45,7 @@ fn stderr(o: &Output) -> String {
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
+        .join("../data")
         .join(name)
 }
 

@@ -10,7 +10,7 @@
 //! The harnesses themselves live in `fuzz/src/harness.rs`; the coverage-guided runs are
 //! `cargo +nightly fuzz run <target>` in `fuzz/` (see the README).
 
-#[path = "../fuzz/src/harness.rs"]
+#[path = "../../fuzz/src/harness.rs"]
 #[allow(dead_code)]
 mod harness;
 
@@ -30,7 +30,7 @@ const TARGETS: [Target; 6] = [
 ];
 
 fn fuzz_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz")
 }
 
 fn files(dir: &Path) -> Vec<PathBuf> {
@@ -191,7 +191,7 @@ fn seeds_reach_the_parsers_and_registration() {
             (None, &data[1..])
         };
         let ext = [Some("json"), Some("csv"), Some("txt"), None][usize::from(mode & 3)];
-        eopnp::cli::input::parse_problem(name, body, ext, camera)
+        eopnp_cli::input::parse_problem(name, body, ext, camera)
     };
     for name in [
         "csv",
@@ -206,7 +206,7 @@ fn seeds_reach_the_parsers_and_registration() {
         "json-bom",
     ] {
         let p = cli_input(name).unwrap_or_else(|f| panic!("{name}: {}", f.message));
-        let json = eopnp::cli::input::solve(&p, &eopnp::Solver::default())
+        let json = eopnp_cli::solve::solve(&p, &eopnp::Solver::default())
             .unwrap_or_else(|f| panic!("{name}: {}", f.message));
         let v: serde_json::Value = serde_json::from_str(&json).unwrap();
         assert_eq!(v["n"], 8, "{name}");
@@ -280,7 +280,7 @@ fn seeds_reach_the_writer() {
 #[test]
 fn negative_algebraic_cost_huge_image_coordinate() {
     harness::solve(include_bytes!(
-        "../fuzz/regressions/solve/negative-algebraic-cost-huge-image-coordinate"
+        "../../fuzz/regressions/solve/negative-algebraic-cost-huge-image-coordinate"
     ));
 }
 
@@ -291,7 +291,7 @@ fn negative_algebraic_cost_huge_image_coordinate() {
 #[test]
 fn infinite_rmse_point_in_focal_plane() {
     harness::solve(include_bytes!(
-        "../fuzz/regressions/solve/infinite-rmse-point-in-focal-plane"
+        "../../fuzz/regressions/solve/infinite-rmse-point-in-focal-plane"
     ));
 }
 
@@ -301,7 +301,7 @@ fn infinite_rmse_point_in_focal_plane() {
 #[test]
 fn infinite_cost_huge_weights() {
     harness::solve(include_bytes!(
-        "../fuzz/regressions/solve/infinite-cost-huge-weights"
+        "../../fuzz/regressions/solve/infinite-cost-huge-weights"
     ));
 }
 
@@ -314,7 +314,7 @@ fn infinite_cost_huge_weights() {
 #[test]
 fn non_orthonormal_p3p_near_collinear_triple() {
     harness::solve(include_bytes!(
-        "../fuzz/regressions/solve/non-orthonormal-p3p-near-collinear-triple"
+        "../../fuzz/regressions/solve/non-orthonormal-p3p-near-collinear-triple"
     ));
 }
 
@@ -326,7 +326,7 @@ fn non_orthonormal_p3p_near_collinear_triple() {
 #[test]
 fn infinite_rmse_robust_loss_huge_residuals() {
     harness::solve(include_bytes!(
-        "../fuzz/regressions/solve/infinite-rmse-robust-loss-huge-residuals"
+        "../../fuzz/regressions/solve/infinite-rmse-robust-loss-huge-residuals"
     ));
 }
 
@@ -336,6 +336,6 @@ fn infinite_rmse_robust_loss_huge_residuals() {
 #[test]
 fn huge_pixel_registration_has_finite_cost() {
     harness::colmap_binary(include_bytes!(
-        "../fuzz/regressions/colmap_binary/huge-pixel-infinite-cost"
+        "../../fuzz/regressions/colmap_binary/huge-pixel-infinite-cost"
     ));
 }

@@ -31,7 +31,7 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use eopnp::camera::{Camera, CameraModel};
-use eopnp::cli::input::{read_problem, read_problem_from, Limits};
+use eopnp_cli::input::{read_problem, read_problem_from, Limits};
 use eopnp::colmap::{
     parse_model_with_limits, read_model, read_model_with_limits, write_model, Image, Limit, Model,
     ModelErrorKind, ModelFormat, Point3D, ReadLimits,
