@@ -9,7 +9,7 @@ mod support;
 
 use common::Scene;
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
-use eopnp::batch::Problem;
+use eopnp::Problem;
 use eopnp::Solver;
 use support::{config, problems};
 

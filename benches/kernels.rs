@@ -1,4 +1,4 @@
-//! Every generated kernel of `eopnp::kernels`. Inputs: M (and the planar restriction of M, and
+//! Every generated kernel of `eopnp::internals::kernels`. Inputs: M (and the planar restriction of M, and
 //! the cost coefficients) from real problems of the paper protocol; the case-2/3/4 inputs are
 //! fixed pseudo-random numbers in [-1, 1] (the kernels are straight-line code, so their time
 //! does not depend on the values). 64 inputs per kernel, cycled inside the timed closure.
@@ -7,7 +7,7 @@ use eopnp_testkit as common;
 mod support;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use eopnp::kernels;
+use eopnp::internals::kernels;
 use rand::{Rng, SeedableRng};
 use support::config;
 

@@ -126,11 +126,11 @@ fn pixels(c: &mut Criterion) {
                 b.iter(|| {
                     let p = &set[i % set.len()];
                     i = i.wrapping_add(1);
-                    black_box(solver.solve_pixels(
+                    black_box(solver.solve(&eopnp::Problem::pixels(
                         black_box(&p.world),
                         black_box(&p.pixels),
                         &camera,
-                    ))
+                    )))
                 });
             });
         }
@@ -142,7 +142,10 @@ fn pixels(c: &mut Criterion) {
                 b.iter(|| {
                     let p = &set[i % set.len()];
                     i = i.wrapping_add(1);
-                    black_box(solver.solve(black_box(&p.world), black_box(&p.normalised)))
+                    black_box(solver.solve(&eopnp::Problem::normalised(
+                        black_box(&p.world),
+                        black_box(&p.normalised),
+                    )))
                 });
             });
         }

@@ -2,6 +2,7 @@
 //! algebraic refinement; `Solver::refine` from a nearby prior (N = 10, 100, 1000). Each
 //! benchmark cycles through a fixed, pre-generated problem set.
 
+use eopnp::Problem;
 use eopnp_testkit as common;
 mod support;
 
@@ -30,7 +31,10 @@ fn full_solve(c: &mut Criterion) {
                     b.iter(|| {
                         let p = &set[i % set.len()];
                         i = i.wrapping_add(1);
-                        black_box(solver.solve(black_box(&p.world), black_box(&p.image)))
+                        black_box(solver.solve(&Problem::normalised(
+                            black_box(&p.world),
+                            black_box(&p.image),
+                        )))
                     });
                 });
             }
@@ -64,7 +68,10 @@ fn refine_from_prior(c: &mut Criterion) {
                 let k = i % set.len();
                 i = i.wrapping_add(1);
                 let p = &set[k];
-                black_box(solver.refine(black_box(&p.world), black_box(&p.image), &priors[k]))
+                black_box(solver.refine(
+                    &Problem::normalised(black_box(&p.world), black_box(&p.image)),
+                    &priors[k],
+                ))
             });
         });
     }

@@ -63,20 +63,20 @@ fn run(
                 }
                 None => row.fails[k] += 1,
             };
-        match default.solve(&p.world, &p.image) {
+        match default.solve(&eopnp::Problem::normalised(&p.world, &p.image)) {
             Ok(s) => {
                 *wins.entry(format!("{:?}", s.source)).or_default() += 1;
-                record(0, Some((s.rotation, s.pose.translation.vector)));
+                record(0, Some((s.rotation, s.translation)));
             }
             Err(_) => record(0, None),
         }
-        if let Ok(s) = exhaustive.solve(&p.world, &p.image) {
+        if let Ok(s) = exhaustive.solve(&eopnp::Problem::normalised(&p.world, &p.image)) {
             *wins_exhaustive
                 .entry(format!("{:?}", s.source))
                 .or_default() += 1;
         }
-        match algebraic.solve(&p.world, &p.image) {
-            Ok(s) => record(1, Some((s.rotation, s.pose.translation.vector))),
+        match algebraic.solve(&eopnp::Problem::normalised(&p.world, &p.image)) {
+            Ok(s) => record(1, Some((s.rotation, s.translation))),
             Err(_) => record(1, None),
         }
         record(2, Some((lm.r, lm.t)));

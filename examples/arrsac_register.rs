@@ -32,7 +32,7 @@ use std::time::Instant;
 
 use arrsac::Arrsac;
 use eopnp::camera::Camera;
-use eopnp::metrics::{rotation_error_deg, translation_error_pct};
+use eopnp::internals::metrics::{rotation_error_deg, translation_error_pct};
 use eopnp::ransac::consensus::{Correspondence, P3pEstimator};
 use eopnp::ransac::Ransac;
 use eopnp::Solver;
@@ -172,14 +172,12 @@ fn run(method: Method, problem: &Problem, seed: u64) -> (Option<Pose>, f64) {
     let solver = Solver::default();
     if method == Method::Eopnp {
         let ransac = Ransac::default().threshold_px(THRESHOLD_PX).seed(seed);
-        return match ransac.estimate_pixels(
+        return match ransac.estimate(
             &solver,
-            &problem.camera,
-            &problem.world,
-            &problem.pixels,
+            &eopnp::Problem::pixels(&problem.world, &problem.pixels, &problem.camera),
         ) {
             Ok(sol) => (
-                Some((sol.solution.rotation, sol.solution.pose.translation.vector)),
+                Some((sol.solution.rotation, sol.solution.translation)),
                 sol.stats.micros * 1e-3,
             ),
             Err(_) => (None, f64::NAN),
@@ -193,7 +191,7 @@ fn run(method: Method, problem: &Problem, seed: u64) -> (Option<Pose>, f64) {
 /// The ARRSAC rows of [`run`].
 fn run_arrsac(method: Method, problem: &Problem, seed: u64, solver: &Solver) -> Option<Pose> {
     let cam = &problem.camera;
-    let (fx, fy) = cam.intrinsics_scale();
+    let (fx, fy) = cam.focal_lengths();
     // Undistort; a pixel that cannot be undistorted is dropped (as `Ransac::estimate_pixels`).
     let mut world: Vec<Point3<f64>> = Vec::new();
     let mut pixels: Vec<Point2<f64>> = Vec::new();
@@ -239,8 +237,8 @@ fn run_arrsac(method: Method, problem: &Problem, seed: u64, solver: &Solver) -> 
     };
     let w: Vec<Point3<f64>> = inliers.iter().map(|&i| world[i]).collect();
     let p: Vec<Point2<f64>> = inliers.iter().map(|&i| pixels[i]).collect();
-    let sol = solver.solve_pixels(&w, &p, cam).ok()?;
-    Some((sol.rotation, sol.pose.translation.vector))
+    let sol = solver.solve(&eopnp::Problem::pixels(&w, &p, cam)).ok()?;
+    Some((sol.rotation, sol.translation))
 }
 
 fn median(v: &mut [f64]) -> f64 {

@@ -21,10 +21,10 @@ fn main() {
     let cam = Camera::pinhole(common::F, common::F, 320.0, 240.0).unwrap();
     let sol = Solver::default()
         .covariance(Some(NoiseModel::Sigma(1.0)))
-        .solve_pixels(&p.world, &p.pixels, &cam)
+        .solve(&eopnp::Problem::pixels(&p.world, &p.pixels, &cam))
         .unwrap();
     let c = sol.covariance.unwrap().matrix;
-    let t = sol.pose.translation.vector;
+    let t = sol.translation;
     let json = serde_json::json!({
         "camera": {"model": "PINHOLE", "width": 640, "height": 480,
                    "params": [common::F, common::F, 320.0, 240.0]},

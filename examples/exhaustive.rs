@@ -58,8 +58,8 @@ fn main() {
                         rotation: RotationKind::Uniform,
                         seed,
                     });
-                    let a = default.solve(&p.world, &p.image);
-                    let b = exhaustive.solve(&p.world, &p.image);
+                    let a = default.solve(&eopnp::Problem::normalised(&p.world, &p.image));
+                    let b = exhaustive.solve(&eopnp::Problem::normalised(&p.world, &p.image));
                     match (&a, &b) {
                         (Ok(a), Ok(b)) => {
                             let d = rot_err_deg(&a.rotation, &b.rotation);

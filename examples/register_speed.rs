@@ -25,7 +25,8 @@
 //! that row over the model's images.
 
 use eopnp::camera::Camera;
-use eopnp::colmap::{read_model, register_image, Model, Registrar};
+use eopnp::colmap::{read_model, register_image, Model, ReadOptions, Registrar};
+use eopnp::Problem;
 use eopnp::Solver;
 use nalgebra::{Point2, Point3};
 use std::hint::black_box;
@@ -55,11 +56,19 @@ const ROWS: [&str; 5] = [
 fn part(row: usize, im: &Image, model: &Model, registrar: &mut Registrar, solver: &Solver) {
     match row {
         0 => {
-            black_box(solver.solve(black_box(&im.solve_world), black_box(&im.normalised))).ok();
+            black_box(solver.solve(&Problem::normalised(
+                black_box(&im.solve_world),
+                black_box(&im.normalised),
+            )))
+            .ok();
         }
         1 => {
-            black_box(solver.solve_pixels(black_box(&im.world), black_box(&im.pixels), im.camera))
-                .ok();
+            black_box(solver.solve(&Problem::pixels(
+                black_box(&im.world),
+                black_box(&im.pixels),
+                im.camera,
+            )))
+            .ok();
         }
         2 => {
             black_box(registrar.correspondences(black_box(im.id))).ok();
@@ -106,7 +115,7 @@ fn main() {
             _ => dir = a,
         }
     }
-    let model = read_model(&dir).unwrap_or_else(|e| fail(&e.to_string()));
+    let model = read_model(&dir, &ReadOptions::default()).unwrap_or_else(|e| fail(&e.to_string()));
     let images: Vec<Image> = model
         .images
         .keys()

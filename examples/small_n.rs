@@ -20,7 +20,11 @@ use std::collections::BTreeMap;
 fn solve_all_problems(solver: &Solver, problems: &[Problem]) -> Vec<Option<Solution>> {
     problems
         .iter()
-        .map(|p| solver.solve(&p.world, &p.image).ok())
+        .map(|p| {
+            solver
+                .solve(&eopnp::Problem::normalised(&p.world, &p.image))
+                .ok()
+        })
         .collect()
 }
 

@@ -32,8 +32,8 @@ pub enum NoiseModel {
     /// image units (pixels for pixel input) and `n` the points of weight > 0.
     Estimated,
     /// The standard deviation of each image coordinate, in the units of the observations
-    /// (pixels for [`crate::Solver::solve_pixels`], normalised units for
-    /// [`crate::Solver::solve`]; pycolmap assumes 1 pixel).
+    /// (pixels for [`crate::Problem::pixels`], normalised units for
+    /// [`crate::Problem::normalised`]; pycolmap assumes 1 pixel).
     Sigma(f64),
 }
 

@@ -35,7 +35,7 @@
 //! checked reference (the solver works in a chart centred on each iterate instead).
 //!
 //! ```
-//! use eopnp::kernels::{cost, cost_coefficients};
+//! use eopnp::internals::kernels::{cost, cost_coefficients};
 //!
 //! // M = I (upper triangle, row-major): f(R) = |vec(R)|^2 = 3 for every rotation, so the
 //! // cost polynomial C(s) = (1 + |s|^2)^2 f(R(s)) = 3 (1 + |s|^2)^2.

@@ -12,12 +12,13 @@ use crate::pipeline::{
     self, Loss, Options, PixelInputs, PlanarDetection, Refinement, ReprojOptions, Solution,
     Solutions,
 };
+use crate::problem::{Observations, Problem};
 
 /// Solver options, as a builder. `Solver::default()` is the recommended configuration: EOPnP
 /// followed by the maximum-likelihood refinement of the reprojection error.
 ///
 /// ```
-/// use eopnp::{PlanarDetection, Refinement, Solver};
+/// use eopnp::{PlanarDetection, Problem, Refinement, Solver};
 /// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
 /// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
 /// # let t = Vector3::new(0.1, -0.2, 6.0);
@@ -35,8 +36,8 @@ use crate::pipeline::{
 ///     .refinement(Refinement::Algebraic)
 ///     .planar_detection(PlanarDetection::Auto)
 ///     .newton_iterations(100);
-/// let sol = solver.solve(&world, &image)?;
-/// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+/// let sol = solver.solve(&Problem::normalised(&world, &image))?;
+/// assert!((sol.translation - t).norm() < 1e-9);
 /// # Ok::<(), eopnp::PnpError>(())
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -53,7 +54,7 @@ impl Solver {
     ///
     /// ```
     /// use eopnp::covariance::NoiseModel;
-    /// use eopnp::Solver;
+    /// use eopnp::{Problem, Solver};
     /// # use nalgebra::{Point2, Point3, Vector3};
     /// # let t = Vector3::new(0.1, -0.2, 6.0);
     /// # let world = [
@@ -66,7 +67,7 @@ impl Solver {
     /// #     .collect();
     ///
     /// // Image noise of 1 px at a focal length of 800 px, in normalised units.
-    /// let sol = Solver::default().covariance(Some(NoiseModel::Sigma(1.0 / 800.0))).solve(&world, &image)?;
+    /// let sol = Solver::default().covariance(Some(NoiseModel::Sigma(1.0 / 800.0))).solve(&Problem::normalised(&world, &image))?;
     /// let cov = sol.covariance.unwrap().matrix;
     /// // Standard deviation of the depth, in world units.
     /// assert!(cov[(5, 5)].sqrt() < 0.05);
@@ -138,13 +139,13 @@ impl Solver {
     /// The loss of the final refinement ([`Loss`]; default [`Loss::Squared`], the
     /// maximum-likelihood pose for Gaussian noise). A robust loss ([`Loss::Huber`],
     /// [`Loss::Cauchy`]) is applied by S10 to the pixel residuals through the camera (pixel
-    /// input: [`Solver::solve_pixels`], [`Solver::refine_pixels`], RANSAC's fits) or to the
+    /// input: [`Problem::pixels`], RANSAC's fits) or to the
     /// normalised residuals (normalised input), after S9. An unusable scale (not positive,
     /// or with a square outside the normal f64 range) is [`PnpError::InvalidOption`]
     /// (`"loss"`) at solve time.
     ///
     /// ```
-    /// use eopnp::{Loss, Solver};
+    /// use eopnp::{Loss, Problem, Solver};
     /// # use nalgebra::{Point2, Point3, Vector3};
     /// # let t = Vector3::new(0.1, -0.2, 6.0);
     /// # let mut world = vec![
@@ -158,9 +159,9 @@ impl Solver {
     /// #     .collect();
     /// // One gross outlier (0.05 normalised units, 40 px at f = 800).
     /// image[7].x += 0.05;
-    /// let plain = Solver::default().solve(&world, &image)?;
-    /// let robust = Solver::default().loss(Loss::Cauchy(1e-3)).solve(&world, &image)?;
-    /// let err = |s: &eopnp::Solution| (s.pose.translation.vector - t).norm();
+    /// let plain = Solver::default().solve(&Problem::normalised(&world, &image))?;
+    /// let robust = Solver::default().loss(Loss::Cauchy(1e-3)).solve(&Problem::normalised(&world, &image))?;
+    /// let err = |s: &eopnp::Solution| (s.translation - t).norm();
     /// assert!(err(&robust) < 0.1 * err(&plain));
     /// # Ok::<(), eopnp::PnpError>(())
     /// ```
@@ -170,10 +171,29 @@ impl Solver {
         self
     }
 
-    /// The pose from `world` points and their normalised image points `(x/z, y/z)`.
+    /// The pose of a [`Problem`]: EOPnP's global search, then (in the default mode) the
+    /// maximum-likelihood refinement.
+    ///
+    /// In the default mode ([`Refinement::Reprojection`]) the returned pose minimises the
+    /// (weighted) sum of squared reprojection residuals: of the normalised image points for
+    /// [`Problem::normalised`], of the pixels through the camera model, distortion included,
+    /// for [`Problem::pixels`] (with a robust [`Solver::loss`], the sum of the loss of the
+    /// squared residuals). [`Solution::cost`] is that sum, [`Solution::reprojection_rmse`] the
+    /// RMS residual in normalised units (for pixels: divided by `max(fx, fy)`).
+    ///
+    /// Pixels are first undistorted to normalised coordinates ([`Camera::undistort`]); a pixel
+    /// that cannot be undistorted is left out and counted in [`Solution::skipped`]. The search
+    /// on the undistorted points weights the x and y residual rows by `fx^2` and `fy^2`
+    /// (normalised): exactly the pixel error for a pinhole camera. With distortion (or a robust
+    /// loss) it gives the start of a last Levenberg-Marquardt refinement of the pixel error
+    /// through the camera model itself (the `refine_pixels` stage of docs/algorithm.md). In
+    /// [`Refinement::Algebraic`] mode, where the search's pose is the result, the residual of
+    /// point `i` is also weighted by `|det J_i| / (fx fy)`, `J_i` the Jacobian of
+    /// [`Camera::project`] at the point: to first order the pixel error.
     ///
     /// ```
-    /// use eopnp::Solver;
+    /// use eopnp::camera::Camera;
+    /// use eopnp::{Problem, Solver};
     /// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
     /// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
     /// # let t = Vector3::new(0.1, -0.2, 6.0);
@@ -186,82 +206,39 @@ impl Solver {
     /// #     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
     /// #     .collect();
     ///
-    /// let sol = Solver::default().solve(&world, &image)?;
-    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+    /// let sol = Solver::default().solve(&Problem::normalised(&world, &image))?;
+    /// assert!((sol.translation - t).norm() < 1e-9);
     /// assert!(sol.cheirality_ok && !sol.degenerate);
-    /// # Ok::<(), eopnp::PnpError>(())
-    /// ```
     ///
-    /// # Errors
-    /// [`PnpError`] for too few points, mismatched lengths, non-finite values and degenerate
-    /// configurations; see its variants.
-    pub fn solve(
-        &self,
-        world: &[Point3<f64>],
-        image: &[Point2<f64>],
-    ) -> Result<Solution, PnpError> {
-        let px = self.normalised_loss(image, None);
-        let sol = self.run(world, image, None, &self.opts.reproj, px.as_ref(), None)?;
-        Ok(self.with_covariance(sol, world, image, &|_| 1.0, Metric::Identity))
-    }
-
-    /// As [`Solver::solve`] with a non-negative weight per point (a point of weight 0 is
-    /// ignored; weights scale each point's squared residuals).
-    ///
-    /// ```
-    /// use eopnp::Solver;
-    /// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
-    /// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
-    /// # let t = Vector3::new(0.1, -0.2, 6.0);
-    /// # let world = [
-    /// #     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
-    /// #     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
-    /// # ];
-    /// # let image: Vec<Point2<f64>> = world
-    /// #     .iter()
-    /// #     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
-    /// #     .collect();
-    ///
-    /// // A wrong seventh point with weight 0 changes nothing.
+    /// // Pixels through a camera with lens distortion; a wrong seventh correspondence with
+    /// // weight 0 changes nothing.
+    /// let cam = Camera::from_colmap("SIMPLE_RADIAL", 640, 480, vec![800.0, 320.0, 240.0, -0.05])?;
+    /// let mut pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
     /// let mut world = world.to_vec();
-    /// let mut image = image.clone();
     /// world.push(Point3::new(5.0, 5.0, 5.0));
-    /// image.push(Point2::new(0.9, -0.9));
+    /// pixels.push(Point2::new(10.0, 470.0));
     /// let weights = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0];
-    /// let sol = Solver::default().solve_weighted(&world, &image, &weights)?;
-    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
-    /// assert_eq!(sol.used, 6);
-    /// # Ok::<(), eopnp::PnpError>(())
+    /// let sol = Solver::default().solve(&Problem::pixels(&world, &pixels, &cam).weights(&weights))?;
+    /// assert!((sol.translation - t).norm() < 1e-9);
+    /// assert_eq!((sol.used, sol.skipped), (6, 0));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     ///
     /// # Errors
-    /// As [`Solver::solve`], plus [`PnpError::WeightsLength`], [`PnpError::InvalidWeight`] and
-    /// [`PnpError::NonFinite`] for the weights.
-    pub fn solve_weighted(
-        &self,
-        world: &[Point3<f64>],
-        image: &[Point2<f64>],
-        weights: &[f64],
-    ) -> Result<Solution, PnpError> {
-        let px = self.normalised_loss(image, Some(weights));
-        let sol = self.run(
-            world,
-            image,
-            Some(weights),
-            &self.opts.reproj,
-            px.as_ref(),
-            None,
-        )?;
-        Ok(self.with_covariance(sol, world, image, &|i| weights[i], Metric::Identity))
+    /// [`PnpError`] for too few points, mismatched lengths, non-finite values, bad weights
+    /// (checked in that order, each with the correspondence's index), an unusable
+    /// [`Solver::loss`] and degenerate configurations; see its variants.
+    pub fn solve(&self, problem: &Problem<'_>) -> Result<Solution, PnpError> {
+        self.solve_problem(problem, None)
     }
 
     /// Every distinct local minimum of the cost, best first: cheirality-valid poses before the
     /// others, then by increasing reprojection error. For N <= 6 and for planar scenes several
     /// poses can explain the data about equally well; this lists them. Bounded (at most 32), no
-    /// allocation.
+    /// allocation of its own.
     ///
     /// ```
-    /// use eopnp::Solver;
+    /// use eopnp::{Problem, Solver};
     /// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
     /// # let r = Rotation3::from_euler_angles(0.1, -0.2, 0.3);
     /// # let t = Vector3::new(0.1, -0.2, 6.0);
@@ -274,44 +251,30 @@ impl Solver {
     /// #     .map(|x| { let p = r * x + t; Point2::new(p.x / p.z, p.y / p.z) })
     /// #     .collect();
     ///
-    /// let all = Solver::default().solve_all(&world[..4], &image[..4])?;
+    /// let all = Solver::default().solve_all(&Problem::normalised(&world[..4], &image[..4]))?;
     /// // Four points: one or more poses fit them; the true one is among them.
-    /// assert!(all.iter().any(|s| (s.pose.translation.vector - t).norm() < 1e-8));
+    /// assert!(all.iter().any(|s| (s.translation - t).norm() < 1e-8));
     /// # Ok::<(), eopnp::PnpError>(())
     /// ```
     ///
     /// # Errors
     /// As [`Solver::solve`].
-    pub fn solve_all(
-        &self,
-        world: &[Point3<f64>],
-        image: &[Point2<f64>],
-    ) -> Result<Solutions, PnpError> {
+    pub fn solve_all(&self, problem: &Problem<'_>) -> Result<Solutions, PnpError> {
         let mut all = Solutions::new();
-        let px = self.normalised_loss(image, None);
-        self.run(
-            world,
-            image,
-            None,
-            &self.opts.reproj,
-            px.as_ref(),
-            Some(&mut all),
-        )?;
-        for sol in &mut all {
-            *sol = self.with_covariance(*sol, world, image, &|_| 1.0, Metric::Identity);
-        }
+        self.solve_problem(problem, Some(&mut all))?;
         Ok(all)
     }
 
     /// Refines a prior pose (tracking: the previous frame's pose) to the maximum-likelihood pose
-    /// of the basin it starts in: Levenberg-Marquardt on the reprojection error from
-    /// `initial` (world to camera, `x_cam = R X + t`), without EOPnP's global search
-    /// (OpenCV's `solvePnPRefineLM`, PoseLib's `refine_absolute_pose`). The input is
+    /// of the basin it starts in, without EOPnP's global search (OpenCV's `solvePnPRefineLM`,
+    /// PoseLib's `refine_absolute_pose`): damped Newton on the algebraic cost from `initial`'s
+    /// rotation, then the Levenberg-Marquardt refinement of the reprojection error (through the
+    /// camera for pixels). `initial` maps world to camera, `x_cam = R X + t`. The problem is
     /// validated as by [`Solver::solve`]; [`Solution::converged`] says whether the refinement
     /// reached a minimum, [`Solution::source`] is [`crate::CandidateSource::Initial`].
     ///
     /// ```
-    /// use eopnp::Solver;
+    /// use eopnp::{Problem, Solver};
     /// use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion, Vector3};
     ///
     /// let t = Vector3::new(0.1, -0.2, 6.0);
@@ -328,9 +291,9 @@ impl Solver {
     ///     Translation3::new(0.12, -0.18, 5.9),
     ///     UnitQuaternion::from_euler_angles(0.02, -0.01, 0.03),
     /// );
-    /// let sol = Solver::default().refine(&world, &image, &prior)?;
+    /// let sol = Solver::default().refine(&Problem::normalised(&world, &image), &prior)?;
     /// assert!(sol.converged);
-    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
+    /// assert!((sol.translation - t).norm() < 1e-9);
     /// # Ok::<(), eopnp::PnpError>(())
     /// ```
     ///
@@ -339,30 +302,62 @@ impl Solver {
     /// that is not finite.
     pub fn refine(
         &self,
-        world: &[Point3<f64>],
-        image: &[Point2<f64>],
+        problem: &Problem<'_>,
         initial: &Isometry3<f64>,
     ) -> Result<Solution, PnpError> {
-        self.refine_impl(world, image, None, initial)
+        let (world, weights) = (problem.world, problem.weights);
+        match problem.observations {
+            Observations::Normalised { points, .. } => {
+                self.refine_normalised(world, points, weights, initial)
+            }
+            Observations::Pixels { points, camera } => {
+                self.refine_pixels(world, points, camera, weights, initial)
+            }
+        }
     }
 
-    /// [`Solver::refine`] with a non-negative weight per point, as [`Solver::solve_weighted`]:
-    /// from a start in its basin, [`Solver::solve_weighted`]'s pose.
-    ///
-    /// # Errors
-    /// As [`Solver::refine`] and [`Solver::solve_weighted`].
-    pub fn refine_weighted(
+    /// [`Solver::solve`] (`all: None`) and [`Solver::solve_all`].
+    fn solve_problem(
+        &self,
+        problem: &Problem<'_>,
+        all: Option<&mut Solutions>,
+    ) -> Result<Solution, PnpError> {
+        let (world, weights) = (problem.world, problem.weights);
+        match problem.observations {
+            Observations::Normalised { points, .. } => self.normalised(world, points, weights, all),
+            Observations::Pixels { points, camera } => {
+                self.pixels(world, points, camera, weights, all)
+            }
+        }
+    }
+
+    /// The solve of normalised image points.
+    fn normalised(
         &self,
         world: &[Point3<f64>],
         image: &[Point2<f64>],
-        weights: &[f64],
-        initial: &Isometry3<f64>,
+        weights: Option<&[f64]>,
+        mut all: Option<&mut Solutions>,
     ) -> Result<Solution, PnpError> {
-        self.refine_impl(world, image, Some(weights), initial)
+        let px = self.normalised_loss(image, weights);
+        let sol = self.run(
+            world,
+            image,
+            weights,
+            &self.opts.reproj,
+            px.as_ref(),
+            all.as_deref_mut(),
+        )?;
+        let weight = |i: usize| weights.map_or(1.0, |w| w[i]);
+        let finish = |s: Solution| self.with_covariance(s, world, image, &weight, Metric::Identity);
+        for s in all.into_iter().flatten() {
+            *s = finish(*s);
+        }
+        Ok(finish(sol))
     }
 
-    /// [`Solver::refine`] and [`Solver::refine_weighted`].
-    fn refine_impl(
+    /// [`Solver::refine`] of normalised image points.
+    fn refine_normalised(
         &self,
         world: &[Point3<f64>],
         image: &[Point2<f64>],
@@ -386,38 +381,8 @@ impl Solver {
         Ok(self.with_covariance(sol, world, image, &weight, Metric::Identity))
     }
 
-    /// [`Solver::refine`] from observed pixels through a camera (as [`Solver::solve_pixels`]).
-    ///
-    /// # Errors
-    /// As [`Solver::refine`] and [`Solver::solve_pixels`].
-    pub fn refine_pixels(
-        &self,
-        world: &[Point3<f64>],
-        pixels: &[Point2<f64>],
-        camera: &Camera,
-        initial: &Isometry3<f64>,
-    ) -> Result<Solution, PnpError> {
-        self.refine_pixels_impl(world, pixels, camera, None, initial)
-    }
-
-    /// [`Solver::refine_pixels`] with a non-negative weight per point, as
-    /// [`Solver::solve_pixels_weighted`]: from a start in its basin, its pose.
-    ///
-    /// # Errors
-    /// As [`Solver::refine`] and [`Solver::solve_pixels_weighted`].
-    pub fn refine_pixels_weighted(
-        &self,
-        world: &[Point3<f64>],
-        pixels: &[Point2<f64>],
-        camera: &Camera,
-        weights: &[f64],
-        initial: &Isometry3<f64>,
-    ) -> Result<Solution, PnpError> {
-        self.refine_pixels_impl(world, pixels, camera, Some(weights), initial)
-    }
-
-    /// [`Solver::refine_pixels`] and [`Solver::refine_pixels_weighted`].
-    fn refine_pixels_impl(
+    /// [`Solver::refine`] of pixels through a camera.
+    fn refine_pixels(
         &self,
         world: &[Point3<f64>],
         pixels: &[Point2<f64>],
@@ -446,9 +411,9 @@ impl Solver {
         Ok(self.with_covariance(sol, &u.world, &u.image, &weight, Metric::Camera(camera)))
     }
 
-    /// As [`Solver::solve_weighted`] (weights optional) with the x and y residual rows of the
-    /// reprojection refinement weighted by `row_weights` (e.g. `(fx^2, fy^2)` normalised, as
-    /// in [`Solver::solve_pixels`]). Used by RANSAC's fits. Non-finite or
+    /// The solve of normalised image points (weights optional) with the x and y residual rows
+    /// of the reprojection refinement weighted by `row_weights` (e.g. `(fx^2, fy^2)`
+    /// normalised, as for pixels through a camera). Used by RANSAC's fits. Non-finite or
     /// non-positive row weights fall back to `(1, 1)`.
     pub(crate) fn solve_with_row_weights(
         &self,
@@ -457,13 +422,14 @@ impl Solver {
         weights: Option<&[f64]>,
         row_weights: (f64, f64),
         pixel: Option<&PixelInputs<'_>>,
+        all: Option<&mut Solutions>,
     ) -> Result<Solution, PnpError> {
         let mut opts = self.opts.reproj;
         let ok = |w: f64| w.is_finite() && w > 0.0;
         if ok(row_weights.0) && ok(row_weights.1) {
             opts.row_weights = row_weights;
         }
-        self.run(world, image, weights, &opts, pixel, None)
+        self.run(world, image, weights, &opts, pixel, all)
     }
 
     /// S10's inputs for normalised input: only with a robust loss (the identity camera,
@@ -536,119 +502,37 @@ impl Solver {
         }
     }
 
-    /// The pose from observed (distorted) pixels and a camera model ([`Camera`]: any of the
-    /// supported models, pinhole included, e.g. [`Camera::pinhole`]).
-    ///
-    /// In the default (reprojection) mode the returned pose minimises the sum of squared pixel
-    /// residuals through the camera's projection, distortion included: the maximum-likelihood
-    /// pose for isotropic Gaussian pixel noise, for every camera model (with a robust
-    /// [`Solver::loss`], the sum of the loss of the squared residuals). [`Solution::cost`] is
-    /// that sum in pixels^2, [`Solution::reprojection_rmse`] the RMS pixel residual divided by
-    /// `max(fx, fy)`.
-    ///
-    /// How: the pixels are undistorted to normalised coordinates ([`Camera::undistort`]); a
-    /// pixel that cannot be undistorted is left out and counted in [`Solution::skipped`]. The
-    /// solve on the undistorted points weights the x and y residual rows by `fx^2` and `fy^2`
-    /// (normalised): exactly the pixel error for a pinhole camera. With distortion (or a
-    /// robust loss) it gives the start of a last Levenberg-Marquardt refinement that
-    /// minimises the pixel error through the camera model itself (stage S10 of
-    /// docs/algorithm.md). In [`Refinement::Algebraic`] mode, where the solve on the
-    /// undistorted points is the result, it also weights the residual of point `i` by
-    /// `|det J_i| / (fx fy)`, `J_i` the Jacobian of [`Camera::project`] at the point
-    /// ([`Camera::project_jacobian`]): to first order the pixel error.
-    ///
-    /// ```
-    /// use eopnp::{camera::Camera, Solver};
-    /// use nalgebra::{Point2, Point3, Vector3};
-    ///
-    /// let cam = Camera::pinhole(800.0, 800.0, 320.0, 240.0)?;
-    /// let t = Vector3::new(0.1, -0.2, 6.0);
-    /// let world = [
-    ///     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
-    ///     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
-    /// ];
-    /// let pixels: Vec<Point2<f64>> = world
-    ///     .iter()
-    ///     .map(|x| { let p = x.coords + t; cam.project(Point2::new(p.x / p.z, p.y / p.z)) })
-    ///     .collect();
-    /// let sol = Solver::default().solve_pixels(&world, &pixels, &cam)?;
-    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
-    /// assert_eq!((sol.used, sol.skipped), (6, 0));
-    /// # Ok::<(), Box<dyn std::error::Error>>(())
-    /// ```
-    ///
-    /// # Errors
-    /// [`PnpError::LengthMismatch`] if the slices differ in length, otherwise as
-    /// [`Solver::solve_weighted`] on the undistorted points.
-    pub fn solve_pixels(
-        &self,
-        world: &[Point3<f64>],
-        pixels: &[Point2<f64>],
-        camera: &Camera,
-    ) -> Result<Solution, PnpError> {
-        self.pixels(world, pixels, camera, None)
-    }
-
-    /// As [`Solver::solve_pixels`] with a non-negative weight per correspondence, as
-    /// [`Solver::solve_weighted`]: the residual of point `i` is weighted by `weights[i]` times
-    /// the lens distortion's local scale of [`Solver::solve_pixels`]. A point of weight 0 is
-    /// ignored; all weights 1 give exactly [`Solver::solve_pixels`].
-    ///
-    /// ```
-    /// use eopnp::{camera::Camera, Solver};
-    /// use nalgebra::{Point2, Point3, Vector3};
-    ///
-    /// let cam = Camera::from_colmap("SIMPLE_RADIAL", 640, 480, vec![800.0, 320.0, 240.0, -0.05])?;
-    /// let t = Vector3::new(0.1, -0.2, 6.0);
-    /// let mut world = vec![
-    ///     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
-    ///     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
-    /// ];
-    /// let mut pixels: Vec<Point2<f64>> = world
-    ///     .iter()
-    ///     .map(|x| { let p = x.coords + t; cam.project(Point2::new(p.x / p.z, p.y / p.z)) })
-    ///     .collect();
-    /// // A wrong seventh correspondence with weight 0 changes nothing.
-    /// world.push(Point3::new(5.0, 5.0, 5.0));
-    /// pixels.push(Point2::new(10.0, 470.0));
-    /// let weights = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0];
-    /// let sol = Solver::default().solve_pixels_weighted(&world, &pixels, &cam, &weights)?;
-    /// assert!((sol.pose.translation.vector - t).norm() < 1e-9);
-    /// assert_eq!((sol.used, sol.skipped), (6, 0));
-    /// # Ok::<(), Box<dyn std::error::Error>>(())
-    /// ```
-    ///
-    /// # Errors
-    /// [`PnpError::LengthMismatch`], then [`PnpError::WeightsLength`], then
-    /// [`PnpError::NonFinite`] and [`PnpError::InvalidWeight`] for the first bad weight (its
-    /// index is the correspondence's), otherwise as [`Solver::solve_pixels`].
-    pub fn solve_pixels_weighted(
-        &self,
-        world: &[Point3<f64>],
-        pixels: &[Point2<f64>],
-        camera: &Camera,
-        weights: &[f64],
-    ) -> Result<Solution, PnpError> {
-        self.pixels(world, pixels, camera, Some(weights))
-    }
-
-    /// [`Solver::solve_pixels`] and [`Solver::solve_pixels_weighted`].
+    /// The solve of pixels through a camera.
     fn pixels(
         &self,
         world: &[Point3<f64>],
         pixels: &[Point2<f64>],
         camera: &Camera,
         user_weights: Option<&[f64]>,
+        mut all: Option<&mut Solutions>,
     ) -> Result<Solution, PnpError> {
         let u = self.undistort(world, pixels, camera, user_weights)?;
         let px = self.camera_loss(&u, camera);
-        let mut sol =
-            self.solve_with_row_weights(&u.world, &u.image, u.solve_weights(), u.rows, Some(&px))?;
-        sol.skipped = world.len() - u.image.len();
+        let sol = self.solve_with_row_weights(
+            &u.world,
+            &u.image,
+            u.solve_weights(),
+            u.rows,
+            Some(&px),
+            all.as_deref_mut(),
+        )?;
+        let skipped = world.len() - u.image.len();
         // The covariance through the camera: the caller's weights, not the first-order
         // distortion weights of the solve.
         let weight = |k: usize| user_weights.map_or(1.0, |uw| uw[u.index(k)]);
-        Ok(self.with_covariance(sol, &u.world, &u.image, &weight, Metric::Camera(camera)))
+        let finish = |mut s: Solution| {
+            s.skipped = skipped;
+            self.with_covariance(s, &u.world, &u.image, &weight, Metric::Camera(camera))
+        };
+        for s in all.into_iter().flatten() {
+            *s = finish(*s);
+        }
+        Ok(finish(sol))
     }
 
     /// `sol` with its covariance when [`Solver::covariance`] asks for it (also RANSAC's, from
@@ -662,7 +546,7 @@ impl Solver {
         metric: Metric<'_>,
     ) -> Solution {
         if let Some(noise) = self.covariance {
-            let pose = (&sol.rotation, &sol.pose.translation.vector);
+            let pose = (&sol.rotation, &sol.translation);
             sol.covariance = pose_covariance(world, image, weight, pose, metric, noise);
         }
         sol
@@ -682,7 +566,9 @@ impl Solver {
     }
 }
 
-/// The pose from world points and normalised image points with the default [`Solver`].
+/// The pose from world points and their normalised image points `(x/z, y/z)` with the
+/// default [`Solver`]: `Solver::default().solve(&Problem::normalised(world, image))`, the
+/// shortest way in.
 ///
 /// ```
 /// # use nalgebra::{Point2, Point3, Rotation3, Vector3};
@@ -705,7 +591,7 @@ impl Solver {
 /// # Errors
 /// See [`Solver::solve`].
 pub fn solve(world: &[Point3<f64>], image: &[Point2<f64>]) -> Result<Solution, PnpError> {
-    Solver::default().solve(world, image)
+    Solver::default().solve(&Problem::normalised(world, image))
 }
 
 /// Pixel correspondences made ready for the solvers by [`undistort_all`]. When every pixel
@@ -785,7 +671,7 @@ pub(crate) fn undistort_all<'a>(
         }
     }
     let n = world.len();
-    let focal = camera.intrinsics_scale();
+    let focal = camera.focal_lengths();
     let (fx, fy) = focal;
     let fmax = fx.max(fy);
     let rows = ((fx / fmax).powi(2), (fy / fmax).powi(2));

@@ -136,7 +136,7 @@ fn noise_free(
                 rotation,
                 seed,
             });
-            let msg = match solver.solve(&p.world, &p.image) {
+            let msg = match solver.solve(&eopnp::Problem::normalised(&p.world, &p.image)) {
                 Err(e) => {
                     rot.push(f64::NAN);
                     trans.push(f64::NAN);
@@ -337,7 +337,7 @@ fn noisy_run(n: usize, sigma: f64) -> NoisyRun {
         run.lm_rot.push(lr);
         run.lm_t.push(100.0 * lt);
         for (mode, solver) in [("default", &default), ("algebraic", &algebraic)] {
-            let (er, et) = match solver.solve(&p.world, &p.image) {
+            let (er, et) = match solver.solve(&eopnp::Problem::normalised(&p.world, &p.image)) {
                 Ok(sol) => {
                     let (r, t) = pose_of(&sol);
                     let (er, et) = p.errors(&r, &t);
@@ -467,7 +467,7 @@ fn solve_all_contains_ml_pose_n4_n5() {
             let lm = p.lm_from_gt();
             lm_unconverged += u64::from(!lm.converged);
             lm_rot.push(p.errors(&lm.r, &lm.t).0);
-            let all = match solver.solve_all(&p.world, &p.image) {
+            let all = match solver.solve_all(&eopnp::Problem::normalised(&p.world, &p.image)) {
                 Ok(all) => all,
                 Err(e) => {
                     misses.push(format!("seed {seed:#x}: error {e:?}"));

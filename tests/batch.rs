@@ -1,9 +1,10 @@
 //! The batch API (feature `rayon`): every result equals the one-problem call, whatever the
 //! thread count, for plain and RANSAC solves, normalised and pixel input, with and without
 //! weights, and for bad problems (the same typed error).
-use eopnp::batch::{problem_seed, Problem};
 use eopnp::camera::Camera;
+use eopnp::ransac::problem_seed;
 use eopnp::ransac::Ransac;
+use eopnp::Problem;
 use eopnp::Solver;
 use eopnp_testkit::{self as common, Problem as Synth, ProblemOptions, RotationKind, Scene};
 use nalgebra::Point2;
@@ -44,8 +45,9 @@ fn problems<'a>(data: &'a [Owned], cam: &'a Camera) -> Vec<Problem<'a>> {
     data.iter()
         .enumerate()
         .map(|(k, o)| match k % 4 {
-            0 => Problem::normalised_with_focal(&o.p.world, &o.p.image, (800.0, 800.0)),
-            1 => Problem::normalised_with_focal(&o.p.world, &o.p.image, (800.0, 800.0))
+            0 => Problem::normalised(&o.p.world, &o.p.image).focal(800.0, 800.0),
+            1 => Problem::normalised(&o.p.world, &o.p.image)
+                .focal(800.0, 800.0)
                 .weights(&o.weights),
             2 => Problem::pixels(&o.p.world, &o.pixels, cam),
             _ => Problem::pixels(&o.p.world, &o.pixels, cam).weights(&o.weights),
@@ -65,10 +67,10 @@ fn batch_equals_one_by_one_on_any_thread_count() {
         .iter()
         .enumerate()
         .map(|(k, o)| match k % 4 {
-            0 => solver.solve(&o.p.world, &o.p.image),
-            1 => solver.solve_weighted(&o.p.world, &o.p.image, &o.weights),
-            2 => solver.solve_pixels(&o.p.world, &o.pixels, &cam),
-            _ => solver.solve_pixels_weighted(&o.p.world, &o.pixels, &cam, &o.weights),
+            0 => solver.solve(&Problem::normalised(&o.p.world, &o.p.image)),
+            1 => solver.solve(&Problem::normalised(&o.p.world, &o.p.image).weights(&o.weights)),
+            2 => solver.solve(&Problem::pixels(&o.p.world, &o.pixels, &cam)),
+            _ => solver.solve(&Problem::pixels(&o.p.world, &o.pixels, &cam).weights(&o.weights)),
         })
         .collect();
     let serial_ransac: Vec<_> = data
@@ -77,16 +79,21 @@ fn batch_equals_one_by_one_on_any_thread_count() {
         .map(|(k, o)| {
             let r = ransac.seed(problem_seed(11, k));
             match k % 4 {
-                0 => r.estimate(&solver, &o.p.world, &o.p.image, (800.0, 800.0), None),
+                0 => r.estimate(
+                    &solver,
+                    &Problem::normalised(&o.p.world, &o.p.image).focal(800.0, 800.0),
+                ),
                 1 => r.estimate(
                     &solver,
-                    &o.p.world,
-                    &o.p.image,
-                    (800.0, 800.0),
-                    Some(&o.weights),
+                    &Problem::normalised(&o.p.world, &o.p.image)
+                        .focal(800.0, 800.0)
+                        .weights(&o.weights),
                 ),
-                2 => r.estimate_pixels(&solver, &cam, &o.p.world, &o.pixels),
-                _ => r.estimate_pixels_weighted(&solver, &cam, &o.p.world, &o.pixels, &o.weights),
+                2 => r.estimate(&solver, &Problem::pixels(&o.p.world, &o.pixels, &cam)),
+                _ => r.estimate(
+                    &solver,
+                    &Problem::pixels(&o.p.world, &o.pixels, &cam).weights(&o.weights),
+                ),
             }
         })
         .collect();
@@ -107,7 +114,7 @@ fn batch_equals_one_by_one_on_any_thread_count() {
         for (k, (a, b)) in plain.iter().zip(&serial).enumerate() {
             match (a, b) {
                 (Ok(a), Ok(b)) => {
-                    assert_eq!(a.pose, b.pose, "{threads} threads, problem {k}");
+                    assert_eq!(a.pose(), b.pose(), "{threads} threads, problem {k}");
                     assert_eq!(a.cost, b.cost, "{threads} threads, problem {k}");
                 }
                 (Err(a), Err(b)) => assert_eq!(a, b, "{threads} threads, problem {k}"),
@@ -118,7 +125,8 @@ fn batch_equals_one_by_one_on_any_thread_count() {
             match (a, b) {
                 (Ok(a), Ok(b)) => {
                     assert_eq!(
-                        a.solution.pose, b.solution.pose,
+                        a.solution.pose(),
+                        b.solution.pose(),
                         "{threads} threads, problem {k}"
                     );
                     assert_eq!(a.inliers, b.inliers, "{threads} threads, problem {k}");

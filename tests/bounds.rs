@@ -27,23 +27,23 @@ fn user_bounds_newton_lm_ransac() {
     let res = Solver::default()
         .newton_iterations(1)
         .reprojection_iterations(1)
-        .solve(&w, &i)
+        .solve(&eopnp::Problem::normalised(&w, &i))
         .expect("a well-posed noise-free problem");
     assert!(res.newton_iterations <= 1 && res.reprojection_iterations <= 1);
-    let err = eopnp::metrics::rotation_error_deg(&res.rotation, &r);
+    let err = eopnp::internals::metrics::rotation_error_deg(&res.rotation, &r);
     assert!(err < 1e-6, "one iteration each: {err:e} deg");
     // With no iteration at all the pose is S5's projection of the case-1 null vector, which is
     // exact for noise-free data.
     let res0 = Solver::default()
         .newton_iterations(0)
         .reprojection_iterations(0)
-        .solve(&w, &i)
+        .solve(&eopnp::Problem::normalised(&w, &i))
         .expect("a well-posed noise-free problem");
     assert_eq!(
         (res0.newton_iterations, res0.reprojection_iterations),
         (0, 0)
     );
-    let err0 = eopnp::metrics::rotation_error_deg(&res0.rotation, &r);
+    let err0 = eopnp::internals::metrics::rotation_error_deg(&res0.rotation, &r);
     assert!(err0 < 1e-6, "no iteration: {err0:e} deg");
     // RANSAC at its iteration bound: 90 % outliers, confidence 0.999 needs thousands of
     // samples; 30 are allowed.
@@ -57,7 +57,10 @@ fn user_bounds_newton_lm_ransac() {
         .max_iterations(30)
         .min_iterations(0)
         .seed(3);
-    match ransac.estimate(&Solver::default(), &w, &i, (500.0, 500.0), None) {
+    match ransac.estimate(
+        &Solver::default(),
+        &eopnp::Problem::normalised(&w, &i).focal(500.0, 500.0),
+    ) {
         Ok(sol) => assert_eq!(sol.stats.iterations, 30),
         Err(e) => assert!(
             matches!(e, PnpError::NoConsensus { iterations: 30, .. }),

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use eopnp::colmap::{
-    parse_model_buffered, read_model, read_model_binary, read_model_text, register_image,
-    write_model_binary, Location, Model, ModelError, ModelFormat, ReadLimits, Registrar,
+    parse_model_buffered, read_model, register_image, write_model, Location, Model, ModelError,
+    ModelFormat, Overwrite, ReadOptions, Registrar, WriteOptions,
 };
 use eopnp::{Refinement, Solver};
 
@@ -17,7 +17,11 @@ fn data(name: &str) -> PathBuf {
 }
 
 fn text_model() -> Model {
-    read_model_text(data("colmap-boxes")).expect("bundled text model reads")
+    read_model(
+        data("colmap-boxes"),
+        &ReadOptions::default().format(ModelFormat::Text),
+    )
+    .expect("bundled text model reads")
 }
 
 /// A fresh scratch directory under Cargo's per-test temporary directory.
@@ -179,19 +183,37 @@ fn algebraic_mode_is_close_to_colmap_poses() {
 #[test]
 fn binary_copy_reads_to_the_identical_model() {
     let text = text_model();
-    let bin = read_model_binary(data("colmap-boxes-bin")).expect("bundled binary model reads");
+    let bin = read_model(
+        data("colmap-boxes-bin"),
+        &ReadOptions::default().format(ModelFormat::Binary),
+    )
+    .expect("bundled binary model reads");
     assert_eq!(text, bin);
     // Auto-detection picks each format.
-    assert_eq!(read_model(data("colmap-boxes-bin")).unwrap(), text);
-    assert_eq!(read_model(data("colmap-boxes")).unwrap(), text);
+    assert_eq!(
+        read_model(data("colmap-boxes-bin"), &ReadOptions::default()).unwrap(),
+        text
+    );
+    assert_eq!(
+        read_model(data("colmap-boxes"), &ReadOptions::default()).unwrap(),
+        text
+    );
 }
 
 #[test]
 fn binary_writer_round_trips_and_matches_the_bundled_copy() {
     let text = text_model();
     let dir = scratch("roundtrip");
-    write_model_binary(&text, &dir).unwrap();
-    assert_eq!(read_model_binary(&dir).unwrap(), text);
+    write_model(
+        &text,
+        &dir,
+        &WriteOptions::default().overwrite(Overwrite::Files),
+    )
+    .unwrap();
+    assert_eq!(
+        read_model(&dir, &ReadOptions::default().format(ModelFormat::Binary)).unwrap(),
+        text
+    );
     for f in ["cameras.bin", "images.bin", "points3D.bin"] {
         assert_eq!(
             std::fs::read(dir.join(f)).unwrap(),
@@ -224,7 +246,7 @@ fn tiny_buffers_read_the_same_model() {
             .map(|n| std::fs::read(data(dir).join(n)).unwrap());
         let files = [&files[0][..], &files[1][..], &files[2][..]];
         for capacity in [1, 2, 3, 5, 8, 13] {
-            let read = parse_model_buffered(format, files, &ReadLimits::default(), capacity)
+            let read = parse_model_buffered(format, files, &ReadOptions::default(), capacity)
                 .unwrap_or_else(|e| panic!("{format:?} through {capacity} bytes: {e}"));
             assert!(read == m, "{format:?} through {capacity} bytes");
         }
@@ -238,7 +260,7 @@ fn text_model_with(name: &str, file: &str, contents: &[u8]) -> Result<Model, Mod
         std::fs::copy(data("colmap-boxes").join(f), dir.join(f)).unwrap();
     }
     std::fs::write(dir.join(file), contents).unwrap();
-    let r = read_model(&dir);
+    let r = read_model(&dir, &ReadOptions::default());
     let _ = std::fs::remove_dir_all(&dir);
     r
 }
@@ -320,7 +342,7 @@ fn binary_model_with(
     let mut b = std::fs::read(dir.join(file)).unwrap();
     edit(&mut b);
     std::fs::write(dir.join(file), &b).unwrap();
-    let r = read_model(&dir);
+    let r = read_model(&dir, &ReadOptions::default());
     let _ = std::fs::remove_dir_all(&dir);
     r
 }
@@ -385,7 +407,12 @@ fn huge_binary_counts_are_rejected_without_allocating() {
 fn regenerate_binary_copy() {
     let dir = data("colmap-boxes-bin");
     std::fs::create_dir_all(&dir).unwrap();
-    write_model_binary(&text_model(), &dir).unwrap();
+    write_model(
+        &text_model(),
+        &dir,
+        &WriteOptions::default().overwrite(Overwrite::Files),
+    )
+    .unwrap();
 }
 
 /// Random corruptions (byte flips, truncations, inserted bytes) of every model file never
@@ -435,7 +462,7 @@ fn random_corruptions_never_panic() {
             }
             std::fs::write(dir.join(file), &b).unwrap();
             // Must return (Ok or Err), never panic.
-            let _ = read_model(&dir);
+            let _ = read_model(&dir, &ReadOptions::default());
         }
         for n in &names {
             std::fs::remove_file(dir.join(n)).unwrap();

@@ -57,7 +57,7 @@ fn run(camera: &Camera, sigma_px: f64, noise: NoiseModel) -> (f64, f64, f64, f64
     // The predicted covariance at the noise-free pose, for the stated noise.
     let c = Solver::default()
         .covariance(Some(NoiseModel::Sigma(sigma_px)))
-        .solve_pixels(&p.world, &clean, camera)
+        .solve(&eopnp::Problem::pixels(&p.world, &clean, camera))
         .unwrap()
         .covariance
         .unwrap()
@@ -71,15 +71,12 @@ fn run(camera: &Camera, sigma_px: f64, noise: NoiseModel) -> (f64, f64, f64, f64
             .iter()
             .map(|q| Point2::new(q.x + normal.sample(&mut rng), q.y + normal.sample(&mut rng)))
             .collect();
-        let sol = solver.solve_pixels(&p.world, &px, camera).unwrap();
+        let sol = solver
+            .solve(&eopnp::Problem::pixels(&p.world, &px, camera))
+            .unwrap();
         let cov = sol.covariance.unwrap();
         var += cov.sigma * cov.sigma;
-        devs.push(tangent(
-            &sol.rotation,
-            &sol.pose.translation.vector,
-            &p.r_gt,
-            &p.t_gt,
-        ));
+        devs.push(tangent(&sol.rotation, &sol.translation, &p.r_gt, &p.t_gt));
     }
     let (chi2, lo, hi) = compare(&devs, &c);
     (chi2, lo, hi, (var / DRAWS as f64).sqrt())
@@ -163,12 +160,17 @@ fn ransac_pose_carries_the_covariance_of_its_inliers() {
 
     let solver = Solver::default().covariance(Some(NoiseModel::Sigma(1.0 / 800.0)));
     let r = ransac
-        .estimate(&solver, &p.world, &image, (800.0, 800.0), Some(&weights))
+        .estimate(
+            &solver,
+            &eopnp::Problem::normalised(&p.world, &image)
+                .focal(800.0, 800.0)
+                .weights(&weights),
+        )
         .unwrap();
     assert!((0..n).all(|i| !(wrong(i) && r.inliers[i])));
     assert!(r.num_inliers >= 40, "{}", r.num_inliers);
     let direct = solver
-        .solve_weighted(&p.world, &image, &masked(&r.inliers))
+        .solve(&eopnp::Problem::normalised(&p.world, &image).weights(&masked(&r.inliers)))
         .unwrap();
     assert!((r.solution.rotation - direct.rotation).amax() < 1e-12);
     let d = relative_difference(&r.solution, &direct);
@@ -176,10 +178,9 @@ fn ransac_pose_carries_the_covariance_of_its_inliers() {
     let plain = ransac
         .estimate(
             &Solver::default(),
-            &p.world,
-            &image,
-            (800.0, 800.0),
-            Some(&weights),
+            &eopnp::Problem::normalised(&p.world, &image)
+                .focal(800.0, 800.0)
+                .weights(&weights),
         )
         .unwrap();
     assert!(plain.solution.covariance.is_none());
@@ -189,12 +190,15 @@ fn ransac_pose_carries_the_covariance_of_its_inliers() {
     let solver = Solver::default().covariance(Some(NoiseModel::Estimated));
     let pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
     let r = ransac
-        .estimate_pixels_weighted(&solver, &cam, &p.world, &pixels, &weights)
+        .estimate(
+            &solver,
+            &eopnp::Problem::pixels(&p.world, &pixels, &cam).weights(&weights),
+        )
         .unwrap();
     assert!((0..n).all(|i| !(wrong(i) && r.inliers[i])));
     assert!(r.num_inliers >= 40, "{}", r.num_inliers);
     let direct = solver
-        .solve_pixels_weighted(&p.world, &pixels, &cam, &masked(&r.inliers))
+        .solve(&eopnp::Problem::pixels(&p.world, &pixels, &cam).weights(&masked(&r.inliers)))
         .unwrap();
     assert!((r.solution.rotation - direct.rotation).amax() < 1e-9);
     let d = relative_difference(&r.solution, &direct);

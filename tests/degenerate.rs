@@ -79,11 +79,11 @@ fn length_mismatch() {
 fn weights_length_mismatch() {
     let p = valid(6, "weights_len");
     let err = Solver::default()
-        .solve_weighted(&p.world, &p.image, &[1.0; 5])
+        .solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(&[1.0; 5]))
         .unwrap_err();
     assert!(matches!(err, PnpError::WeightsLength { .. }), "{err:?}");
     let err = Solver::default()
-        .solve_weighted(&p.world, &p.image, &[1.0; 7])
+        .solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(&[1.0; 7]))
         .unwrap_err();
     assert!(matches!(err, PnpError::WeightsLength { .. }), "{err:?}");
 }
@@ -139,7 +139,7 @@ fn non_finite_weight_names_the_index() {
         let mut w = vec![1.0; 8];
         w[6] = bad;
         let err = Solver::default()
-            .solve_weighted(&p.world, &p.image, &w)
+            .solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(&w))
             .unwrap_err();
         assert!(
             matches!(
@@ -160,7 +160,7 @@ fn negative_weight() {
     let mut w = vec![1.0; 8];
     w[3] = -1e-300;
     let err = Solver::default()
-        .solve_weighted(&p.world, &p.image, &w)
+        .solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(&w))
         .unwrap_err();
     assert!(
         matches!(err, PnpError::InvalidWeight { index: 3 }),
@@ -397,11 +397,11 @@ proptest! {
             weights.resize(n, 1.0);
         }
         check_finite_or_err(eopnp::solve(&world, &image))?;
-        check_finite_or_err(Solver::default().solve_weighted(&world, &image, &weights))?;
+        check_finite_or_err(Solver::default().solve(&eopnp::Problem::normalised(&world, &image).weights(&weights)))?;
         check_finite_or_err(
-            Solver::default().refinement(eopnp::Refinement::Algebraic).solve(&world, &image),
+            Solver::default().refinement(eopnp::Refinement::Algebraic).solve(&eopnp::Problem::normalised(&world, &image)),
         )?;
-        if let Ok(all) = Solver::default().solve_all(&world, &image) {
+        if let Ok(all) = Solver::default().solve_all(&eopnp::Problem::normalised(&world, &image)) {
             for s in all.iter() {
                 check_pose(s)?;
             }
@@ -458,17 +458,17 @@ fn huge_world_and_image_coordinates_never_give_a_non_finite_pose() {
         eopnp::Solver::default(),
         eopnp::Solver::default().refinement(eopnp::Refinement::Algebraic),
     ] {
-        match solver.solve(&world, &image) {
+        match solver.solve(&eopnp::Problem::normalised(&world, &image)) {
             Ok(s) => {
-                assert!(s.pose.translation.vector.iter().all(|x| x.is_finite()));
+                assert!(s.translation.iter().all(|x| x.is_finite()));
                 assert!(s.rotation.iter().all(|x| x.is_finite()));
             }
             Err(e) => assert_eq!(e, eopnp::PnpError::NoSolution, "{e}"),
         }
-        if let Ok(all) = solver.solve_all(&world, &image) {
+        if let Ok(all) = solver.solve_all(&eopnp::Problem::normalised(&world, &image)) {
             assert!(all
                 .iter()
-                .all(|s| s.pose.translation.vector.iter().all(|x| x.is_finite())));
+                .all(|s| s.translation.iter().all(|x| x.is_finite())));
         }
     }
 }

@@ -31,18 +31,18 @@ fn exact_fit_skips_s6_and_stays_exact() {
         for trial in 0..TRIALS {
             let p = problem(&name, n, 0.0, trial);
             let a = fast
-                .solve(&p.world, &p.image)
+                .solve(&eopnp::Problem::normalised(&p.world, &p.image))
                 .expect("noise-free general scene");
             if a.newton_iterations != 0 {
                 continue;
             }
             skipped += 1;
             let b = full
-                .solve(&p.world, &p.image)
+                .solve(&eopnp::Problem::normalised(&p.world, &p.image))
                 .expect("noise-free general scene");
-            let t = a.pose.translation.vector;
+            let t = a.translation;
             let (rot, trans) = p.errors(&a.rotation, &t);
-            let rel_b = (t - b.pose.translation.vector).norm() / b.pose.translation.vector.norm();
+            let rel_b = (t - b.translation).norm() / b.translation.norm();
             let to_b = eopnp_testkit::rot_err_deg(&a.rotation, &b.rotation);
             assert!(
                 rot <= 1e-11 && trans <= 1e-12 && to_b <= 1e-11 && rel_b <= 1e-12,
@@ -74,7 +74,9 @@ fn noise_is_never_taken_for_an_exact_fit() {
             let name = format!("exact_fit/noisy/{n}/{sigma}");
             for trial in 0..TRIALS / 3 {
                 let p = problem(&name, n, sigma, trial);
-                let s = solver.solve(&p.world, &p.image).expect("general scene");
+                let s = solver
+                    .solve(&eopnp::Problem::normalised(&p.world, &p.image))
+                    .expect("general scene");
                 assert!(
                     s.newton_iterations > 0,
                     "N = {n}, sigma = {sigma} px, trial {trial}: S6 skipped"
@@ -108,18 +110,18 @@ fn exact_fit_with_weights_and_through_a_camera() {
                 .map(|i| 0.5 + 1.5 * ((i as u64 * 2_654_435_761 + trial) % 1000) as f64 / 999.0)
                 .collect();
             let a = solver
-                .solve_weighted(&p.world, &p.image, &w)
+                .solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(&w))
                 .expect("noise-free general scene");
             let px: Vec<_> = p.image.iter().map(|m| cam.project(*m)).collect();
             let b = solver
-                .solve_pixels(&p.world, &px, &cam)
+                .solve(&eopnp::Problem::pixels(&p.world, &px, &cam))
                 .expect("noise-free general scene");
             for (s, count, what) in [(&a, &mut weighted, "weights"), (&b, &mut pixels, "pixels")] {
                 if s.newton_iterations != 0 {
                     continue;
                 }
                 *count += 1;
-                let (rot, trans) = p.errors(&s.rotation, &s.pose.translation.vector);
+                let (rot, trans) = p.errors(&s.rotation, &s.translation);
                 assert!(
                     rot <= 1e-11 && trans <= 1e-12 && s.converged,
                     "N = {n}, trial {trial}, {what}: {rot:e} deg, {trans:e} relative, \

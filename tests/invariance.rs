@@ -75,8 +75,8 @@ proptest! {
         let world: Vec<Point3<f64>> = order.iter().map(|&i| p.world[i]).collect();
         let image: Vec<Point2<f64>> = order.iter().map(|&i| p.image[i]).collect();
         for (mode, solver) in solvers() {
-            let a = solver.solve(&p.world, &p.image);
-            let b = solver.solve(&world, &image);
+            let a = solver.solve(&eopnp::Problem::normalised(&p.world, &p.image));
+            let b = solver.solve(&eopnp::Problem::normalised(&world, &image));
             prop_assert!(a.is_ok() && b.is_ok(), "seed {seed:#x} {mode}: {a:?} {b:?}");
             let (r, t) = pose_of(&a.unwrap());
             close(&b.unwrap(), &r, &t, &format!("seed {seed:#x} n {n} {mode} permuted"))?;
@@ -96,8 +96,8 @@ proptest! {
         ) * s;
         let world: Vec<Point3<f64>> = p.world.iter().map(|x| Point3::from(q * x.coords * s + b)).collect();
         for (mode, solver) in solvers() {
-            let a = solver.solve(&p.world, &p.image);
-            let c = solver.solve(&world, &p.image);
+            let a = solver.solve(&eopnp::Problem::normalised(&p.world, &p.image));
+            let c = solver.solve(&eopnp::Problem::normalised(&world, &p.image));
             prop_assert!(a.is_ok() && c.is_ok(), "seed {seed:#x} {mode}: {a:?} {c:?}");
             let (r, t) = pose_of(&a.unwrap());
             let r2 = r * q.transpose();
@@ -119,8 +119,8 @@ proptest! {
         world.remove(k);
         image.remove(k);
         for (mode, solver) in solvers() {
-            let a = solver.solve_weighted(&p.world, &p.image, &weights);
-            let b = solver.solve(&world, &image);
+            let a = solver.solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(&weights));
+            let b = solver.solve(&eopnp::Problem::normalised(&world, &image));
             prop_assert!(a.is_ok() && b.is_ok(), "seed {seed:#x} {mode}: {a:?} {b:?}");
             let (r, t) = pose_of(&b.unwrap());
             close(&a.unwrap(), &r, &t, &format!("seed {seed:#x} n {n} k {k} {mode} zero weight"))?;
@@ -132,8 +132,8 @@ proptest! {
         let p = noisy_problem(seed, n);
         let weights = vec![1.0; n];
         for (mode, solver) in solvers() {
-            let a = solver.solve_weighted(&p.world, &p.image, &weights);
-            let b = solver.solve(&p.world, &p.image);
+            let a = solver.solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(&weights));
+            let b = solver.solve(&eopnp::Problem::normalised(&p.world, &p.image));
             prop_assert!(a.is_ok() && b.is_ok(), "seed {seed:#x} {mode}: {a:?} {b:?}");
             let (r, t) = pose_of(&b.unwrap());
             close(&a.unwrap(), &r, &t, &format!("seed {seed:#x} n {n} {mode} unit weights"))?;

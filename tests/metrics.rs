@@ -1,6 +1,6 @@
 //! The public error metrics (`eopnp::metrics`). (Formerly in `src/numeric/rotation/tests.rs`.)
 
-use eopnp::metrics::{rotation_error_deg, translation_error_pct};
+use eopnp::internals::metrics::{rotation_error_deg, translation_error_pct};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 #[test]

@@ -125,8 +125,8 @@ fn check_scene(scene: Scene, scene_name: &str) {
         for p in &problems {
             let _ = eopnp::solve(&p.world, &p.image);
             for (_, s) in &solvers {
-                let _ = s.solve(&p.world, &p.image);
-                let _ = s.solve_all(&p.world, &p.image);
+                let _ = s.solve(&eopnp::Problem::normalised(&p.world, &p.image));
+                let _ = s.solve_all(&eopnp::Problem::normalised(&p.world, &p.image));
             }
         }
         for p in &problems {
@@ -137,12 +137,15 @@ fn check_scene(scene: Scene, scene_name: &str) {
                 failures.push(format!("{name} seed {seed}: eopnp::solve: {a} allocations"));
             }
             for (mode, s) in &solvers {
-                let (a, r) = count_allocations(|| s.solve(&p.world, &p.image));
+                let (a, r) =
+                    count_allocations(|| s.solve(&eopnp::Problem::normalised(&p.world, &p.image)));
                 assert!(r.is_ok(), "seed {seed}: {mode} solve failed: {r:?}");
                 if a != 0 {
                     failures.push(format!("{name} seed {seed}: {mode} solve: {a} allocations"));
                 }
-                let (a, r) = count_allocations(|| s.solve_all(&p.world, &p.image));
+                let (a, r) = count_allocations(|| {
+                    s.solve_all(&eopnp::Problem::normalised(&p.world, &p.image))
+                });
                 assert!(r.is_ok(), "seed {seed}: {mode} solve_all failed: {r:?}");
                 if a != 0 {
                     failures.push(format!(

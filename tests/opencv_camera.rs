@@ -290,7 +290,12 @@ fn the_opencv_model_is_not_a_colmap_model() {
     model.cameras.insert(1, cam);
     let dir = std::env::temp_dir().join(format!("eopnp_opencv_camera_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let e = eopnp::colmap::write_model_binary(&model, &dir).unwrap_err();
+    let e = eopnp::colmap::write_model(
+        &model,
+        &dir,
+        &eopnp::colmap::WriteOptions::default().overwrite(eopnp::colmap::Overwrite::Files),
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
     assert!(e.to_string().contains("OPENCV_THIN_PRISM_TILTED"), "{e}");
     assert!(!dir.join("cameras.bin").exists());

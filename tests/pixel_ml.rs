@@ -177,10 +177,10 @@ fn default_pose_is_the_pixel_ml_pose_for_every_distortion_model() {
         for trial in 0..TRIALS {
             let p = problem(&case, trial_seed(name, trial));
             let sol = Solver::default()
-                .solve_pixels(&p.world, &p.pixels, cam)
+                .solve(&eopnp::Problem::pixels(&p.world, &p.pixels, cam))
                 .unwrap_or_else(|e| panic!("{name} trial {trial}: {e}"));
             let r = sol.rotation;
-            let t = sol.pose.translation.vector;
+            let t = sol.translation;
             let ml = lm_refine_projection(&p.world, &p.pixels, &p.r, &p.t, &|n| cam.project(n));
             assert!(
                 ml.converged,
@@ -209,16 +209,18 @@ fn default_pose_is_the_pixel_ml_pose_for_every_distortion_model() {
                 let mut w = Vec::new();
                 let mut m = Vec::new();
                 let mut k = Vec::new();
+                let (fx, fy) = cam.focal_lengths();
                 for (x, u) in p.world.iter().zip(&p.pixels) {
-                    let (n, weight) = cam.undistort_weighted(*u).unwrap();
+                    let n = cam.undistort(*u).unwrap();
+                    let j = cam.project_jacobian(n);
                     w.push(*x);
                     m.push(n);
-                    k.push(weight);
+                    k.push((j[0] * j[3] - j[1] * j[2]).abs() / (fx * fy));
                 }
                 (w, m, k)
             };
             let first = Solver::default()
-                .solve_weighted(&world, &image, &weights)
+                .solve(&eopnp::Problem::normalised(&world, &image).weights(&weights))
                 .unwrap();
             let first_cost = pixel_cost(
                 cam,
@@ -226,7 +228,7 @@ fn default_pose_is_the_pixel_ml_pose_for_every_distortion_model() {
                 &p.pixels,
                 None,
                 &first.rotation,
-                &first.pose.translation.vector,
+                &first.translation,
             );
             first_order_above.push(first_cost / ml_cost - 1.0);
         }
@@ -261,10 +263,10 @@ fn weighted_pixel_refinement_equals_duplicated_points() {
                 }
             }
             let a = Solver::default()
-                .solve_pixels_weighted(&p.world, &p.pixels, cam, &weights)
+                .solve(&eopnp::Problem::pixels(&p.world, &p.pixels, cam).weights(&weights))
                 .unwrap();
             let b = Solver::default()
-                .solve_pixels(&world, &pixels, cam)
+                .solve(&eopnp::Problem::pixels(&world, &pixels, cam))
                 .unwrap();
             let ca = pixel_cost(
                 cam,
@@ -272,7 +274,7 @@ fn weighted_pixel_refinement_equals_duplicated_points() {
                 &p.pixels,
                 Some(&weights),
                 &a.rotation,
-                &a.pose.translation.vector,
+                &a.translation,
             );
             let cb = pixel_cost(
                 cam,
@@ -280,7 +282,7 @@ fn weighted_pixel_refinement_equals_duplicated_points() {
                 &p.pixels,
                 Some(&weights),
                 &b.rotation,
-                &b.pose.translation.vector,
+                &b.translation,
             );
             assert!(
                 (ca - cb).abs() <= 1e-9 * cb,
@@ -318,7 +320,10 @@ fn ransac_final_fit_is_the_pixel_ml_pose_of_its_inliers() {
             let rs = Ransac::default()
                 .threshold_px(4.0)
                 .seed(trial)
-                .estimate_pixels(&Solver::default(), cam, &p.world, &p.pixels)
+                .estimate(
+                    &Solver::default(),
+                    &eopnp::Problem::pixels(&p.world, &p.pixels, cam),
+                )
                 .unwrap_or_else(|e| panic!("{name} trial {trial}: {e}"));
             let truth: Vec<bool> = outlier.iter().map(|o| !o).collect();
             if rs.inliers != truth {
@@ -329,14 +334,7 @@ fn ransac_final_fit_is_the_pixel_ml_pose_of_its_inliers() {
             let pixels: Vec<_> = (0..N).filter(|&i| truth[i]).map(|i| p.pixels[i]).collect();
             let ml = lm_refine_projection(&world, &pixels, &p.r, &p.t, &|n| cam.project(n));
             let s = &rs.solution;
-            let cost = pixel_cost(
-                cam,
-                &world,
-                &pixels,
-                None,
-                &s.rotation,
-                &s.pose.translation.vector,
-            );
+            let cost = pixel_cost(cam, &world, &pixels, None, &s.rotation, &s.translation);
             let ml_cost = pixel_cost(cam, &world, &pixels, None, &ml.r, &ml.t);
             assert!(
                 cost <= ml_cost * (1.0 + REL),
@@ -363,11 +361,11 @@ fn cauchy_loss_resists_outliers_through_the_camera() {
             u.x += 80.0;
         }
         let plain = Solver::default()
-            .solve_pixels(&p.world, &p.pixels, cam)
+            .solve(&eopnp::Problem::pixels(&p.world, &p.pixels, cam))
             .unwrap();
         let robust = Solver::default()
             .loss(Loss::Cauchy(2.0))
-            .solve_pixels(&p.world, &p.pixels, cam)
+            .solve(&eopnp::Problem::pixels(&p.world, &p.pixels, cam))
             .unwrap();
         let err = |s: &eopnp::Solution| rot_err_deg(&s.rotation, &p.r);
         if err(&robust) < 0.5 * err(&plain) {
@@ -379,7 +377,7 @@ fn cauchy_loss_resists_outliers_through_the_camera() {
             .iter()
             .zip(&p.pixels)
             .map(|(x, u)| {
-                let q = robust.rotation * x.coords + robust.pose.translation.vector;
+                let q = robust.rotation * x.coords + robust.translation;
                 let r2 = (cam.project(Point2::new(q.x / q.z, q.y / q.z)) - u).norm_squared();
                 4.0 * (r2 / 4.0).ln_1p()
             })
@@ -421,19 +419,31 @@ fn unusable_loss_scales_are_invalid_options() {
         let invalid = |r: Result<eopnp::Solution, eopnp::PnpError>| {
             matches!(r, Err(eopnp::PnpError::InvalidOption { option: "loss" }))
         };
-        assert!(invalid(s.solve(&p.world, &image)), "{bad:?}");
         assert!(
-            invalid(s.solve_pixels(&p.world, &p.pixels, &case.camera)),
+            invalid(s.solve(&eopnp::Problem::normalised(&p.world, &image))),
             "{bad:?}"
         );
-        assert!(invalid(s.refine(&p.world, &image, &init)), "{bad:?}");
         assert!(
-            invalid(s.refine_pixels(&p.world, &p.pixels, &case.camera, &init)),
+            invalid(s.solve(&eopnp::Problem::pixels(&p.world, &p.pixels, &case.camera))),
+            "{bad:?}"
+        );
+        assert!(
+            invalid(s.refine(&eopnp::Problem::normalised(&p.world, &image), &init)),
+            "{bad:?}"
+        );
+        assert!(
+            invalid(s.refine(
+                &eopnp::Problem::pixels(&p.world, &p.pixels, &case.camera),
+                &init
+            )),
             "{bad:?}"
         );
         assert!(
             matches!(
-                Ransac::default().estimate_pixels(&s, &case.camera, &p.world, &p.pixels),
+                Ransac::default().estimate(
+                    &s,
+                    &eopnp::Problem::pixels(&p.world, &p.pixels, &case.camera)
+                ),
                 Err(eopnp::PnpError::InvalidOption { option: "loss" })
             ),
             "{bad:?}"
@@ -442,7 +452,7 @@ fn unusable_loss_scales_are_invalid_options() {
     for good in [Loss::Huber(1e-150), Loss::Cauchy(1e150), Loss::Huber(2.0)] {
         Solver::default()
             .loss(good)
-            .solve_pixels(&p.world, &p.pixels, &case.camera)
+            .solve(&eopnp::Problem::pixels(&p.world, &p.pixels, &case.camera))
             .unwrap_or_else(|e| panic!("{good:?}: {e}"));
     }
 }
@@ -469,8 +479,9 @@ fn unusable_loss_scale_is_invalid_option() {
         assert!(!loss.is_valid(), "{loss:?}");
         let s = Solver::default().loss(loss);
         let results = [
-            s.solve(&p.world, &normalised).map(|_| ()),
-            s.solve_pixels(&p.world, &p.pixels, &case.camera)
+            s.solve(&eopnp::Problem::normalised(&p.world, &normalised))
+                .map(|_| ()),
+            s.solve(&eopnp::Problem::pixels(&p.world, &p.pixels, &case.camera))
                 .map(|_| ()),
         ];
         for r in results {
@@ -510,23 +521,29 @@ fn weighted_refine_is_the_weighted_solve_pose() {
             );
             let s = Solver::default();
             let solved = s
-                .solve_pixels_weighted(&p.world, &p.pixels, cam, &weights)
+                .solve(&eopnp::Problem::pixels(&p.world, &p.pixels, cam).weights(&weights))
                 .unwrap();
             let refined = s
-                .refine_pixels_weighted(&p.world, &p.pixels, cam, &weights, &prior)
+                .refine(
+                    &eopnp::Problem::pixels(&p.world, &p.pixels, cam).weights(&weights),
+                    &prior,
+                )
                 .unwrap();
             assert!(refined.converged, "{name} trial {trial}");
             assert!(
                 rot_err_deg(&refined.rotation, &solved.rotation) < 1e-7
-                    && (refined.pose.translation.vector - solved.pose.translation.vector).norm()
-                        < 1e-8,
+                    && (refined.translation - solved.translation).norm() < 1e-8,
                 "{name} trial {trial}: refined {refined:?} solved {solved:?}"
             );
             assert!((refined.cost - solved.cost).abs() <= 1e-9 * solved.cost);
             assert_eq!(refined.used, N - 1);
             // Weight 0 = dropped.
             let dropped = s
-                .refine_pixels_weighted(&p.world[1..], &p.pixels[1..], cam, &weights[1..], &prior)
+                .refine(
+                    &eopnp::Problem::pixels(&p.world[1..], &p.pixels[1..], cam)
+                        .weights(&weights[1..]),
+                    &prior,
+                )
                 .unwrap();
             assert!(rot_err_deg(&dropped.rotation, &refined.rotation) < 1e-7);
             // Normalised input: solve_weighted's pose.
@@ -535,9 +552,14 @@ fn weighted_refine_is_the_weighted_solve_pose() {
                 .iter()
                 .map(|u| cam.undistort(*u).unwrap())
                 .collect();
-            let solved = s.solve_weighted(&p.world, &image, &weights).unwrap();
+            let solved = s
+                .solve(&eopnp::Problem::normalised(&p.world, &image).weights(&weights))
+                .unwrap();
             let refined = s
-                .refine_weighted(&p.world, &image, &weights, &prior)
+                .refine(
+                    &eopnp::Problem::normalised(&p.world, &image).weights(&weights),
+                    &prior,
+                )
                 .unwrap();
             assert!(refined.converged, "{name} trial {trial}");
             assert!(
@@ -554,11 +576,17 @@ fn weighted_refine_is_the_weighted_solve_pose() {
     let mut w = vec![1.0; N];
     w[3] = -1.0;
     let e = Solver::default()
-        .refine_pixels_weighted(&p.world, &p.pixels, &case.camera, &w, &prior)
+        .refine(
+            &eopnp::Problem::pixels(&p.world, &p.pixels, &case.camera).weights(&w),
+            &prior,
+        )
         .unwrap_err();
     assert_eq!(e, eopnp::PnpError::InvalidWeight { index: 3 });
     let e = Solver::default()
-        .refine_weighted(&p.world, &p.pixels, &w[..N - 1], &prior)
+        .refine(
+            &eopnp::Problem::normalised(&p.world, &p.pixels).weights(&w[..N - 1]),
+            &prior,
+        )
         .unwrap_err();
     assert!(matches!(e, eopnp::PnpError::WeightsLength { .. }), "{e:?}");
 }

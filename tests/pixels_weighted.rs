@@ -5,6 +5,7 @@
 
 use eopnp::camera::Camera;
 use eopnp::ransac::Ransac;
+use eopnp::Problem;
 use eopnp::{InputKind, PnpError, Solver};
 use nalgebra::{Point2, Point3, Rotation3, Vector2, Vector3};
 
@@ -44,10 +45,12 @@ fn unit_weights_are_solve_pixels() {
     let cam = camera();
     let (world, pixels) = problem(&cam);
     let solver = Solver::default();
-    let plain = solver.solve_pixels(&world, &pixels, &cam).unwrap();
+    let plain = solver
+        .solve(&Problem::pixels(&world, &pixels, &cam))
+        .unwrap();
     let ones = vec![1.0; world.len()];
     let weighted = solver
-        .solve_pixels_weighted(&world, &pixels, &cam, &ones)
+        .solve(&Problem::pixels(&world, &pixels, &cam).weights(&ones))
         .unwrap();
     assert_eq!(plain, weighted);
 }
@@ -57,17 +60,19 @@ fn zero_weight_drops_the_point() {
     let cam = camera();
     let (mut world, mut pixels) = problem(&cam);
     let solver = Solver::default();
-    let reference = solver.solve_pixels(&world, &pixels, &cam).unwrap();
+    let reference = solver
+        .solve(&Problem::pixels(&world, &pixels, &cam))
+        .unwrap();
     world.insert(3, Point3::new(4.0, -3.0, 2.0));
     pixels.insert(3, Point2::new(12.0, 470.0));
     let mut weights = vec![1.0; world.len()];
     weights[3] = 0.0;
     let sol = solver
-        .solve_pixels_weighted(&world, &pixels, &cam, &weights)
+        .solve(&Problem::pixels(&world, &pixels, &cam).weights(&weights))
         .unwrap();
     assert_eq!((sol.used, sol.skipped), (12, 0));
     assert!((sol.rotation - reference.rotation).norm() < 1e-12);
-    let dt = sol.pose.translation.vector - reference.pose.translation.vector;
+    let dt = sol.translation - reference.translation;
     assert!(dt.norm() < 1e-11);
 }
 
@@ -80,10 +85,10 @@ fn bad_weights_keep_their_index() {
     pixels[1] = Point2::new(f64::NAN, 0.0);
     let mut weights = vec![1.0; world.len()];
     weights[5] = -1.0;
-    let err = solver.solve_pixels_weighted(&world, &pixels, &cam, &weights);
+    let err = solver.solve(&Problem::pixels(&world, &pixels, &cam).weights(&weights));
     assert_eq!(err, Err(PnpError::InvalidWeight { index: 5 }));
     weights[5] = f64::INFINITY;
-    let err = solver.solve_pixels_weighted(&world, &pixels, &cam, &weights);
+    let err = solver.solve(&Problem::pixels(&world, &pixels, &cam).weights(&weights));
     assert_eq!(
         err,
         Err(PnpError::NonFinite {
@@ -91,7 +96,7 @@ fn bad_weights_keep_their_index() {
             input: InputKind::Weight
         })
     );
-    let err = solver.solve_pixels_weighted(&world, &pixels, &cam, &weights[1..]);
+    let err = solver.solve(&Problem::pixels(&world, &pixels, &cam).weights(&weights[1..]));
     assert_eq!(
         err,
         Err(PnpError::WeightsLength {
@@ -99,7 +104,7 @@ fn bad_weights_keep_their_index() {
             points: 12
         })
     );
-    let err = solver.solve_pixels_weighted(&world, &pixels[1..], &cam, &weights);
+    let err = solver.solve(&Problem::pixels(&world, &pixels[1..], &cam).weights(&weights));
     assert_eq!(
         err,
         Err(PnpError::LengthMismatch {
@@ -110,7 +115,7 @@ fn bad_weights_keep_their_index() {
     // Weight 1 everywhere: the NaN pixel is skipped, as in `solve_pixels`.
     weights[5] = 1.0;
     let sol = solver
-        .solve_pixels_weighted(&world, &pixels, &cam, &weights)
+        .solve(&Problem::pixels(&world, &pixels, &cam).weights(&weights))
         .unwrap();
     assert_eq!((sol.used, sol.skipped), (11, 1));
 }
@@ -141,23 +146,23 @@ fn pixels_left_out_are_the_correspondences_removed() {
 
     let solver = Solver::default();
     let sol = solver
-        .solve_pixels_weighted(&world, &with_bad, &cam, &weights)
+        .solve(&Problem::pixels(&world, &with_bad, &cam).weights(&weights))
         .unwrap();
     let reference = solver
-        .solve_pixels_weighted(&world_kept, &pixels_kept, &cam, &weights_kept)
+        .solve(&Problem::pixels(&world_kept, &pixels_kept, &cam).weights(&weights_kept))
         .unwrap();
     assert_eq!((sol.used, sol.skipped), (10, 2));
-    assert_eq!(sol.pose, reference.pose);
+    assert_eq!(sol.pose(), reference.pose());
     assert_eq!(sol.cost, reference.cost);
 
     let ransac = Ransac::default().seed(7);
     let est = ransac
-        .estimate_pixels(&solver, &cam, &world, &with_bad)
+        .estimate(&solver, &Problem::pixels(&world, &with_bad, &cam))
         .unwrap();
     let est_ref = ransac
-        .estimate_pixels(&solver, &cam, &world_kept, &pixels_kept)
+        .estimate(&solver, &Problem::pixels(&world_kept, &pixels_kept, &cam))
         .unwrap();
-    assert_eq!(est.solution.pose, est_ref.solution.pose);
+    assert_eq!(est.solution.pose(), est_ref.solution.pose());
     assert_eq!(est.inliers.len(), 12);
     assert!(!est.inliers[3] && !est.inliers[8]);
     assert_eq!(without_3_and_8(&est.inliers), est_ref.inliers);

@@ -4,12 +4,16 @@
 
 use std::path::PathBuf;
 
-use eopnp::colmap::{read_model, register_image, Model};
+use eopnp::colmap::{read_model, register_image, Model, ReadOptions};
 use eopnp::ransac::Ransac;
 use eopnp::Solver;
 
 fn model() -> Model {
-    read_model(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/colmap-boxes")).unwrap()
+    read_model(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/colmap-boxes"),
+        &ReadOptions::default(),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -22,7 +26,7 @@ fn same_seed_same_result() {
         let reg = register_image(&model, id, &solver, Some(&r)).unwrap();
         let stats = reg.ransac.unwrap();
         (
-            reg.solution.pose,
+            reg.solution.pose(),
             reg.inliers,
             stats.iterations,
             stats.hypotheses,
@@ -46,16 +50,27 @@ fn bad_input_is_an_error_not_a_panic() {
     let w = [Point3::new(0.0, 0.0, 1.0); 3];
     let i = [Point2::new(0.0, 0.0); 3];
     assert!(matches!(
-        r.estimate(&s, &w, &i, (1000.0, 1000.0), None),
+        r.estimate(
+            &s,
+            &eopnp::Problem::normalised(&w, &i).focal(1000.0, 1000.0)
+        ),
         Err(PnpError::TooFewPoints { .. })
     ));
     let w = [Point3::new(f64::NAN, 0.0, 1.0); 5];
     let i = [Point2::new(0.0, 0.0); 5];
-    assert!(r.estimate(&s, &w, &i, (1000.0, 1000.0), None).is_err());
+    assert!(r
+        .estimate(
+            &s,
+            &eopnp::Problem::normalised(&w, &i).focal(1000.0, 1000.0)
+        )
+        .is_err());
     // All points identical: no hypothesis, a typed error.
     let w = [Point3::new(1.0, 0.0, 1.0); 8];
     assert!(r
-        .estimate(&s, &w, &i.repeat(2)[..8], (1000.0, 1000.0), None)
+        .estimate(
+            &s,
+            &eopnp::Problem::normalised(&w, &i.repeat(2)[..8]).focal(1000.0, 1000.0)
+        )
         .is_err());
 }
 
@@ -96,18 +111,23 @@ fn options_out_of_range_are_typed_errors() {
         ),
     ];
     for (r, option) in cases {
-        let e = r.estimate(&s, &w, &i, (800.0, 800.0), None).unwrap_err();
+        let e = r
+            .estimate(&s, &eopnp::Problem::normalised(&w, &i).focal(800.0, 800.0))
+            .unwrap_err();
         assert_eq!(e, PnpError::InvalidOption { option });
         assert!(e.to_string().contains(option), "{e}");
         // Checked first, before the data.
         assert_eq!(
-            r.estimate(&s, &w[..2], &i[..2], (800.0, 800.0), None)
-                .unwrap_err(),
+            r.estimate(
+                &s,
+                &eopnp::Problem::normalised(&w[..2], &i[..2]).focal(800.0, 800.0)
+            )
+            .unwrap_err(),
             PnpError::InvalidOption { option }
         );
     }
     assert!(Ransac::default()
-        .estimate(&s, &w, &i, (800.0, 800.0), None)
+        .estimate(&s, &eopnp::Problem::normalised(&w, &i).focal(800.0, 800.0))
         .is_ok());
 }
 
@@ -129,7 +149,10 @@ fn no_consensus_is_reported_with_the_sample_count() {
         })
         .collect();
     let r = Ransac::default().threshold_px(0.5).max_iterations(200);
-    match r.estimate(&Solver::default(), &w, &i, (800.0, 800.0), None) {
+    match r.estimate(
+        &Solver::default(),
+        &eopnp::Problem::normalised(&w, &i).focal(800.0, 800.0),
+    ) {
         Err(e @ PnpError::NoConsensus { iterations, .. }) => {
             assert_eq!(iterations, 200);
             let msg = e.to_string();
@@ -156,10 +179,14 @@ fn clean_problems_with_four_and_five_points_are_solved() {
             });
             let sol = Ransac::default()
                 .seed(seed)
-                .estimate(&Solver::default(), &p.world, &p.image, (800.0, 800.0), None)
+                .estimate(
+                    &Solver::default(),
+                    &eopnp::Problem::normalised(&p.world, &p.image).focal(800.0, 800.0),
+                )
                 .unwrap_or_else(|e| panic!("N = {n}, seed {seed}: {e}"));
             assert_eq!(sol.num_inliers, n, "N = {n}, seed {seed}");
-            let err = eopnp::metrics::rotation_error_deg(&sol.solution.rotation, &p.r_gt);
+            let err =
+                eopnp::internals::metrics::rotation_error_deg(&sol.solution.rotation, &p.r_gt);
             assert!(err < 1e-6, "N = {n}, seed {seed}: {err:e} deg");
         }
     }

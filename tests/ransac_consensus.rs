@@ -3,7 +3,7 @@
 //! contaminated problems keep their true pose.
 use std::path::PathBuf;
 
-use eopnp::colmap::{read_model, register_image, RegisterError};
+use eopnp::colmap::{read_model, register_image, ReadOptions, RegisterError};
 use eopnp::ransac::Ransac;
 use eopnp::{PnpError, Solver};
 use eopnp_testkit::{self as common, Problem, ProblemOptions, RotationKind, Scene};
@@ -33,9 +33,12 @@ fn contaminated(n: usize, n_in: usize, seed: u64) -> Problem {
 fn outcome(p: &Problem, seed: u64) -> Result<(usize, f64), PnpError> {
     Ransac::default()
         .seed(seed)
-        .estimate(&Solver::default(), &p.world, &p.image, (800.0, 800.0), None)
+        .estimate(
+            &Solver::default(),
+            &eopnp::Problem::normalised(&p.world, &p.image).focal(800.0, 800.0),
+        )
         .map(|s| {
-            let err = eopnp::metrics::rotation_error_deg(&s.solution.rotation, &p.r_gt);
+            let err = eopnp::internals::metrics::rotation_error_deg(&s.solution.rotation, &p.r_gt);
             (s.num_inliers, err)
         })
 }
@@ -53,10 +56,7 @@ fn no_consensus_without_signal() {
                 let p = contaminated(n, n_in, common::trial_seed("consensus_noise", seed));
                 let r = Ransac::default().seed(seed).threshold_px(th).estimate(
                     &Solver::default(),
-                    &p.world,
-                    &p.image,
-                    (800.0, 800.0),
-                    None,
+                    &eopnp::Problem::normalised(&p.world, &p.image).focal(800.0, 800.0),
                 );
                 match r {
                     Err(PnpError::NoConsensus {
@@ -98,7 +98,7 @@ fn true_consensus_is_accepted() {
 #[test]
 fn colmap_images_with_wrong_correspondences() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/colmap-boxes");
-    let mut model = read_model(dir).unwrap();
+    let mut model = read_model(dir, &ReadOptions::default()).unwrap();
     let ids: Vec<u32> = model.images.keys().copied().collect();
     for &id in &ids {
         let image = model.images.get_mut(&id).unwrap();

@@ -24,14 +24,19 @@ fn refine_from_a_nearby_prior_gives_the_ml_pose() {
                 rotation: RotationKind::Uniform,
                 seed: common::trial_seed("refine", trial),
             });
-            let full = Solver::default().solve(&p.world, &p.image).unwrap();
+            let full = Solver::default()
+                .solve(&eopnp::Problem::normalised(&p.world, &p.image))
+                .unwrap();
             // A prior 2 degrees and 3 % of the distance off the truth.
             let mut rng = common::rng_from_seed(common::trial_seed("refine_prior", trial));
             let w = common::unit_vector(&mut rng) * 2f64.to_radians();
             let r0 = common::exp_so3(&w) * p.r_gt;
             let t0 = p.t_gt + common::unit_vector(&mut rng) * 0.03 * p.t_gt.norm();
             let sol = Solver::default()
-                .refine(&p.world, &p.image, &iso(&r0, &t0))
+                .refine(
+                    &eopnp::Problem::normalised(&p.world, &p.image),
+                    &iso(&r0, &t0),
+                )
                 .unwrap();
             let seed = p.opts.seed;
             assert!(sol.converged, "{scene:?} seed {seed:#x}");
@@ -63,7 +68,10 @@ fn refine_pixels_through_a_camera() {
     let pixels: Vec<_> = p.image.iter().map(|m| cam.project(*m)).collect();
     let r0 = common::exp_so3(&Vector3::new(0.02, -0.01, 0.015)) * p.r_gt;
     let sol = Solver::default()
-        .refine_pixels(&p.world, &pixels, &cam, &iso(&r0, &(p.t_gt * 1.02)))
+        .refine(
+            &eopnp::Problem::pixels(&p.world, &pixels, &cam),
+            &iso(&r0, &(p.t_gt * 1.02)),
+        )
         .unwrap();
     assert!(sol.converged);
     assert!(common::rot_err_deg(&sol.rotation, &p.r_gt) < 1e-8);
@@ -80,12 +88,15 @@ fn refine_refuses_a_non_finite_prior_and_bad_input() {
     });
     let bad = iso(&p.r_gt, &Vector3::new(f64::NAN, 0.0, 1.0));
     let e = Solver::default()
-        .refine(&p.world, &p.image, &bad)
+        .refine(&eopnp::Problem::normalised(&p.world, &p.image), &bad)
         .unwrap_err();
     assert_eq!(e, PnpError::InvalidOption { option: "initial" });
     assert!(e.to_string().contains("initial pose"));
     let e = Solver::default()
-        .refine(&p.world[..3], &p.image[..3], &iso(&p.r_gt, &p.t_gt))
+        .refine(
+            &eopnp::Problem::normalised(&p.world[..3], &p.image[..3]),
+            &iso(&p.r_gt, &p.t_gt),
+        )
         .unwrap_err();
     assert_eq!(e, PnpError::TooFewPoints { got: 3, need: 4 });
 }
@@ -101,10 +112,15 @@ fn refine_stays_in_the_basin_it_starts_in() {
         rotation: RotationKind::Uniform,
         seed: 3,
     });
-    let full = Solver::default().solve(&p.world, &p.image).unwrap();
+    let full = Solver::default()
+        .solve(&eopnp::Problem::normalised(&p.world, &p.image))
+        .unwrap();
     let flip = common::axis_angle(&Vector3::new(0.0, 0.0, 1.0), std::f64::consts::PI) * p.r_gt;
     let sol = Solver::default()
-        .refine(&p.world, &p.image, &iso(&flip, &p.t_gt))
+        .refine(
+            &eopnp::Problem::normalised(&p.world, &p.image),
+            &iso(&flip, &p.t_gt),
+        )
         .unwrap();
     assert!(sol.cost >= full.cost * (1.0 - 1e-12));
 }

@@ -1,8 +1,8 @@
-//! Unit-level tests of the public polynomial root finders (`eopnp::roots`): known roots,
+//! Unit-level tests of the public polynomial root finders (`eopnp::internals::roots`): known roots,
 //! multiple roots, zero and degree-0 polynomials, leading zeros, non-finite and extreme
 //! coefficients, near-real complex pairs, iteration. (Formerly `src/numeric/roots/tests.rs`.)
 
-use eopnp::roots::{
+use eopnp::internals::roots::{
     cubic_real_roots, quartic_real_roots, real_roots, real_roots_near, Roots, DEFAULT_IMAG_TOL,
 };
 

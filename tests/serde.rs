@@ -3,6 +3,7 @@
 
 use eopnp::camera::{Camera, CameraModel};
 use eopnp::ransac::{Ransac, RansacSolution};
+use eopnp::Problem;
 use eopnp::{Refinement, Solution, Solver};
 use nalgebra::{Point2, Point3, Rotation3, Vector3};
 
@@ -40,7 +41,7 @@ fn solution_and_options_round_trip() {
         Solver::default(),
         Solver::default().refinement(Refinement::Algebraic),
     ] {
-        let sol = solver.solve(&world, &image).unwrap();
+        let sol = solver.solve(&Problem::normalised(&world, &image)).unwrap();
         let back: Solution = round_trip(&sol);
         assert_eq!(back, sol);
     }
@@ -48,7 +49,10 @@ fn solution_and_options_round_trip() {
     let r = Ransac::default().threshold_px(3.0).seed(9);
     assert_eq!(round_trip(&r), r);
     let sol = r
-        .estimate(&Solver::default(), &world, &image, (800.0, 800.0), None)
+        .estimate(
+            &Solver::default(),
+            &Problem::normalised(&world, &image).focal(800.0, 800.0),
+        )
         .unwrap();
     let back: RansacSolution = round_trip(&sol);
     assert_eq!(back.solution, sol.solution);
@@ -85,9 +89,9 @@ fn camera_round_trips_and_is_validated() {
 
 #[test]
 fn colmap_model_and_registration_round_trip() {
-    use eopnp::colmap::{read_model, register_image, Model, Registration};
+    use eopnp::colmap::{read_model, register_image, Model, ReadOptions, Registration};
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-boxes");
-    let model = read_model(dir).unwrap();
+    let model = read_model(dir, &ReadOptions::default()).unwrap();
     let back: Model = round_trip(&model);
     assert_eq!(back, model);
     let id = *model.images.keys().next().unwrap();

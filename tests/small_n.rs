@@ -53,7 +53,7 @@ fn seeded(n: usize, scene: Scene, seed: u64) -> Problem {
 /// truth, or the solver's error.
 fn cost_and_lm(solver: &Solver, p: &Problem) -> Result<(f64, f64), eopnp::PnpError> {
     let lm = p.lm_from_gt();
-    let s = solver.solve(&p.world, &p.image)?;
+    let s = solver.solve(&eopnp::Problem::normalised(&p.world, &p.image))?;
     let (r, t) = pose_of(&s);
     let cost = reprojection_cost(&p.world, &p.pixels, &r, &t, PIXEL_CAMERA);
     Ok((cost, lm.cost))
@@ -151,9 +151,14 @@ fn weights_at_n4_n5() {
             let p = problem("small_n/weights", 5, scene, trial);
             let seed = p.opts.seed;
             // The fifth point weighted 0: the pose of the first four.
-            let four = solver.solve(&p.world[..4], &p.image[..4]).unwrap();
+            let four = solver
+                .solve(&eopnp::Problem::normalised(&p.world[..4], &p.image[..4]))
+                .unwrap();
             let w0 = solver
-                .solve_weighted(&p.world, &p.image, &[1.0, 1.0, 1.0, 1.0, 0.0])
+                .solve(
+                    &eopnp::Problem::normalised(&p.world, &p.image)
+                        .weights(&[1.0, 1.0, 1.0, 1.0, 0.0]),
+                )
                 .unwrap();
             let (r4, t4) = pose_of(&four);
             let (r, t) = pose_of(&w0);
@@ -165,9 +170,11 @@ fn weights_at_n4_n5() {
             );
             assert_eq!(w0.used, 4);
             // A common scale of the weights: the same pose, the cost scaled.
-            let one = solver.solve(&p.world, &p.image).unwrap();
+            let one = solver
+                .solve(&eopnp::Problem::normalised(&p.world, &p.image))
+                .unwrap();
             let scaled = solver
-                .solve_weighted(&p.world, &p.image, &[3.0; 5])
+                .solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(&[3.0; 5]))
                 .unwrap();
             let (r1, t1) = pose_of(&one);
             let (rs, ts) = pose_of(&scaled);
@@ -218,7 +225,7 @@ fn collinear_triple_at_n4() {
             continue; // a point too close to (or behind) the camera for a sensible problem
         }
         let s = solver
-            .solve(&world, &image)
+            .solve(&eopnp::Problem::normalised(&world, &image))
             .unwrap_or_else(|e| panic!("trial {trial}: {e:?}"));
         ran += 1;
         // The small-N search's sources (four such points are coplanar, so the p1 start is

@@ -115,7 +115,9 @@ fn soak(count: u64) -> Tally {
             t.degenerate_inputs += 1;
         }
         let start = Instant::now();
-        let result = catch_unwind(AssertUnwindSafe(|| solver.solve(&p.world, &p.image)));
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            solver.solve(&eopnp::Problem::normalised(&p.world, &p.image))
+        }));
         let took = start.elapsed();
         if took > t.max_call {
             t.max_call = took;
@@ -132,11 +134,11 @@ fn soak(count: u64) -> Tally {
                 t.ok += 1;
                 assert!(
                     s.rotation.iter().all(|x| x.is_finite())
-                        && s.pose.translation.vector.iter().all(|x| x.is_finite()),
+                        && s.translation.iter().all(|x| x.is_finite()),
                     "Ok with a non-finite pose (seed {seed})"
                 );
                 if !degenerate {
-                    let (er, _) = p.errors(&s.rotation, &s.pose.translation.vector);
+                    let (er, _) = p.errors(&s.rotation, &s.translation);
                     if er > 5.0 {
                         t.failures += 1;
                         if n <= 20 {

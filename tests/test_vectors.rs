@@ -11,6 +11,7 @@
 // `!(err <= tol)` is deliberate throughout: a NaN error must fail the check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use eopnp::Problem;
 use eopnp_testkit as common;
 
 use common::{lm_refine, rot_err_deg, trans_err_pct, NORMALISED};
@@ -96,7 +97,7 @@ fn algebraic_mode_matches_reference() {
     let mut report = Vec::new();
     let mut failures = Vec::new();
     for tv in load() {
-        let sol = match solver.solve(&tv.world, &tv.image) {
+        let sol = match solver.solve(&Problem::normalised(&tv.world, &tv.image)) {
             Ok(s) => s,
             Err(e) => {
                 failures.push(format!("{}: error {e:?}", tv.name));
@@ -153,7 +154,7 @@ fn default_mode_matches_s9_from_expected() {
     let mut report = Vec::new();
     let mut failures = Vec::new();
     for tv in load() {
-        let sol = match solver.solve(&tv.world, &tv.image) {
+        let sol = match solver.solve(&Problem::normalised(&tv.world, &tv.image)) {
             Ok(s) => s,
             Err(e) => {
                 failures.push(format!("{}: error {e:?}", tv.name));

@@ -42,7 +42,7 @@ fn no_wrong_pose_unflagged_over_shrinking_patterns() {
             let (mut good, mut flagged, mut errors) = (0, 0, 0);
             for seed in 0..50 {
                 let (p, w, i) = shrunk(common::trial_seed("tiny_image", seed), 10, scene, s);
-                match Solver::default().solve(&w, &i) {
+                match Solver::default().solve(&eopnp::Problem::normalised(&w, &i)) {
                     Ok(sol) if sol.degenerate => flagged += 1,
                     Ok(sol) => {
                         let err = common::rot_err_deg(&sol.rotation, &p.r_gt);

@@ -25,7 +25,7 @@ fn no_root_mirrored_through_the_principal_point() {
                             continue;
                         };
                         ok += 1;
-                        let (fx, fy) = cam.intrinsics_scale();
+                        let (fx, fy) = cam.focal_lengths();
                         let (cx, cy) = cam.principal_point();
                         let d = ((px.x - cx) / fx, (px.y - cy) / fy);
                         // Same side of the principal point as the pixel.

@@ -3,6 +3,7 @@
 //! (the working frame) makes these decisions; the solver returns its error unchanged.
 //! (Formerly unit tests of the working frame in `src/pipeline/frame/tests.rs`.)
 
+use eopnp::Problem;
 use eopnp::{DegenerateKind, InputKind, PnpError, Solution, Solver};
 use nalgebra::{Point2, Point3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -36,8 +37,8 @@ fn solve(
     weights: Option<&[f64]>,
 ) -> Result<Solution, PnpError> {
     match weights {
-        Some(w) => Solver::default().solve_weighted(world, image, w),
-        None => Solver::default().solve(world, image),
+        Some(w) => Solver::default().solve(&Problem::normalised(world, image).weights(w)),
+        None => Solver::default().solve(&Problem::normalised(world, image)),
     }
 }
 

@@ -128,7 +128,10 @@ pub(crate) fn ransac_on_problem(
     solver: &Solver,
 ) -> Result<(Estimate, RansacSolution), RegisterError> {
     let (_, cam) = model.image_and_camera(image_id)?;
-    let sol = ransac.estimate_pixels(solver, cam, &problem.world, &problem.pixels)?;
+    let sol = ransac.estimate(
+        solver,
+        &eopnp::Problem::pixels(&problem.world, &problem.pixels, cam),
+    )?;
     let mut reg = estimate(model, image_id, problem, &sol.solution, sol.num_inliers)?;
     reg.micros = sol.stats.micros;
     reg.ransac = Some(sol.stats);
@@ -151,7 +154,7 @@ pub(crate) fn estimate(
     let (img, cam) = model.image_and_camera(image_id)?;
     let (r_ref, t_ref) = img.pose();
     let r = solution.rotation;
-    let t = solution.pose.translation.vector;
+    let t = solution.translation;
     let rmse = |r: &Matrix3<f64>, t: &Vector3<f64>| true_rmse(cam, problem, r, t);
     Ok(Estimate {
         n: problem.world.len(),
@@ -183,7 +186,12 @@ fn rotation_error_deg(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
 /// correspondences of `problem` (NaN if there is none).
 fn true_rmse(cam: &Camera, problem: &ImageProblem, r: &Matrix3<f64>, t: &Vector3<f64>) -> f64 {
     let (mut sum, mut count) = (0.0, 0usize);
-    for ((x, u), ok) in problem.world.iter().zip(&problem.pixels).zip(&problem.truth) {
+    for ((x, u), ok) in problem
+        .world
+        .iter()
+        .zip(&problem.pixels)
+        .zip(&problem.truth)
+    {
         if *ok {
             let p = r * x.coords + t;
             sum += (cam.project(Point2::new(p.x / p.z, p.y / p.z)) - u).norm_squared();
@@ -224,7 +232,7 @@ pub(crate) fn floor(
         }
     }
     let start = Instant::now();
-    let sol = solver.solve_pixels(&w, &p, cam)?;
+    let sol = solver.solve(&eopnp::Problem::pixels(&w, &p, cam))?;
     let micros = start.elapsed().as_secs_f64() * 1e6;
     let mut reg = estimate(model, image_id, problem, &sol, sol.used)?;
     reg.micros = micros;

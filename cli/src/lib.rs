@@ -13,8 +13,8 @@ mod source;
 use std::io::Write;
 use std::path::PathBuf;
 
-use eopnp::{Refinement, Solver};
 use clap::{Args, Parser, Subcommand};
+use eopnp::{Refinement, Solver};
 
 /// Camera pose from 2D-3D point correspondences (EOPnP, Zhou & Kaess 2019, plus a
 /// reprojection-error refinement).

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use super::experiment::{self, ImageProblem, Outliers};
 use eopnp::colmap::{self, Limit, Model, ModelErrorKind, ModelFormat, RegisterError, Registrar};
 use eopnp::ransac::Ransac;
+use eopnp::Problem;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
@@ -120,7 +121,7 @@ fn plain_on_problem(
     let mut sol = None;
     for _ in 0..3 {
         let start = Instant::now();
-        let s = solver.solve_pixels(&problem.world, &problem.pixels, cam)?;
+        let s = solver.solve(&Problem::pixels(&problem.world, &problem.pixels, cam))?;
         best = best.min(start.elapsed().as_secs_f64() * 1e6);
         sol = Some(s);
     }
@@ -248,16 +249,21 @@ fn write_output(
     for (id, _, result, _) in rows {
         match (result, new.images.get_mut(id)) {
             (Ok(reg), Some(img)) => {
-                let q = reg.solution.pose.rotation;
+                let q = reg.solution.pose().rotation;
                 img.q = [q.w, q.i, q.j, q.k];
-                img.t = reg.solution.pose.translation.vector;
+                img.t = reg.solution.translation;
                 replaced += 1;
             }
             _ => kept.push(*id),
         }
     }
     let format = out.format.unwrap_or(input_format);
-    colmap::write_model(&new, &out.dir, format).map_err(|e| {
+    colmap::write_model(
+        &new,
+        &out.dir,
+        &colmap::WriteOptions::default().format(format),
+    )
+    .map_err(|e| {
         use std::io::ErrorKind as K;
         let message = format!("cannot write the model to {}: {e}", out.dir.display());
         match e.kind() {
@@ -368,10 +374,10 @@ pub(crate) fn run(
     opts.validate()?;
     let limits = opts
         .max_input_size
-        .map_or_else(colmap::ReadLimits::default, |n| {
-            colmap::ReadLimits::default().max_file_bytes(n)
+        .map_or_else(colmap::ReadOptions::default, |n| {
+            colmap::ReadOptions::default().max_file_bytes(n)
         });
-    let model = colmap::read_model_with_limits(dir, &limits).map_err(|e| {
+    let model = colmap::read_model(dir, &limits).map_err(|e| {
         let hint = if matches!(e.kind, ModelErrorKind::Limit(Limit::FileBytes(_))) {
             "; raise it with --max-input-size SIZE"
         } else {

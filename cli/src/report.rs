@@ -59,12 +59,7 @@ pub(super) struct Extra {
 }
 
 /// Outcome for one image: the registration or why it failed, and the robust-mode extras.
-pub(super) type Row = (
-    u32,
-    String,
-    Result<Estimate, RegisterError>,
-    Option<Extra>,
-);
+pub(super) type Row = (u32, String, Result<Estimate, RegisterError>, Option<Extra>);
 
 /// What `--write` wrote.
 pub(super) struct Written {
@@ -117,8 +112,8 @@ pub(super) fn to_json(
         .map(|(id, name, r, extra)| match r {
             Ok(r) => {
                 let rm = r.solution.rotation;
-                let t = r.solution.pose.translation.vector;
-                let q = r.solution.pose.rotation;
+                let t = r.solution.translation;
+                let q = r.solution.pose().rotation;
                 json!({
                     "image_id": id,
                     "name": name,

@@ -9,14 +9,14 @@ use crate::Failure;
 
 /// Solves the problem and renders the pose JSON.
 pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
-    // Undistortion failures are input errors here (`Solver::solve_pixels` would skip the point).
+    // Undistortion failures are input errors here (a solve would skip the point).
     for (k, px) in p.pixels.iter().enumerate() {
         p.camera
-            .undistort_weighted(*px)
+            .undistort(*px)
             .map_err(|e| Failure::input(format!("correspondence {}: {e}", k + 1)))?;
     }
     let sol = solver
-        .solve_pixels(&p.world, &p.pixels, &p.camera)
+        .solve(&eopnp::Problem::pixels(&p.world, &p.pixels, &p.camera))
         .map_err(|e| {
             // Degenerate or malformed input is the input's problem (exit 2); only a numerical
             // failure on valid input is the solver's (exit 1).
@@ -28,8 +28,8 @@ pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
         })?;
 
     let r = sol.rotation;
-    let t = sol.pose.translation.vector;
-    let q = sol.pose.rotation;
+    let t = sol.translation;
+    let q = sol.pose().rotation;
     let mut s2 = 0.0;
     for (x, px) in p.world.iter().zip(&p.pixels) {
         let c = r * x.coords + t;
@@ -56,4 +56,3 @@ pub fn solve(p: &Problem, solver: &Solver) -> Result<String, Failure> {
     out.push('\n');
     Ok(out)
 }
-

@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-use eopnp::colmap::read_model;
+use eopnp::colmap::{read_model, ReadOptions};
 
 fn eopnp(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_eopnp"))
@@ -117,7 +117,7 @@ fn register_json_on_the_binary_copy() {
 
 /// Image 2's correspondences as CSV and JSON, and its camera as a `--camera` string.
 fn image2_files() -> (PathBuf, PathBuf, String, nalgebra::Matrix3<f64>) {
-    let m = read_model(data("colmap-boxes")).unwrap();
+    let m = read_model(data("colmap-boxes"), &ReadOptions::default()).unwrap();
     let img = &m.images[&2];
     let cam = &m.cameras[&img.camera_id];
     let (world, pixels) = m.correspondences(2);
@@ -167,7 +167,7 @@ fn solve_csv_and_json_give_the_model_pose() {
         let r = rotation_of(&v);
         // Same pixel weighting as `register`: the default-mode bound of tests/colmap.rs.
         assert!(
-            eopnp::metrics::rotation_error_deg(&r, &r_model) <= 0.01,
+            eopnp::internals::metrics::rotation_error_deg(&r, &r_model) <= 0.01,
             "{v}"
         );
         assert_eq!(v["quaternion_wxyz"].as_array().unwrap().len(), 4);
@@ -279,7 +279,7 @@ fn assert_model_pose(out: &Output, r_model: &nalgebra::Matrix3<f64>) {
     assert!(out.status.success(), "{}", stderr(out));
     let v: serde_json::Value = serde_json::from_str(&stdout(out)).unwrap();
     assert!(
-        eopnp::metrics::rotation_error_deg(&rotation_of(&v), r_model) <= 0.01,
+        eopnp::internals::metrics::rotation_error_deg(&rotation_of(&v), r_model) <= 0.01,
         "{v}"
     );
 }

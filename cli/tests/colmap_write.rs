@@ -9,9 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use eopnp::colmap::{
-    encode_model, parse_model_binary, parse_model_text, read_model, read_model_binary,
-    read_model_text, write_model, write_model_binary, write_model_with, Model, ModelFormat,
-    Overwrite,
+    encode_model, parse_model, read_model, write_model, Model, ModelFormat, Overwrite, ReadOptions,
+    WriteOptions,
 };
 
 const TEXT_MODEL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../data/colmap-boxes");
@@ -66,18 +65,18 @@ fn format_of(dir: &Path) -> ModelFormat {
 fn write_then_read_gives_the_identical_model() {
     let base = scratch("roundtrip");
     for (input, name) in [(TEXT_MODEL, "text-in"), (BIN_MODEL, "bin-in")] {
-        let model = read_model(input).unwrap();
+        let model = read_model(input, &ReadOptions::default()).unwrap();
         assert_eq!(model.images.len(), 6);
         for format in FORMATS {
             let out = base.join(format!("{name}-{format:?}"));
-            write_model(&model, &out, format).unwrap();
+            write_model(&model, &out, &WriteOptions::default().format(format)).unwrap();
             assert_eq!(format_of(&out), format);
             assert_eq!(entries(&out), {
                 let mut n = format.file_names().map(String::from).to_vec();
                 n.sort();
                 n
             });
-            let back = read_model(&out).unwrap();
+            let back = read_model(&out, &ReadOptions::default()).unwrap();
             assert_eq!(back, model, "{name} -> {format:?}");
             // Bit for bit (PartialEq would let 0.0 == -0.0 pass).
             for (a, b) in model.images.values().zip(back.images.values()) {
@@ -92,8 +91,16 @@ fn write_then_read_gives_the_identical_model() {
             // And through the in-memory parsers.
             let files = encode_model(&model, format).unwrap();
             let parsed = match format {
-                ModelFormat::Text => parse_model_text(&files[0], &files[1], &files[2]),
-                ModelFormat::Binary => parse_model_binary(&files[0], &files[1], &files[2]),
+                ModelFormat::Text => parse_model(
+                    ModelFormat::Text,
+                    [&files[0], &files[1], &files[2]],
+                    &ReadOptions::default(),
+                ),
+                ModelFormat::Binary => parse_model(
+                    ModelFormat::Binary,
+                    [&files[0], &files[1], &files[2]],
+                    &ReadOptions::default(),
+                ),
             };
             assert_eq!(parsed.unwrap(), model);
         }
@@ -106,8 +113,13 @@ fn written_files_are_colmaps_own() {
     // (same header comments, and COLMAP's 6-digit values print the same in shortest form);
     // points3D.txt differs only in the order of the points (written by id).
     let base = scratch("colmap-bytes");
-    let bin = read_model(BIN_MODEL).unwrap();
-    write_model(&bin, base.join("b"), ModelFormat::Binary).unwrap();
+    let bin = read_model(BIN_MODEL, &ReadOptions::default()).unwrap();
+    write_model(
+        &bin,
+        base.join("b"),
+        &WriteOptions::default().format(ModelFormat::Binary),
+    )
+    .unwrap();
     for f in ModelFormat::Binary.file_names() {
         let ours = std::fs::read(base.join("b").join(f)).unwrap();
         assert!(
@@ -115,8 +127,13 @@ fn written_files_are_colmaps_own() {
             "{f}"
         );
     }
-    let text = read_model(TEXT_MODEL).unwrap();
-    write_model(&text, base.join("t"), ModelFormat::Text).unwrap();
+    let text = read_model(TEXT_MODEL, &ReadOptions::default()).unwrap();
+    write_model(
+        &text,
+        base.join("t"),
+        &WriteOptions::default().format(ModelFormat::Text),
+    )
+    .unwrap();
     for f in ["cameras.txt", "images.txt"] {
         let ours = std::fs::read_to_string(base.join("t").join(f)).unwrap();
         let theirs = std::fs::read_to_string(Path::new(TEXT_MODEL).join(f)).unwrap();
@@ -136,7 +153,7 @@ fn written_files_are_colmaps_own() {
 
 #[test]
 fn extreme_values_round_trip_exactly_in_text() {
-    let mut model = read_model(TEXT_MODEL).unwrap();
+    let mut model = read_model(TEXT_MODEL, &ReadOptions::default()).unwrap();
     let values = [
         -0.0,
         5e-324,
@@ -159,8 +176,13 @@ fn extreme_values_round_trip_exactly_in_text() {
     pt.xyz.y = -1e-300;
     pt.error = f64::INFINITY;
     let out = scratch("extreme").join("m");
-    write_model(&model, &out, ModelFormat::Text).unwrap();
-    let back = read_model_text(&out).unwrap();
+    write_model(
+        &model,
+        &out,
+        &WriteOptions::default().format(ModelFormat::Text),
+    )
+    .unwrap();
+    let back = read_model(&out, &ReadOptions::default().format(ModelFormat::Text)).unwrap();
     let a = &model.images.values().next().unwrap();
     let b = &back.images.values().next().unwrap();
     for k in 0..values.len() {
@@ -180,7 +202,7 @@ fn extreme_values_round_trip_exactly_in_text() {
 #[test]
 fn refuses_what_would_not_read_back() {
     let base = scratch("unrepresentable");
-    let model = read_model(TEXT_MODEL).unwrap();
+    let model = read_model(TEXT_MODEL, &ReadOptions::default()).unwrap();
     let first = *model.images.keys().next().unwrap();
     let cases: Vec<(Model, ModelFormat)> = vec![
         {
@@ -237,41 +259,74 @@ fn refuses_what_would_not_read_back() {
     ];
     for (k, (m, format)) in cases.iter().enumerate() {
         let out = base.join(format!("case{k}"));
-        let e = write_model(m, &out, *format).unwrap_err();
+        let e = write_model(m, &out, &WriteOptions::default().format(*format)).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::InvalidInput, "case {k}: {e}");
         assert!(!out.exists(), "case {k}");
     }
     assert!(entries(&base).is_empty(), "{:?}", entries(&base));
     // The same u64 id is fine in text.
     let (m, _) = &cases[7];
-    write_model(m, base.join("big-id"), ModelFormat::Text).unwrap();
-    assert_eq!(&read_model(base.join("big-id")).unwrap(), m);
+    write_model(
+        m,
+        base.join("big-id"),
+        &WriteOptions::default().format(ModelFormat::Text),
+    )
+    .unwrap();
+    assert_eq!(
+        &read_model(base.join("big-id"), &ReadOptions::default()).unwrap(),
+        m
+    );
 }
 
 #[test]
 fn existing_directories() {
     let base = scratch("existing");
-    let model = read_model(TEXT_MODEL).unwrap();
+    let model = read_model(TEXT_MODEL, &ReadOptions::default()).unwrap();
     // An empty directory is written into.
     let empty = base.join("empty");
     std::fs::create_dir(&empty).unwrap();
-    write_model(&model, &empty, ModelFormat::Binary).unwrap();
-    assert_eq!(read_model(&empty).unwrap(), model);
+    write_model(
+        &model,
+        &empty,
+        &WriteOptions::default().format(ModelFormat::Binary),
+    )
+    .unwrap();
+    assert_eq!(read_model(&empty, &ReadOptions::default()).unwrap(), model);
     // A non-empty one is refused and left as it was.
     let before = snapshot(&empty);
-    let e = write_model(&model, &empty, ModelFormat::Text).unwrap_err();
+    let e = write_model(
+        &model,
+        &empty,
+        &WriteOptions::default().format(ModelFormat::Text),
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::DirectoryNotEmpty, "{e}");
     assert_eq!(snapshot(&empty), before);
     // Text over a complete binary model is refused even with Overwrite::Files.
-    let e = write_model_with(&model, &empty, ModelFormat::Text, Overwrite::Files).unwrap_err();
+    let e = write_model(
+        &model,
+        &empty,
+        &WriteOptions::default()
+            .format(ModelFormat::Text)
+            .overwrite(Overwrite::Files),
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::AlreadyExists, "{e}");
     assert_eq!(snapshot(&empty), before);
     // Overwrite::Files replaces the three files and keeps the others.
     std::fs::write(empty.join("notes.txt"), b"keep me").unwrap();
     let mut moved = model.clone();
     moved.images.values_mut().for_each(|i| i.t.x += 1.0);
-    write_model_binary(&moved, &empty).unwrap();
-    assert_eq!(read_model_binary(&empty).unwrap(), moved);
+    write_model(
+        &moved,
+        &empty,
+        &WriteOptions::default().overwrite(Overwrite::Files),
+    )
+    .unwrap();
+    assert_eq!(
+        read_model(&empty, &ReadOptions::default().format(ModelFormat::Binary)).unwrap(),
+        moved
+    );
     assert_eq!(std::fs::read(empty.join("notes.txt")).unwrap(), b"keep me");
     assert_eq!(
         entries(&empty),
@@ -280,11 +335,26 @@ fn existing_directories() {
     // A file, a missing parent, a parent that is a file.
     let file = base.join("file");
     std::fs::write(&file, b"x").unwrap();
-    let e = write_model(&model, &file, ModelFormat::Text).unwrap_err();
+    let e = write_model(
+        &model,
+        &file,
+        &WriteOptions::default().format(ModelFormat::Text),
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::NotADirectory, "{e}");
-    let e = write_model(&model, base.join("missing/out"), ModelFormat::Text).unwrap_err();
+    let e = write_model(
+        &model,
+        base.join("missing/out"),
+        &WriteOptions::default().format(ModelFormat::Text),
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::NotFound, "{e}");
-    let e = write_model(&model, file.join("out"), ModelFormat::Text).unwrap_err();
+    let e = write_model(
+        &model,
+        file.join("out"),
+        &WriteOptions::default().format(ModelFormat::Text),
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), ErrorKind::NotADirectory, "{e}");
     assert_eq!(std::fs::read(&file).unwrap(), b"x");
     assert_eq!(entries(&base), ["empty", "file"]);
@@ -316,8 +386,8 @@ fn cli_writes_the_registered_poses() {
         assert_eq!(v["written"]["replaced"], 6);
         assert_eq!(v["written"]["kept_input_pose"], serde_json::json!([]));
         assert_eq!(format_of(&out), format);
-        let input_model = read_model(input).unwrap();
-        let written = read_model(&out).unwrap();
+        let input_model = read_model(input, &ReadOptions::default()).unwrap();
+        let written = read_model(&out, &ReadOptions::default()).unwrap();
         // Everything but the poses is the input's.
         assert_eq!(written.cameras, input_model.cameras);
         assert_eq!(written.points, input_model.points);
@@ -364,7 +434,12 @@ fn cli_refuses_bad_output_paths_and_leaves_the_input_alone() {
     let base = scratch("cli-refuse");
     // A private copy of the input, so that nothing else races on it.
     let input = base.join("in");
-    write_model(&read_model(TEXT_MODEL).unwrap(), &input, ModelFormat::Text).unwrap();
+    write_model(
+        &read_model(TEXT_MODEL, &ReadOptions::default()).unwrap(),
+        &input,
+        &WriteOptions::default().format(ModelFormat::Text),
+    )
+    .unwrap();
     std::fs::write(base.join("a-file"), b"not a directory").unwrap();
     let non_empty = base.join("non-empty");
     std::fs::create_dir(&non_empty).unwrap();
@@ -473,15 +548,27 @@ fn library_failure_half_way_in_an_existing_directory_restores_it() {
     // rename of that file fails after the others were renamed; they are put back.
     let base = scratch("restore");
     let dir = base.join("m");
-    let model = read_model(BIN_MODEL).unwrap();
-    write_model(&model, &dir, ModelFormat::Binary).unwrap();
+    let model = read_model(BIN_MODEL, &ReadOptions::default()).unwrap();
+    write_model(
+        &model,
+        &dir,
+        &WriteOptions::default().format(ModelFormat::Binary),
+    )
+    .unwrap();
     std::fs::remove_file(dir.join("points3D.bin")).unwrap();
     std::fs::create_dir(dir.join("points3D.bin")).unwrap();
     std::fs::write(dir.join("points3D.bin").join("x"), b"x").unwrap();
     let before = snapshot(&dir);
     let mut moved = model.clone();
     moved.images.values_mut().for_each(|i| i.t.z -= 2.0);
-    let e = write_model_with(&moved, &dir, ModelFormat::Binary, Overwrite::Files).unwrap_err();
+    let e = write_model(
+        &moved,
+        &dir,
+        &WriteOptions::default()
+            .format(ModelFormat::Binary)
+            .overwrite(Overwrite::Files),
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("points3D.bin"), "{e}");
     assert!(snapshot(&dir) == before, "directory not restored");
     assert_eq!(entries(&dir), ["cameras.bin", "images.bin", "points3D.bin"]);

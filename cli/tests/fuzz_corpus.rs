@@ -14,6 +14,7 @@
 #[allow(dead_code)]
 mod harness;
 
+use eopnp::Problem;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -121,7 +122,9 @@ fn seeds_reach_the_solver() {
     let solver = harness::decode_solver(r.u8());
     let p = harness::decode_problem(&mut r);
     assert_eq!(p.world.len(), 10);
-    let sol = solver.solve(&p.world, &p.image).unwrap();
+    let sol = solver
+        .solve(&Problem::normalised(&p.world, &p.image))
+        .unwrap();
     assert!(sol.reprojection_rmse < 1e-3, "{}", sol.reprojection_rmse);
 
     let data = seed("solve", "tiled10000-default");
@@ -134,19 +137,17 @@ fn seeds_reach_the_solver() {
     let solver = harness::decode_solver(r.u8());
     let p = harness::decode_problem(&mut r);
     assert!(matches!(
-        solver.solve(&p.world, &p.image),
+        solver.solve(&Problem::normalised(&p.world, &p.image)),
         Err(eopnp::PnpError::NonFinite { .. })
     ));
 }
 
 #[test]
 fn seeds_reach_the_parsers_and_registration() {
-    for (target, parse) in [
-        (
-            "colmap_text",
-            eopnp::colmap::parse_model_text as fn(&[u8], &[u8], &[u8]) -> _,
-        ),
-        ("colmap_binary", eopnp::colmap::parse_model_binary),
+    use eopnp::colmap::{parse_model, ModelFormat, ReadOptions};
+    for (target, format) in [
+        ("colmap_text", ModelFormat::Text),
+        ("colmap_binary", ModelFormat::Binary),
     ] {
         let data = seed(target, "boxes-subset");
         let sep = b"\0\0\xff";
@@ -158,7 +159,12 @@ fn seeds_reach_the_parsers_and_registration() {
         }
         files.push(rest);
         assert_eq!(files.len(), 3, "{target}");
-        let model = parse(files[0], files[1], files[2]).unwrap();
+        let model = parse_model(
+            format,
+            [files[0], files[1], files[2]],
+            &ReadOptions::default(),
+        )
+        .unwrap();
         assert_eq!(model.images.len(), 2, "{target}");
         for &id in model.images.keys() {
             let reg = eopnp::colmap::register_image(&model, id, &eopnp::Solver::default(), None)
@@ -237,7 +243,7 @@ fn seeds_reach_the_parsers_and_registration() {
 
 #[test]
 fn seeds_reach_the_writer() {
-    use eopnp::colmap::{encode_model, parse_model_binary, parse_model_text, ModelFormat};
+    use eopnp::colmap::{encode_model, parse_model, ModelFormat, ReadOptions};
     let split = |data: &[u8]| -> Vec<Vec<u8>> {
         let mut files = Vec::new();
         let mut rest = data;
@@ -256,8 +262,16 @@ fn seeds_reach_the_writer() {
         ("names-binary", false, true),
     ] {
         let f = split(&seed("colmap_write", name));
-        let t = parse_model_text(&f[0], &f[1], &f[2]);
-        let b = parse_model_binary(&f[0], &f[1], &f[2]);
+        let t = parse_model(
+            ModelFormat::Text,
+            [&f[0], &f[1], &f[2]],
+            &ReadOptions::default(),
+        );
+        let b = parse_model(
+            ModelFormat::Binary,
+            [&f[0], &f[1], &f[2]],
+            &ReadOptions::default(),
+        );
         assert_eq!((t.is_ok(), b.is_ok()), (text, binary), "{name}");
         let model = t.or(b).unwrap();
         // The stress seeds reach the writer's refusals in the other format.

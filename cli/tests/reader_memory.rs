@@ -18,7 +18,7 @@
 //! - `solve` problems, CSV or JSON: `peak <= 3 * kept + 1 MiB`: the two vectors of
 //!   correspondences grow by doubling (the number of lines is not known in advance).
 //! - Refusals: `peak <= 1 MiB` whatever the input's size, except an image over the
-//!   observation limit (`ReadLimits::max_observations`, 1,000,000 by default), which costs up
+//!   observation limit (`ReadOptions::max_observations`, 1,000,000 by default), which costs up
 //!   to 3 times the limit's 32 MB before it is refused.
 //!
 //! The tests run one at a time (a lock): the counter is global.
@@ -31,11 +31,11 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use eopnp::camera::{Camera, CameraModel};
-use eopnp_cli::input::{read_problem, read_problem_from, Limits};
 use eopnp::colmap::{
-    parse_model_with_limits, read_model, read_model_with_limits, write_model, Image, Limit, Model,
-    ModelErrorKind, ModelFormat, Point3D, ReadLimits,
+    parse_model, read_model, write_model, Image, Limit, Model, ModelErrorKind, ModelFormat,
+    Point3D, ReadOptions, WriteOptions,
 };
+use eopnp_cli::input::{read_problem, read_problem_from, Limits};
 use nalgebra::{Point2, Point3, Vector3};
 
 struct Counting;
@@ -198,9 +198,9 @@ fn colmap_models_peak_within_1_5_times_the_model() {
     for format in [ModelFormat::Text, ModelFormat::Binary] {
         let dir = scratch(&format!("{format:?}"));
         let out = dir.join("model");
-        write_model(&m, &out, format).unwrap();
+        write_model(&m, &out, &WriteOptions::default().format(format)).unwrap();
         let size = dir_size(&out);
-        let (read, peak, kept) = measure(|| read_model(&out).unwrap());
+        let (read, peak, kept) = measure(|| read_model(&out, &ReadOptions::default()).unwrap());
         assert_eq!(read, m);
         eprintln!(
             "{format:?} model: files {:.1} MB, kept {:.1} MB, peak {:.1} MB = {:.3} x kept",
@@ -379,9 +379,9 @@ fn pathological_models_are_refused_with_little_memory() {
     let _lock = LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let cameras = b"1 SIMPLE_PINHOLE 640 480 500 320 240\n".as_slice();
     let header = "1 1 0 0 0 0 0 5 1 a.png\n";
-    let limits = ReadLimits::default();
-    let text = |images: &[u8], limits: &ReadLimits| {
-        measure(|| parse_model_with_limits(ModelFormat::Text, [cameras, images, b""], limits))
+    let limits = ReadOptions::default();
+    let text = |images: &[u8], limits: &ReadOptions| {
+        measure(|| parse_model(ModelFormat::Text, [cameras, images, b""], limits))
     };
     // One image with 10 million observations (cost 856 MB when read whole): refused at the
     // observation limit, having held at most 3 times its 32 MB.
@@ -425,7 +425,7 @@ fn pathological_models_are_refused_with_little_memory() {
     for k in 0..3 {
         let mut files = [cameras, header.as_bytes(), b"".as_slice()];
         files[k] = commas.as_bytes();
-        let (r, peak, _) = measure(|| parse_model_with_limits(ModelFormat::Text, files, &limits));
+        let (r, peak, _) = measure(|| parse_model(ModelFormat::Text, files, &limits));
         let e = r.unwrap_err();
         assert_eq!(
             e.kind,
@@ -437,7 +437,7 @@ fn pathological_models_are_refused_with_little_memory() {
     // A track of 10 million elements.
     let points = format!("1 0 0 0 1 2 3 0.5{}\n", " 1 0".repeat(10_000_000));
     let (r, peak, _) = measure(|| {
-        parse_model_with_limits(
+        parse_model(
             ModelFormat::Text,
             [cameras, header.as_bytes(), points.as_bytes()],
             &limits,
@@ -454,8 +454,7 @@ fn pathological_models_are_refused_with_little_memory() {
         for k in 0..3 {
             let mut files = [&[0u8; 8][..], &[0u8; 8][..], &[0u8; 8][..]];
             files[k] = &b;
-            let (r, peak, _) =
-                measure(|| parse_model_with_limits(ModelFormat::Binary, files, &limits));
+            let (r, peak, _) = measure(|| parse_model(ModelFormat::Binary, files, &limits));
             let e = r.unwrap_err();
             assert_eq!(e.kind, ModelErrorKind::Invalid, "{e}");
             assert!(e.reason.contains("remain"), "{e}");
@@ -473,13 +472,12 @@ fn pathological_models_are_refused_with_little_memory() {
     images.extend_from_slice(&2_000_000u64.to_le_bytes());
     images.resize(images.len() + 24 * 2_000_000, 0);
     let cams = eopnp::colmap::encode_model(
-        &parse_model_with_limits(ModelFormat::Text, [cameras, b"", b""], &limits).unwrap(),
+        &parse_model(ModelFormat::Text, [cameras, b"", b""], &limits).unwrap(),
         ModelFormat::Binary,
     )
     .unwrap();
-    let (r, peak, _) = measure(|| {
-        parse_model_with_limits(ModelFormat::Binary, [&cams[0], &images, &cams[2]], &limits)
-    });
+    let (r, peak, _) =
+        measure(|| parse_model(ModelFormat::Binary, [&cams[0], &images, &cams[2]], &limits));
     let e = r.unwrap_err();
     assert_eq!(
         e.kind,
@@ -559,7 +557,7 @@ fn special_files_are_refused_before_they_are_opened() {
         link(target, &cameras);
         let m = model.clone();
         let (e, peak) = within_5s(move || {
-            let (r, peak, _) = measure(|| read_model(&m));
+            let (r, peak, _) = measure(|| read_model(&m, &ReadOptions::default()));
             (r.unwrap_err(), peak)
         });
         assert_eq!(e.kind, ModelErrorKind::NotRegularFile, "{e}");
@@ -633,20 +631,20 @@ fn oversized_files_are_refused_before_they_are_read() {
                 .unwrap();
         }
         let t = Instant::now();
-        let (r, peak, _) = measure(|| read_model(&model));
+        let (r, peak, _) = measure(|| read_model(&model, &ReadOptions::default()));
         let e = r.unwrap_err();
         assert!(e.to_string().contains(expected), "{e}");
         assert!(peak <= MIB, "{e}: peak {peak}");
         assert!(t.elapsed() < Duration::from_secs(2));
         // And over a size limit, before reading.
-        let limits = ReadLimits::default().max_file_bytes(1 << 30);
-        let e = read_model_with_limits(&model, &limits).unwrap_err();
+        let limits = ReadOptions::default().max_file_bytes(1 << 30);
+        let e = read_model(&model, &limits).unwrap_err();
         assert_eq!(e.kind, ModelErrorKind::Limit(Limit::FileBytes(1 << 30)));
         assert_eq!(
             e.to_string(),
             format!(
                 "{}: the file is {} bytes long: over the file size limit of 1 GiB \
-                 (ReadLimits::max_file_bytes)",
+                 (ReadOptions::max_file_bytes)",
                 model.join(names[0]).display(),
                 2u64 << 30
             )

@@ -287,7 +287,7 @@ fn time_per_solve<T, R>(inputs: &[T], passes: usize, mut f: impl FnMut(&T) -> R)
 }
 
 fn eopnp_pose(s: &eopnp::Solution) -> Pose {
-    (s.rotation, s.pose.translation.vector)
+    (s.rotation, s.translation)
 }
 
 /// Runs one method on one row (accuracy pass, then timed passes).
@@ -311,13 +311,15 @@ fn run_method(
                 .iter()
                 .map(|p| {
                     solver
-                        .solve(&p.world, &p.image)
+                        .solve(&eopnp::Problem::normalised(&p.world, &p.image))
                         .ok()
                         .map(|s| eopnp_pose(&s))
                 })
                 .collect();
             let mut s = stats(method, problems, &poses);
-            s.us = time_per_solve(problems, passes, |p| solver.solve(&p.world, &p.image));
+            s.us = time_per_solve(problems, passes, |p| {
+                solver.solve(&eopnp::Problem::normalised(&p.world, &p.image))
+            });
             Some(s)
         }
         Method::Sqpnp => {

@@ -1,5 +1,6 @@
 //! Decodes a `solve`/`ransac` fuzz input and prints the problem and the solver's answers:
 //! `cargo run --manifest-path fuzz/Cargo.toml --example show -- solve FILE`.
+use eopnp::Problem;
 use eopnp_fuzz::{decode_problem, decode_solver, Reader};
 
 fn main() {
@@ -37,8 +38,11 @@ fn main() {
             x.x, x.y, x.z, u.x, u.y
         );
     }
-    println!("solve: {:#?}", solver.solve(&p.world, &p.image));
-    if let Ok(all) = solver.solve_all(&p.world, &p.image) {
+    println!(
+        "solve: {:#?}",
+        solver.solve(&Problem::normalised(&p.world, &p.image))
+    );
+    if let Ok(all) = solver.solve_all(&Problem::normalised(&p.world, &p.image)) {
         for s in &all {
             println!(
                 "solve_all: cost {:e} alg {:e} rmse {:e} source {:?}",

@@ -241,7 +241,7 @@ pub fn decode_solver(b: u8) -> Solver {
 
 /// The properties of a returned solution.
 pub fn check_solution(s: &Solution) {
-    let t = s.pose.translation.vector;
+    let t = s.translation;
     assert!(
         t.iter().all(|x| x.is_finite()),
         "non-finite translation {t:?}"
@@ -258,7 +258,7 @@ pub fn check_solution(s: &Solution) {
         "reflection returned: det R = {}",
         r.determinant()
     );
-    let q = s.pose.rotation.to_rotation_matrix().into_inner();
+    let q = s.pose().rotation.to_rotation_matrix().into_inner();
     let dq = (q - r).norm();
     assert!(dq < 1e-9, "pose.rotation and rotation differ by {dq:e}");
     // The rmse is +inf, never NaN, when a point lies in the focal plane of an algebraic-mode
@@ -541,8 +541,8 @@ pub fn solve_report(data: &[u8]) -> SolveReport {
     let full_budget = solver_byte & 16 == 0;
     let p = decode_problem(&mut r);
     let res = match &p.weights {
-        Some(w) => solver.solve_weighted(&p.world, &p.image, w),
-        None => solver.solve(&p.world, &p.image),
+        Some(w) => solver.solve(&eopnp::Problem::normalised(&p.world, &p.image).weights(w)),
+        None => solver.solve(&eopnp::Problem::normalised(&p.world, &p.image)),
     };
     check_result(&p, &res);
     if let (Ok(s), Some((rot, t)), true) = (&res, &p.exact_pose, full_budget) {
@@ -564,8 +564,8 @@ pub fn solve_report(data: &[u8]) -> SolveReport {
     };
     let exact_solver = decode_solver(solver_byte & if contradicts { 0x03 } else { 0x0f });
     let eres = match &e.weights {
-        Some(w) => exact_solver.solve_weighted(&e.world, &e.image, w),
-        None => exact_solver.solve(&e.world, &e.image),
+        Some(w) => exact_solver.solve(&eopnp::Problem::normalised(&e.world, &e.image).weights(w)),
+        None => exact_solver.solve(&eopnp::Problem::normalised(&e.world, &e.image)),
     };
     match &eres {
         Ok(s) => {
@@ -594,7 +594,7 @@ pub fn solve_report(data: &[u8]) -> SolveReport {
     // solve_all on small problems: every minimum satisfies the same properties, the best
     // equals solve's answer in exhaustive mode, and the list is non-empty exactly when Ok.
     if p.weights.is_none() && p.world.len() <= 64 {
-        let all = solver.solve_all(&p.world, &p.image);
+        let all = solver.solve_all(&eopnp::Problem::normalised(&p.world, &p.image));
         match (&all, &res) {
             (Ok(all), Ok(_)) => {
                 assert!(!all.is_empty(), "solve_all: Ok with no solution");
@@ -646,7 +646,11 @@ pub fn ransac(data: &[u8]) {
         .threshold_px(threshold)
         .confidence(confidence)
         .final_threshold_factor(factor);
-    let res = ransac.estimate(&solver, &p.world, &p.image, focal, p.weights.as_deref());
+    let mut problem = eopnp::Problem::normalised(&p.world, &p.image).focal(focal.0, focal.1);
+    if let Some(w) = p.weights.as_deref() {
+        problem = problem.weights(w);
+    }
+    let res = ransac.estimate(&solver, &problem);
     let options_ok = threshold.is_finite()
         && threshold > 0.0
         && confidence > 0.0
@@ -721,7 +725,11 @@ fn exercise_model(model: &eopnp::colmap::Model) {
 /// reading properties of [`check_model_reading`].
 pub fn colmap_text(data: &[u8]) {
     let [c, i, p] = three_files(data);
-    let whole = eopnp::colmap::parse_model_text(c, i, p);
+    let whole = eopnp::colmap::parse_model(
+        eopnp::colmap::ModelFormat::Text,
+        [c, i, p],
+        &eopnp::colmap::ReadOptions::default(),
+    );
     check_model_reading(eopnp::colmap::ModelFormat::Text, [c, i, p], &whole);
     match whole {
         Ok(model) => exercise_model(&model),
@@ -733,7 +741,11 @@ pub fn colmap_text(data: &[u8]) {
 /// the reading properties of [`check_model_reading`].
 pub fn colmap_binary(data: &[u8]) {
     let [c, i, p] = three_files(data);
-    let whole = eopnp::colmap::parse_model_binary(c, i, p);
+    let whole = eopnp::colmap::parse_model(
+        eopnp::colmap::ModelFormat::Binary,
+        [c, i, p],
+        &eopnp::colmap::ReadOptions::default(),
+    );
     check_model_reading(eopnp::colmap::ModelFormat::Binary, [c, i, p], &whole);
     match whole {
         Ok(model) => exercise_model(&model),
@@ -743,11 +755,17 @@ pub fn colmap_binary(data: &[u8]) {
 
 /// Limits small enough for fuzzed inputs to reach: 2 KiB files, 8 observations per image, 8
 /// track elements per point.
-pub fn small_model_limits() -> eopnp::colmap::ReadLimits {
-    eopnp::colmap::ReadLimits::default()
-        .max_file_bytes(2048)
-        .max_observations(8)
-        .max_track_length(8)
+const SMALL_FILE_BYTES: u64 = 2048;
+const SMALL_OBSERVATIONS: usize = 8;
+const SMALL_TRACK_LENGTH: usize = 8;
+
+/// The reader options of [`SMALL_FILE_BYTES`], [`SMALL_OBSERVATIONS`] and
+/// [`SMALL_TRACK_LENGTH`].
+pub fn small_model_limits() -> eopnp::colmap::ReadOptions {
+    eopnp::colmap::ReadOptions::default()
+        .max_file_bytes(SMALL_FILE_BYTES)
+        .max_observations(SMALL_OBSERVATIONS)
+        .max_track_length(SMALL_TRACK_LENGTH)
 }
 
 /// The streaming readers' properties on one input (`whole`: its result with the default
@@ -761,7 +779,7 @@ fn check_model_reading(
     files: [&[u8]; 3],
     whole: &Result<eopnp::colmap::Model, eopnp::colmap::ModelError>,
 ) {
-    use eopnp::colmap::{parse_model_buffered, parse_model_with_limits, ModelErrorKind};
+    use eopnp::colmap::{parse_model, parse_model_buffered, ModelErrorKind};
     let len: usize = files.iter().map(|f| f.len()).sum();
     let capacity = 1 + len % 13;
     let buffered = parse_model_buffered(format, files, &Default::default(), capacity);
@@ -771,18 +789,18 @@ fn check_model_reading(
         (a, b) => panic!("buffered through {capacity} bytes: {b:?}, whole: {a:?}"),
     }
     let small = small_model_limits();
-    let limited = parse_model_with_limits(format, files, &small);
+    let limited = parse_model(format, files, &small);
     match (whole, limited) {
         (Ok(a), Ok(b)) => assert_same_model(a, &b, "limited"),
         (Ok(m), Err(e)) => {
             assert!(matches!(e.kind, ModelErrorKind::Limit(_)), "{e}");
-            let within = files.iter().all(|f| f.len() as u64 <= small.max_file_bytes)
+            let within = files.iter().all(|f| f.len() as u64 <= SMALL_FILE_BYTES)
                 && m.images
                     .values()
-                    .all(|i| i.points2d.len() <= small.max_observations)
+                    .all(|i| i.points2d.len() <= SMALL_OBSERVATIONS)
                 && m.points
                     .values()
-                    .all(|p| p.track.len() <= small.max_track_length);
+                    .all(|p| p.track.len() <= SMALL_TRACK_LENGTH);
             assert!(!within, "a model within the limits is refused: {e}");
         }
         (Err(e), Ok(_)) => panic!("bad input read under smaller limits: {e}"),
@@ -860,10 +878,7 @@ fn parse_as(
     format: eopnp::colmap::ModelFormat,
     [c, i, p]: [&[u8]; 3],
 ) -> Result<eopnp::colmap::Model, eopnp::colmap::ModelError> {
-    match format {
-        eopnp::colmap::ModelFormat::Text => eopnp::colmap::parse_model_text(c, i, p),
-        eopnp::colmap::ModelFormat::Binary => eopnp::colmap::parse_model_binary(c, i, p),
-    }
+    eopnp::colmap::parse_model(format, [c, i, p], &eopnp::colmap::ReadOptions::default())
 }
 
 /// A fresh scratch directory of this process (removed by the caller).
@@ -899,7 +914,7 @@ fn sorted_entries(dir: &std::path::Path) -> Vec<String> {
 /// - the directory written holds exactly the three files (no temporaries left).
 pub fn colmap_write(data: &[u8]) {
     use eopnp::colmap::{
-        encode_model, read_model_binary, read_model_text, write_model, ModelFormat,
+        encode_model, read_model, write_model, ModelFormat, ReadOptions, WriteOptions,
     };
     let files = three_files(data);
     for source in [ModelFormat::Text, ModelFormat::Binary] {
@@ -929,15 +944,13 @@ pub fn colmap_write(data: &[u8]) {
 
             let base = scratch_dir();
             let dir = base.join("model");
-            write_model(&model, &dir, format).unwrap_or_else(|e| panic!("{what}: write: {e}"));
+            write_model(&model, &dir, &WriteOptions::default().format(format))
+                .unwrap_or_else(|e| panic!("{what}: write: {e}"));
             assert_eq!(sorted_entries(&base), ["model"], "{what}: leftovers");
             let mut names = format.file_names().map(String::from).to_vec();
             names.sort();
             assert_eq!(sorted_entries(&dir), names, "{what}: files written");
-            let read = match format {
-                ModelFormat::Text => read_model_text(&dir),
-                ModelFormat::Binary => read_model_binary(&dir),
-            };
+            let read = read_model(&dir, &ReadOptions::default().format(format));
             let _ = std::fs::remove_dir_all(&base);
             assert_same_model(
                 &model,

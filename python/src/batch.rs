@@ -21,9 +21,10 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use eopnp::batch::{problem_seed as seed_of, Problem};
 use eopnp::camera::Camera;
+use eopnp::ransac::problem_seed as seed_of;
 use eopnp::ransac::{Ransac, RansacSolution};
+use eopnp::Problem;
 use eopnp::{PnpError, Solution, Solver};
 use nalgebra::{Point2, Point3};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
@@ -312,7 +313,7 @@ impl Input<'_> {
                 check_finite(&pts.world, &pts.image, self.weights)?;
                 Problem::pixels(&pts.world, &pts.image, c)
             }
-            None => Problem::normalised_with_focal(&pts.world, &pts.image, focal),
+            None => Problem::normalised(&pts.world, &pts.image).focal(focal.0, focal.1),
         };
         Ok(match self.weights {
             Some(w) => p.weights(w),
@@ -323,7 +324,7 @@ impl Input<'_> {
     /// `solve` on this problem.
     fn solve(&self, solver: &Solver) -> Result<Solution, PnpError> {
         let pts = self.points();
-        solver.solve_problem(&self.problem(&pts, (1.0, 1.0))?)
+        solver.solve(&self.problem(&pts, (1.0, 1.0))?)
     }
 }
 
@@ -530,7 +531,7 @@ fn write_row(
     for (k, v) in r.iter_mut().enumerate() {
         *v = s.rotation[(k / 3, k % 3)];
     }
-    t.copy_from_slice(s.pose.translation.vector.as_slice());
+    t.copy_from_slice(s.translation.as_slice());
     (*cost, *rmse, *ok) = (s.cost, s.reprojection_rmse, true);
     if let Some((c, sigma)) = cov {
         match &s.covariance {
@@ -800,7 +801,7 @@ fn estimate(
     let problem = p.problem(&pts, focal.unwrap_or((1.0, 1.0)))?;
     let r = ransac
         .seed(seed_of(ransac.seed, index))
-        .estimate_problem(solver, &problem)?;
+        .estimate(solver, &problem)?;
     let sol = PySolution::from(&r.solution);
     let px = ransac_rmse_px(&sol, &r, &pts.world, &pts.image, p.camera, focal);
     Ok((sol, r, px))

@@ -169,7 +169,7 @@ impl PyCamera {
     /// The focal lengths (fx, fy) in pixels.
     #[getter]
     fn focal(&self) -> (f64, f64) {
-        self.inner.intrinsics_scale()
+        self.inner.focal_lengths()
     }
 
     /// The principal point (cx, cy) in pixels.

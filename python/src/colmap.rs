@@ -232,7 +232,7 @@ impl PyImage {
 #[pyfunction]
 pub(crate) fn read_colmap_model(py: Python<'_>, path: PathBuf) -> PyResult<PyModel> {
     let model = py
-        .detach(|| colmap::read_model(&path))
+        .detach(|| colmap::read_model(&path, &colmap::ReadOptions::default()))
         .map_err(|e| model_error(py, &e))?;
     Ok(PyModel {
         inner: Arc::new(model),

@@ -3,6 +3,7 @@
 
 use eopnp::camera::Camera;
 use eopnp::ransac::{Ransac, RansacSolution};
+use eopnp::Problem;
 use nalgebra::{Point2, Point3};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -365,32 +366,39 @@ pub(crate) fn solve_ransac<'py>(
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
     let cam = camera.map(|c| &c.get().inner);
-    let result =
-        match (cam, focal) {
-            (Some(_), Some(_)) => return Err(option_error(
+    let result = match (cam, focal) {
+        (Some(_), Some(_)) => {
+            return Err(option_error(
                 py,
                 "focal",
                 "solve_ransac: pass camera= (pixel input) or focal= (normalised input), not both"
                     .into(),
-            )),
-            (None, None) => {
-                return Err(option_error(
-                    py,
-                    "focal",
-                    "solve_ransac needs camera= (image points in pixels) or focal=(fx, fy) (image \
+            ))
+        }
+        (None, None) => {
+            return Err(option_error(
+                py,
+                "focal",
+                "solve_ransac needs camera= (image points in pixels) or focal=(fx, fy) (image \
                  points normalised, the focal lengths in pixels for the threshold)"
-                        .into(),
-                ))
+                    .into(),
+            ))
+        }
+        (Some(cam), None) => {
+            check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
+            py.detach(|| match &wts {
+                None => ransac.estimate(&solver, &Problem::pixels(&w, &img, cam)),
+                Some(wts) => ransac.estimate(&solver, &Problem::pixels(&w, &img, cam).weights(wts)),
+            })
+        }
+        (None, Some(f)) => py.detach(|| {
+            let problem = Problem::normalised(&w, &img).focal(f.0, f.1);
+            match &wts {
+                None => ransac.estimate(&solver, &problem),
+                Some(wts) => ransac.estimate(&solver, &problem.weights(wts)),
             }
-            (Some(cam), None) => {
-                check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
-                py.detach(|| match &wts {
-                    None => ransac.estimate_pixels(&solver, cam, &w, &img),
-                    Some(wts) => ransac.estimate_pixels_weighted(&solver, cam, &w, &img, wts),
-                })
-            }
-            (None, Some(f)) => py.detach(|| ransac.estimate(&solver, &w, &img, f, wts.as_deref())),
-        };
+        }),
+    };
     let r = result.map_err(|e| pnp_error(py, &e))?;
     ransac_result(py, &r, &w, &img, cam, focal)
 }
@@ -420,7 +428,7 @@ pub(crate) fn ransac_rmse_px(
     cam: Option<&Camera>,
     focal: Option<(f64, f64)>,
 ) -> f64 {
-    let focal = cam.map_or(focal.unwrap_or((1.0, 1.0)), Camera::intrinsics_scale);
+    let focal = cam.map_or(focal.unwrap_or((1.0, 1.0)), Camera::focal_lengths);
     rmse_px(sol, w, img, &r.inliers, cam, focal)
 }
 

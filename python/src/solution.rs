@@ -106,8 +106,8 @@ fn source_name(s: CandidateSource) -> &'static str {
 impl From<&Solution> for PySolution {
     fn from(s: &Solution) -> Self {
         let m = &s.rotation;
-        let t = &s.pose.translation.vector;
-        let q = s.pose.rotation.quaternion();
+        let t = &s.translation;
+        let q = *s.pose().rotation.quaternion();
         let rv = s.rvec();
         PySolution {
             r: [

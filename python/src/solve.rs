@@ -1,6 +1,7 @@
 //! `eopnp.solve` and `eopnp.solve_all`: one problem, normalised or pixels through a camera.
 //! The solve runs with the GIL released.
 
+use eopnp::Problem;
 use eopnp::{InputKind, PnpError};
 use nalgebra::{Point2, Point3};
 use pyo3::prelude::*;
@@ -129,15 +130,15 @@ pub(crate) fn solve(
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
     let result = match camera {
         None => py.detach(|| match &wts {
-            None => solver.solve(&w, &img),
-            Some(wts) => solver.solve_weighted(&w, &img, wts),
+            None => solver.solve(&Problem::normalised(&w, &img)),
+            Some(wts) => solver.solve(&Problem::normalised(&w, &img).weights(wts)),
         }),
         Some(cam) => {
             let cam = &cam.get().inner;
             check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
             py.detach(|| match &wts {
-                None => solver.solve_pixels(&w, &img, cam),
-                Some(wts) => solver.solve_pixels_weighted(&w, &img, cam, wts),
+                None => solver.solve(&Problem::pixels(&w, &img, cam)),
+                Some(wts) => solver.solve(&Problem::pixels(&w, &img, cam).weights(wts)),
             })
         }
     };
@@ -192,7 +193,7 @@ pub(crate) fn solve_all<'py>(
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let all = py
-        .detach(|| solver.solve_all(&w, &img))
+        .detach(|| solver.solve_all(&Problem::normalised(&w, &img)))
         .map_err(|e| pnp_error(py, &e))?;
     PyList::new(py, all.iter().map(PySolution::from))
 }
@@ -215,7 +216,10 @@ pub(crate) fn _time_solve(
         let start = std::time::Instant::now();
         let mut last = None;
         for _ in 0..repeats.max(1) {
-            last = Some(solver.solve(std::hint::black_box(&w), std::hint::black_box(&img)));
+            last = Some(solver.solve(&Problem::normalised(
+                std::hint::black_box(&w),
+                std::hint::black_box(&img),
+            )));
         }
         (
             start.elapsed().as_secs_f64() / f64::from(repeats.max(1)),
@@ -288,15 +292,15 @@ pub(crate) fn refine(
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
     let result = match camera {
         None => py.detach(|| match &wts {
-            None => solver.refine(&w, &img, &initial),
-            Some(wts) => solver.refine_weighted(&w, &img, wts, &initial),
+            None => solver.refine(&Problem::normalised(&w, &img), &initial),
+            Some(wts) => solver.refine(&Problem::normalised(&w, &img).weights(wts), &initial),
         }),
         Some(cam) => {
             let cam = &cam.get().inner;
             check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
             py.detach(|| match &wts {
-                None => solver.refine_pixels(&w, &img, cam, &initial),
-                Some(wts) => solver.refine_pixels_weighted(&w, &img, cam, wts, &initial),
+                None => solver.refine(&Problem::pixels(&w, &img, cam), &initial),
+                Some(wts) => solver.refine(&Problem::pixels(&w, &img, cam).weights(wts), &initial),
             })
         }
     };

@@ -54,7 +54,7 @@
 //! `OPENCV_THIN_PRISM_TILTED` adds the thin-prism terms to `D` and then applies OpenCV's
 //! projective tilt. [`Camera::undistort`] inverts the distortion (and the tilt) by Newton's
 //! method with an analytic Jacobian, a trust region (as COLMAP) and at most
-//! [`UNDISTORT_MAX_ITERATIONS`] iterations; a pixel whose
+//! 100 iterations; a pixel whose
 //! undistortion does not converge is an error, never a silently wrong point. For the radial
 //! models the pixel path of the solver runs the same iteration along each pixel's ray, sixteen
 //! pixels at a time (`distortion::radial_undistortion`, docs/algorithm.md S9).
@@ -103,8 +103,6 @@ impl From<Camera> for CameraFields {
     }
 }
 
-/// Hard bound on the Newton iterations of [`Camera::undistort`].
-pub const UNDISTORT_MAX_ITERATIONS: u32 = crate::numeric::bounds::UNDISTORT_MAX_ITERATIONS;
 /// A camera: model, image size and parameters (validated on construction; with feature
 /// `serde`, deserialization validates the same way).
 #[derive(Clone, Debug, PartialEq)]
@@ -153,7 +151,7 @@ impl Camera {
             height,
             params,
         };
-        let (fx, fy) = cam.intrinsics_scale();
+        let (fx, fy) = cam.focal_lengths();
         if !(fx > 0.0 && fy > 0.0) {
             return Err(CameraError::InvalidParams(format!(
                 "focal length must be positive (got {fx}, {fy})"
@@ -231,7 +229,7 @@ impl Camera {
     /// Focal lengths `(fx, fy)` in pixels (`(f, f)` for single-focal models): the scale from
     /// normalised to pixel residuals, for weighting.
     #[must_use]
-    pub fn intrinsics_scale(&self) -> (f64, f64) {
+    pub fn focal_lengths(&self) -> (f64, f64) {
         let p = &self.params;
         if self.model.single_focal() {
             (p[0], p[0])
@@ -290,7 +288,7 @@ impl Camera {
     /// The camera's projection with its parameters unpacked once, for per-point loops.
     pub(crate) fn projector(&self) -> Projector {
         Projector {
-            focal: self.intrinsics_scale(),
+            focal: self.focal_lengths(),
             centre: self.principal_point(),
             fisheye: self.model.is_fisheye(),
             distortion: self.distortion(),
@@ -317,7 +315,7 @@ impl Camera {
     /// The normalised image point `(x/z, y/z)` of a pixel: inverts [`Camera::project`].
     ///
     /// The distortion is inverted by Newton's method (analytic Jacobian, COLMAP's trust region)
-    /// with at most [`UNDISTORT_MAX_ITERATIONS`] iterations, followed by a check that the
+    /// with at most 100 iterations, followed by a check that the
     /// distortion equation holds to about 1e-13, that the distortion map is locally
     /// invertible at the solution, and that the solution is on the pixel's side of the
     /// principal point (with extreme coefficients a pixel can also have a preimage mirrored
@@ -331,14 +329,15 @@ impl Camera {
         self.projector().undistort(pixel).map(|(n, _)| n)
     }
 
-    /// [`Camera::undistort`] and the weight of the point in [`crate::Solver::solve_pixels`]:
+    /// [`Camera::undistort`] and the point's first-order weight in a solve of pixels:
     /// `|det J| / (fx fy)`, `J` the Jacobian of [`Camera::project`] at the normalised point (to
     /// first order, the squared scale of a pixel error in normalised units relative to the
     /// undistorted pinhole camera).
     ///
     /// # Errors
     /// As [`Camera::undistort`], and [`CameraError::OutOfRange`] if the weight overflows.
-    pub fn undistort_weighted(
+    #[cfg(test)]
+    pub(crate) fn undistort_weighted(
         &self,
         pixel: Point2<f64>,
     ) -> Result<(Point2<f64>, f64), CameraError> {
@@ -504,6 +503,7 @@ impl Projector {
     }
 
     /// [`Camera::undistort_weighted`].
+    #[cfg(test)]
     #[inline]
     pub(crate) fn undistort_weighted(
         &self,

@@ -41,7 +41,7 @@ pub enum CameraModel {
     /// **Not a COLMAP model**: it has no COLMAP id ([`CameraModel::colmap_id`] is `None`),
     /// COLMAP's readers never produce it, [`CameraModel::from_name`] does not accept its name
     /// `"OPENCV_THIN_PRISM_TILTED"` (parsing with [`str::parse`] does), and
-    /// [`crate::colmap::write_model_binary`] refuses it. Built by
+    /// [`crate::colmap::write_model`] refuses it. Built by
     /// [`crate::camera::Camera::from_opencv`] for 12 and 14 coefficients.
     ///
     /// The map is OpenCV's: the distortion `(u, v) + D(u, v)` of the rational model plus
@@ -247,7 +247,7 @@ pub enum CameraError {
     /// The pixel (or the normalised point) is NaN or infinite.
     NonFinite,
     /// The undistortion of the pixel did not converge within
-    /// [`super::UNDISTORT_MAX_ITERATIONS`] Newton iterations, or converged to a point where the
+    /// 100 Newton iterations, or converged to a point where the
     /// distortion map folds over (the pixel is outside the region where the model is
     /// invertible).
     NoConvergence {

@@ -181,7 +181,7 @@ impl Camera {
 
     /// `[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`.
     pub(super) fn opencv_matrix(&self) -> Matrix3<f64> {
-        let (fx, fy) = self.intrinsics_scale();
+        let (fx, fy) = self.focal_lengths();
         let (cx, cy) = self.principal_point();
         Matrix3::new(fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0)
     }

@@ -9,10 +9,10 @@ use std::path::Path;
 
 use nalgebra::{Point2, Point3, Vector3};
 
-use super::limits::{Limit, ReadLimits, MAX_FIELD_BYTES};
 use super::model::{
     check_quaternion, Image, Images, Location, Model, ModelError, ModelErrorKind, Point3D,
 };
+use super::options::{Limit, ReadOptions, MAX_FIELD_BYTES};
 use crate::camera::{Camera, CameraError, CameraModel};
 
 // Binary format (little-endian; COLMAP's reconstruction_io / read_write_model.py layout).
@@ -189,7 +189,7 @@ pub(super) fn parse_cameras_bin<R: BufRead>(
     path: &Path,
     src: &mut R,
     len: u64,
-    _limits: &ReadLimits,
+    _limits: &ReadOptions,
 ) -> Result<BTreeMap<u32, Camera>, ModelError> {
     let mut r = Reader::new(path, src, len);
     let n = r.count("number of cameras", 24, None)?;
@@ -224,7 +224,7 @@ pub(super) fn parse_images_bin<R: BufRead>(
     path: &Path,
     src: &mut R,
     len: u64,
-    limits: &ReadLimits,
+    limits: &ReadOptions,
 ) -> Result<Images, ModelError> {
     let mut r = Reader::new(path, src, len);
     // Smallest record: 4 + 7 * 8 + 4 + 1 (empty name's NUL) + 8 = 73 bytes.
@@ -289,7 +289,7 @@ pub(super) fn parse_points_bin<R: BufRead>(
     path: &Path,
     src: &mut R,
     len: u64,
-    limits: &ReadLimits,
+    limits: &ReadOptions,
 ) -> Result<BTreeMap<u64, Point3D>, ModelError> {
     let mut r = Reader::new(path, src, len);
     // Smallest record: 8 + 3 * 8 + 3 + 8 + 8 = 51 bytes.

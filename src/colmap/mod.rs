@@ -1,7 +1,7 @@
-//! COLMAP sparse reconstructions: readers for the text (`cameras.txt`, `images.txt`,
-//! `points3D.txt`) and binary (`cameras.bin`, `images.bin`, `points3D.bin`) formats, an atomic
-//! writer of both ([`write_model`]: reading back gives the identical [`Model`]), and
-//! [`register_image`], which re-estimates an image's pose from its 2D-3D correspondences
+//! COLMAP sparse reconstructions: [`read_model`] reads the text (`cameras.txt`, `images.txt`,
+//! `points3D.txt`) and binary (`cameras.bin`, `images.bin`, `points3D.bin`) formats,
+//! [`write_model`] writes either atomically (reading back gives the identical [`Model`]), and
+//! [`register_image`] re-estimates an image's pose from its 2D-3D correspondences
 //! ([`Registrar`] for many images of one model).
 //!
 //! Conventions are COLMAP's: an image's pose `(q, t)` maps world to camera,
@@ -11,19 +11,19 @@
 //! Every reader is bounded and panic-free on any input: it streams (text token by token, binary
 //! record by record), a count field can only claim as many records as the remaining bytes can
 //! hold, only regular files are read (a FIFO or `/dev/zero` is refused before it is opened),
-//! and the limits of [`ReadLimits`] bound one record; memory stays proportional to the model
+//! and the limits of [`ReadOptions`] bound one record; memory stays proportional to the model
 //! returned. Every error carries the file name and the line number (text) or byte offset
 //! (binary), its kind ([`ModelErrorKind`]: a limit hit names the limit) and the reason.
 //!
 //! ```
 //! use eopnp::colmap::{
-//!     parse_model_text, read_model, register_image, write_model, ModelFormat, Registrar,
+//!     read_model, register_image, write_model, ModelFormat, ReadOptions, Registrar, WriteOptions,
 //! };
 //! use eopnp::ransac::Ransac;
 //! use eopnp::Solver;
 //! use nalgebra::{Point3, UnitQuaternion, Vector3};
 //!
-//! // A small model: one PINHOLE camera, ten 3D points, one image that observes them all.
+//! // A small model in text form: one PINHOLE camera, ten 3D points, one image that sees them.
 //! let (f, cx, cy) = (800.0, 320.0, 240.0);
 //! let points: Vec<Point3<f64>> = (0..10)
 //!     .map(|i| Point3::new((i % 3) as f64 - 1.0, (i % 4) as f64 * 0.5 - 0.7, (i % 5) as f64 * 0.3))
@@ -36,14 +36,20 @@
 //!     obs += &format!("{} {} {} ", f * p.x / p.z + cx, f * p.y / p.z + cy, k + 1);
 //! }
 //! let (w, v) = (q.quaternion().w, q.quaternion().imag());
-//! let cameras = format!("1 PINHOLE 640 480 {f} {f} {cx} {cy}\n");
-//! let images = format!("1 {w} {} {} {} {} {} {} 1 view.png\n{obs}\n", v.x, v.y, v.z, t.x, t.y, t.z);
+//! let dir = std::env::temp_dir().join(format!("eopnp-colmap-doc-{}", std::process::id()));
+//! std::fs::create_dir_all(&dir)?;
+//! std::fs::write(dir.join("cameras.txt"), format!("1 PINHOLE 640 480 {f} {f} {cx} {cy}\n"))?;
+//! std::fs::write(
+//!     dir.join("images.txt"),
+//!     format!("1 {w} {} {} {} {} {} {} 1 view.png\n{obs}\n", v.x, v.y, v.z, t.x, t.y, t.z),
+//! )?;
 //! let points3d: String = points
 //!     .iter()
 //!     .enumerate()
 //!     .map(|(k, x)| format!("{} {} {} {} 200 200 200 0.5 1 {k}\n", k + 1, x.x, x.y, x.z))
 //!     .collect();
-//! let model = parse_model_text(cameras.as_bytes(), images.as_bytes(), points3d.as_bytes())?;
+//! std::fs::write(dir.join("points3D.txt"), points3d)?;
+//! let model = read_model(&dir, &ReadOptions::default())?;
 //!
 //! // Re-estimate the image's pose from its correspondences alone, plain and with RANSAC.
 //! let plain = register_image(&model, 1, &Solver::default(), None)?;
@@ -58,17 +64,17 @@
 //!     assert!(reg.rotation_error_deg < 1e-9);
 //! }
 //!
-//! // Write it (atomically) and read it back.
-//! let dir = std::env::temp_dir().join(format!("eopnp-colmap-doc-{}", std::process::id()));
-//! write_model(&model, &dir, ModelFormat::Binary)?;
-//! assert_eq!(read_model(&dir)?, model);
+//! // Write it in binary (atomically) and read it back.
+//! let bin = dir.join("binary");
+//! write_model(&model, &bin, &WriteOptions::default().format(ModelFormat::Binary))?;
+//! assert_eq!(read_model(&bin, &ReadOptions::default())?, model);
 //! std::fs::remove_dir_all(&dir)?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 mod binary;
-mod limits;
 mod model;
+mod options;
 mod register;
 mod text;
 mod write;
@@ -79,15 +85,14 @@ use std::path::{Path, PathBuf};
 
 use crate::source::{not_regular_message, open_regular, OpenError};
 
-pub use limits::{Limit, ReadLimits, MAX_FIELD_BYTES};
-pub use model::{
-    quaternion_to_matrix, Image, Location, Model, ModelError, ModelErrorKind, Point3D,
-    RegisterError,
-};
+pub use model::{Image, Location, Model, ModelError, ModelErrorKind, Point3D, RegisterError};
+pub use options::{Limit, ReadOptions};
 #[cfg(test)]
 pub(crate) use register::pixel_rmse;
 pub use register::{register_image, Registrar, Registration};
-pub use write::{encode_model, write_model, write_model_binary, write_model_with, Overwrite};
+#[cfg(feature = "internals")]
+pub use write::encode_model;
+pub use write::{write_model, Overwrite, WriteOptions};
 
 /// The on-disk format of a model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,32 +140,26 @@ pub fn detect_format(dir: &Path) -> Result<ModelFormat, ModelError> {
     }
 }
 
-/// Reads the model in `dir`, text or binary (see [`detect_format`]: binary is preferred when
-/// both are present), and checks its cross-references (every image's camera and every
-/// observed 3D point exist). With the default [`ReadLimits`]; see there for what reading
-/// costs.
+/// Reads the model in `dir` and checks its cross-references (every image's camera and every
+/// observed 3D point exist): in the format `options` names, or by default the one
+/// [`detect_format`] finds (binary is preferred when both are present), within the readers'
+/// limits ([`ReadOptions`]: see there for what reading costs).
 ///
 /// # Errors
 /// A [`ModelError`] with the file, line or byte offset, the kind (a missing or special file,
-/// a limit, malformed content) and the reason.
-pub fn read_model(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    read_model_with_limits(dir, &ReadLimits::default())
-}
-
-/// [`read_model`] with the given limits.
-///
-/// # Errors
-/// As [`read_model`]; a limit that is hit is an error of kind [`ModelErrorKind::Limit`].
-pub fn read_model_with_limits(
-    dir: impl AsRef<Path>,
-    limits: &ReadLimits,
-) -> Result<Model, ModelError> {
+/// a limit, malformed content) and the reason; a limit that is hit is an error of kind
+/// [`ModelErrorKind::Limit`].
+pub fn read_model(dir: impl AsRef<Path>, options: &ReadOptions) -> Result<Model, ModelError> {
     let dir = dir.as_ref();
-    read_with(detect_format(dir)?, dir, limits)
+    let format = match options.format {
+        Some(f) => f,
+        None => detect_format(dir)?,
+    };
+    read_with(format, dir, options)
 }
 
 /// Opens a model file: a regular file within the size limit.
-fn open_file(path: &Path, limits: &ReadLimits) -> Result<(std::fs::File, u64), ModelError> {
+fn open_file(path: &Path, limits: &ReadOptions) -> Result<(std::fs::File, u64), ModelError> {
     let error = |kind, reason| ModelError {
         file: path.to_path_buf(),
         location: Location::File,
@@ -181,7 +180,7 @@ fn open_file(path: &Path, limits: &ReadLimits) -> Result<(std::fs::File, u64), M
     Ok((file, len))
 }
 
-fn check_size(path: &Path, len: u64, limits: &ReadLimits) -> Result<(), ModelError> {
+fn check_size(path: &Path, len: u64, limits: &ReadOptions) -> Result<(), ModelError> {
     if len > limits.max_file_bytes {
         return Err(ModelError::limit(
             path,
@@ -193,66 +192,18 @@ fn check_size(path: &Path, len: u64, limits: &ReadLimits) -> Result<(), ModelErr
     Ok(())
 }
 
-/// Reads a text-format model (`cameras.txt`, `images.txt`, `points3D.txt`) from `dir`.
-///
-/// # Errors
-/// As [`read_model`].
-pub fn read_model_text(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    read_with(ModelFormat::Text, dir.as_ref(), &ReadLimits::default())
-}
-
-/// Reads a binary-format model (`cameras.bin`, `images.bin`, `points3D.bin`) from `dir`.
-///
-/// # Errors
-/// As [`read_model`].
-pub fn read_model_binary(dir: impl AsRef<Path>) -> Result<Model, ModelError> {
-    read_with(ModelFormat::Binary, dir.as_ref(), &ReadLimits::default())
-}
-
-/// Parses a text-format model from the contents of its three files (e.g. read from an
-/// archive). Errors name the files `cameras.txt`, `images.txt` and `points3D.txt`.
-///
-/// # Errors
-/// As [`read_model`].
-pub fn parse_model_text(
-    cameras: &[u8],
-    images: &[u8],
-    points3d: &[u8],
-) -> Result<Model, ModelError> {
-    parse_model_with_limits(
-        ModelFormat::Text,
-        [cameras, images, points3d],
-        &ReadLimits::default(),
-    )
-}
-
-/// Parses a binary-format model from the contents of its three files. Errors name the files
-/// `cameras.bin`, `images.bin` and `points3D.bin`.
-///
-/// # Errors
-/// As [`read_model`].
-pub fn parse_model_binary(
-    cameras: &[u8],
-    images: &[u8],
-    points3d: &[u8],
-) -> Result<Model, ModelError> {
-    parse_model_with_limits(
-        ModelFormat::Binary,
-        [cameras, images, points3d],
-        &ReadLimits::default(),
-    )
-}
-
 /// Parses a model of format `format` from the contents of its three files (cameras, images,
-/// points3D), with the given limits. Errors name the files by their usual names
-/// (`cameras.txt`, ...).
+/// points3D), within the limits of `limits` (its format is not used). Errors name the files
+/// by their usual names (`cameras.txt`, ...). Feature `internals`: for the fuzz harness and
+/// tests, not a stable API.
 ///
 /// # Errors
-/// As [`read_model_with_limits`].
-pub fn parse_model_with_limits(
+/// As [`read_model`].
+#[cfg(feature = "internals")]
+pub fn parse_model(
     format: ModelFormat,
     files: [&[u8]; 3],
-    limits: &ReadLimits,
+    limits: &ReadOptions,
 ) -> Result<Model, ModelError> {
     let paths = format.file_names().map(PathBuf::from);
     for (path, bytes) in paths.iter().zip(files) {
@@ -268,14 +219,14 @@ pub fn parse_model_with_limits(
     )
 }
 
-/// [`parse_model_with_limits`] reading each file through a buffer of `capacity` bytes, as
-/// [`read_model_with_limits`] reads a file: for tests and fuzzing of the streaming (tokens,
-/// names and records cut at buffer boundaries). Not a stable API.
-#[doc(hidden)]
+/// [`parse_model`] reading each file through a buffer of `capacity` bytes, as [`read_model`]
+/// reads a file: for tests and fuzzing of the streaming (tokens, names and records cut at
+/// buffer boundaries). Feature `internals`: not a stable API.
+#[cfg(feature = "internals")]
 pub fn parse_model_buffered(
     format: ModelFormat,
     files: [&[u8]; 3],
-    limits: &ReadLimits,
+    limits: &ReadOptions,
     capacity: usize,
 ) -> Result<Model, ModelError> {
     let paths = format.file_names().map(PathBuf::from);
@@ -294,7 +245,7 @@ pub fn parse_model_buffered(
 
 /// Opens the three files (so that a missing or special file is reported before any content),
 /// then streams each through a buffer, never past the size it had when opened.
-fn read_with(format: ModelFormat, dir: &Path, limits: &ReadLimits) -> Result<Model, ModelError> {
+fn read_with(format: ModelFormat, dir: &Path, limits: &ReadOptions) -> Result<Model, ModelError> {
     let paths = format.file_names().map(|n| dir.join(n));
     let [c, i, p] = [0, 1, 2].map(|k| open_file(&paths[k], limits));
     let [c, i, p] = [c?, i?, p?].map(|(file, len)| (BufReader::new(file.take(len)), len));
@@ -313,7 +264,7 @@ fn parse_with<R: BufRead>(
     format: ModelFormat,
     paths: &[PathBuf; 3],
     [(c, cl), (i, il), (p, pl)]: [(&mut R, u64); 3],
-    limits: &ReadLimits,
+    limits: &ReadOptions,
 ) -> Result<Model, ModelError> {
     let (cameras, (images, locs), points) = match format {
         ModelFormat::Text => (

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-use super::limits::Limit;
+use super::options::Limit;
 use crate::camera::Camera;
 use crate::PnpError;
 
@@ -239,7 +239,7 @@ fn gather_with(
 /// Rotation matrix of a quaternion `(w, x, y, z)` (normalised first), closed form.
 /// A zero or non-finite quaternion gives a NaN matrix ([`super::read_model`] rejects those).
 #[must_use]
-pub fn quaternion_to_matrix(q: [f64; 4]) -> Matrix3<f64> {
+pub(crate) fn quaternion_to_matrix(q: [f64; 4]) -> Matrix3<f64> {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
     let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
     Matrix3::new(
@@ -274,7 +274,7 @@ pub struct ModelError {
     /// Where in the file.
     pub location: Location,
     /// What kind of problem: for callers that react differently to a missing file, a special
-    /// file, a limit of [`ReadLimits`](super::ReadLimits) and malformed content.
+    /// file, a limit of [`ReadOptions`](super::ReadOptions) and malformed content.
     pub kind: ModelErrorKind,
     /// What is wrong.
     pub reason: String,
@@ -313,7 +313,7 @@ pub enum ModelErrorKind {
     /// A path where a regular file is expected is something else: a directory, a named pipe
     /// (FIFO), a device such as `/dev/zero`, a socket. Refused before it is opened.
     NotRegularFile,
-    /// A limit of [`ReadLimits`](super::ReadLimits) (or the fixed field length limit) was hit: which one, with its
+    /// A limit of [`ReadOptions`](super::ReadOptions) (or the fixed field length limit) was hit: which one, with its
     /// value.
     Limit(Limit),
     /// Malformed content: syntax, values, counts, duplicate ids, dangling references.

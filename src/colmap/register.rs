@@ -10,7 +10,7 @@ use super::model::{Image, Model, PointLookup, RegisterError};
 use crate::camera::{Camera, Project, ProjectionJob};
 use crate::numeric::lanes::{dispatched, lane_sum, unweighted_blocks, Block, LANES};
 use crate::ransac::{Ransac, RansacStats};
-use crate::{Refinement, Solution, Solver};
+use crate::{Problem, Refinement, Solution, Solver};
 
 /// The result of [`register_image`].
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -33,10 +33,10 @@ pub struct Registration {
     /// RANSAC's statistics, when registered with RANSAC.
     pub ransac: Option<RansacStats>,
     /// Rotation difference to the model's pose, degrees (largest angle between corresponding
-    /// columns, [`crate::metrics::rotation_error_deg`]).
+    /// columns, each as `atan2(|a x b|, a . b)`: the paper's metric).
     pub rotation_error_deg: f64,
     /// Translation difference to the model's pose, percent of the model's `|t|`
-    /// ([`crate::metrics::translation_error_pct`]).
+    /// (`100 |t - t_model| / |t_model|`).
     pub translation_error_pct: f64,
     /// RMS reprojection error of the estimated pose in pixels, through the full camera model,
     /// over the correspondences it was fitted to.
@@ -230,9 +230,13 @@ impl<'m> Registrar<'m> {
 
         let start = Instant::now();
         let (solution, mask, stats) = match ransac {
-            None => (solver.solve_pixels(world, pixels, cam)?, None, None),
+            None => (
+                solver.solve(&Problem::pixels(world, pixels, cam))?,
+                None,
+                None,
+            ),
             Some(r) => {
-                let s = r.estimate_pixels(solver, cam, world, pixels)?;
+                let s = r.estimate(solver, &Problem::pixels(world, pixels, cam))?;
                 (s.solution, Some(s.inliers), Some(s.stats))
             }
         };
@@ -240,13 +244,13 @@ impl<'m> Registrar<'m> {
 
         let (r_ref, t_ref) = img.pose();
         let r = solution.rotation;
-        let t = solution.pose.translation.vector;
+        let t = solution.translation;
         let keep = mask.as_deref();
         // The estimate's RMS pixel error: in the default mode, on every correspondence, the
         // solution reports it (S9's or S10's last pass, through the camera: `reprojection_rmse`
         // is it divided by `max(fx, fy)`); otherwise (RANSAC's inliers, pixels left out, the
         // algebraic mode's first-order error) one pass of its own.
-        let (fx, fy) = cam.intrinsics_scale();
+        let (fx, fy) = cam.focal_lengths();
         let rmse_px = if ransac.is_none()
             && solution.skipped == 0
             && solver.minimises() == Refinement::Reprojection
@@ -264,8 +268,8 @@ impl<'m> Registrar<'m> {
                 .map_or(solution.used, |m| m.iter().filter(|x| **x).count()),
             skipped: solution.skipped,
             ransac: stats,
-            rotation_error_deg: crate::metrics::rotation_error_deg(&r, &r_ref),
-            translation_error_pct: crate::metrics::translation_error_pct(&t, &t_ref),
+            rotation_error_deg: crate::numeric::rotation::rotation_error_deg(&r, &r_ref),
+            translation_error_pct: crate::numeric::rotation::translation_error_pct(&t, &t_ref),
             rmse_px,
             model_rmse_px: pixel_rmse(cam, world, pixels, keep, &r_ref, &t_ref),
             solution,
@@ -285,10 +289,10 @@ fn emptied_with_room<T>(buffer: &mut Vec<T>, n: usize) {
 
 /// Re-estimates the pose of image `image_id` from its 2D-3D correspondences and compares it
 /// with the model's pose: with `ransac = None` by `solver` on all correspondences
-/// ([`Solver::solve_pixels`]: in the default mode the pose minimises the pixel reprojection
-/// error through the image's camera, distortion included, the error that COLMAP's bundle
-/// adjustment minimises), or robustly by [`Ransac::estimate_pixels`] with `solver` for the
-/// local optimisation and the final fit. The time reported includes the undistortion. For
+/// ([`Solver::solve`] of [`Problem::pixels`]: in the default mode the pose minimises the pixel
+/// reprojection error through the image's camera, distortion included, the error that
+/// COLMAP's bundle adjustment minimises), or robustly by [`Ransac::estimate`] with `solver`
+/// for the local optimisation and the final fit. The time reported includes the undistortion. For
 /// several images of one model, a [`Registrar`] builds the table of the model's 3D points once
 /// instead of once per call.
 ///

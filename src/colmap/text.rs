@@ -9,10 +9,10 @@ use std::path::Path;
 
 use nalgebra::{Point2, Point3, Vector3};
 
-use super::limits::{Limit, ReadLimits, MAX_FIELD_BYTES};
 use super::model::{
     check_quaternion, Image, Images, Location, Model, ModelError, ModelErrorKind, Point3D,
 };
+use super::options::{Limit, ReadOptions, MAX_FIELD_BYTES};
 use crate::camera::{Camera, CameraModel};
 
 /// ASCII whitespace as C's `isspace` (COLMAP's reader) and `char::is_whitespace` both see it.
@@ -309,7 +309,7 @@ pub(super) fn parse_cameras_text<R: BufRead>(
     path: &Path,
     src: &mut R,
     _len: u64,
-    _limits: &ReadLimits,
+    _limits: &ReadOptions,
 ) -> Result<BTreeMap<u32, Camera>, ModelError> {
     let mut t = Tokens::new(path, src);
     let mut cameras = BTreeMap::new();
@@ -360,7 +360,7 @@ pub(super) fn parse_images_text<R: BufRead>(
     path: &Path,
     src: &mut R,
     _len: u64,
-    limits: &ReadLimits,
+    limits: &ReadOptions,
 ) -> Result<Images, ModelError> {
     let mut t = Tokens::new(path, src);
     let mut images = BTreeMap::new();
@@ -455,7 +455,7 @@ pub(super) fn parse_points_text<R: BufRead>(
     path: &Path,
     src: &mut R,
     _len: u64,
-    limits: &ReadLimits,
+    limits: &ReadOptions,
 ) -> Result<BTreeMap<u64, Point3D>, ModelError> {
     let mut t = Tokens::new(path, src);
     let mut points = BTreeMap::new();

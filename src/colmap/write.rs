@@ -1,7 +1,7 @@
 //! Writing a model, text or binary, atomically: the model is checked and encoded in memory
 //! first, then written to temporary files that are fsynced and renamed into place.
 //!
-//! Guarantees (see [`write_model`]):
+//! Guarantees (see [`write_model`] and [`WriteOptions`]):
 //! - `dir` does not exist: the model is written into a fresh temporary directory next to it
 //!   (`.<name>.tmp-<pid>-<n>`), which is renamed to `dir`. All or nothing, even across a
 //!   crash: `dir` either does not appear or appears with the complete model.
@@ -23,12 +23,12 @@ use super::text::{encode_text, text_name_ok};
 use super::{ModelFormat, BIN_FILES};
 use crate::camera::Camera;
 
-/// What [`write_model_with`] may do to an existing, non-empty directory.
+/// What [`write_model`] may do to an existing, non-empty directory ([`WriteOptions::overwrite`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum Overwrite {
     /// Refuse ([`ErrorKind::DirectoryNotEmpty`]) if `dir` exists and is not empty; nothing is
-    /// written. What [`write_model`] does.
+    /// written. The default.
     #[default]
     Never,
     /// Write into an existing directory whatever it holds, replacing the three files of the
@@ -36,6 +36,49 @@ pub enum Overwrite {
     /// text into a directory that holds a complete binary model, which readers (this crate's,
     /// COLMAP's) would keep preferring over the new text files.
     Files,
+}
+
+/// How [`write_model`] writes a model: its format and what it may overwrite.
+///
+/// ```
+/// use eopnp::colmap::{ModelFormat, Overwrite, WriteOptions};
+///
+/// // The default: COLMAP's binary format, into a new or empty directory.
+/// let new_dir = WriteOptions::default();
+/// // Text, replacing the three text files of an existing model (other files are kept).
+/// let replace = WriteOptions::default().format(ModelFormat::Text).overwrite(Overwrite::Files);
+/// # let _ = (new_dir, replace);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WriteOptions {
+    format: ModelFormat,
+    overwrite: Overwrite,
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        WriteOptions {
+            format: ModelFormat::Binary,
+            overwrite: Overwrite::Never,
+        }
+    }
+}
+
+impl WriteOptions {
+    /// The format to write. Default: [`ModelFormat::Binary`] (COLMAP's own default output;
+    /// both formats read back exactly).
+    #[must_use]
+    pub fn format(mut self, format: ModelFormat) -> Self {
+        self.format = format;
+        self
+    }
+
+    /// What to do to an existing, non-empty directory. Default: [`Overwrite::Never`].
+    #[must_use]
+    pub fn overwrite(mut self, overwrite: Overwrite) -> Self {
+        self.overwrite = overwrite;
+        self
+    }
 }
 
 impl ModelFormat {
@@ -146,9 +189,9 @@ fn validate(model: &Model, format: ModelFormat) -> io::Result<()> {
 
 /// The contents of the model's three files (cameras, images, 3D points, in the order of
 /// [`ModelFormat::file_names`]) in `format`, as [`write_model`] writes them. Text numbers are
-/// in Rust's shortest round-trip form, so [`super::parse_model_text`] /
-/// [`super::parse_model_binary`] of the result give `model` back exactly (every `f64`
-/// bit for bit, except that a NaN ERROR of a 3D point reads back as the canonical NaN in text).
+/// in Rust's shortest round-trip form, so parsing the result gives `model` back exactly (every
+/// `f64` bit for bit, except that a NaN ERROR of a 3D point reads back as the canonical NaN in
+/// text). Feature `internals` (for the fuzz harness): not a stable API.
 ///
 /// # Errors
 /// [`ErrorKind::InvalidInput`] if the model would not read back identically: a non-finite or
@@ -165,60 +208,42 @@ pub fn encode_model(model: &Model, format: ModelFormat) -> io::Result<[Vec<u8>; 
     })
 }
 
-/// Writes `model` in `format` to the directory `dir`, atomically, refusing to overwrite:
-/// `dir` must not exist (its parent must) or be an empty directory.
+/// Writes `model` to the directory `dir`, atomically, in the format of `options`
+/// ([`WriteOptions`]; default binary).
 ///
-/// - `dir` does not exist: the model is written into a fresh temporary directory next to it
-///   (`.<name>.tmp-<pid>-<n>` in the parent), every file fsynced, and the directory renamed to
-///   `dir`: all or nothing, even across a crash.
+/// - `dir` does not exist (its parent must): the model is written into a fresh temporary
+///   directory next to it (`.<name>.tmp-<pid>-<n>` in the parent), every file fsynced, and the
+///   directory renamed to `dir`: all or nothing, even across a crash.
 /// - `dir` is an empty directory: each file is written to `.<file>.tmp-<pid>-<n>` in `dir`,
 ///   fsynced and renamed into place; on any error the files already renamed and the
 ///   temporaries are removed (`dir` is empty again). A crash during the three renames can
 ///   leave part of the model.
+/// - `dir` exists and is not empty: refused, unless [`WriteOptions::overwrite`] is
+///   [`Overwrite::Files`]: then the three files of the format are replaced one by one, each
+///   atomically (a hard-link backup of each existing file is taken first); on any error the
+///   directory is restored (old files back in place, temporaries and backups removed); a crash
+///   during the three renames can leave a mix of old and new files (and dot-named
+///   `.tmp-`/`.bak-` files, which no reader takes for a model).
 ///
-/// The model is checked and encoded in memory first ([`encode_model`]), so an unrepresentable
-/// model fails before anything is created. Reading `dir` back ([`super::read_model`]) gives
-/// `model` exactly.
-///
-/// # Errors
-/// [`ErrorKind::InvalidInput`] as [`encode_model`], or for a `dir` without a final name
-/// (`/`, `..`); [`ErrorKind::DirectoryNotEmpty`] if `dir` exists and is not empty;
-/// [`ErrorKind::NotADirectory`] if `dir` or its parent is not a directory;
-/// [`ErrorKind::NotFound`] if the parent does not exist; any I/O error of the writing (in
-/// every case with nothing of the model left behind).
-pub fn write_model(model: &Model, dir: impl AsRef<Path>, format: ModelFormat) -> io::Result<()> {
-    write_model_with(model, dir, format, Overwrite::Never)
-}
-
-/// Writes `model` in COLMAP's binary format to `dir`, replacing the three `.bin` files of an
-/// existing directory (other files are kept): [`write_model_with`] with
-/// [`ModelFormat::Binary`] and [`Overwrite::Files`]. Reading it back with
-/// [`super::read_model_binary`] gives an identical model.
+/// The model is checked and encoded in memory first, so an unrepresentable model fails before
+/// anything is created. Reading `dir` back ([`super::read_model`]) gives `model` exactly
+/// (every `f64` bit for bit: text numbers are written in Rust's shortest round-trip form).
 ///
 /// # Errors
-/// As [`write_model_with`]; [`ErrorKind::InvalidInput`] for a camera whose model has no
-/// COLMAP id ([`crate::camera::CameraModel::OpenCvThinPrismTilted`]), before anything is
-/// written.
-pub fn write_model_binary(model: &Model, dir: impl AsRef<Path>) -> io::Result<()> {
-    write_model_with(model, dir, ModelFormat::Binary, Overwrite::Files)
-}
-
-/// [`write_model`] with a choice of what to do to an existing non-empty directory. With
-/// [`Overwrite::Files`] the three files of the format in an existing directory are replaced
-/// one by one, each atomically (a hard-link backup of each existing file is taken first):
-/// on any error the directory is restored (old files back in place, temporaries and backups
-/// removed); a crash during the three renames can leave a mix of old and new files (and
-/// dot-named `.tmp-`/`.bak-` files, which no reader takes for a model).
-///
-/// # Errors
-/// As [`write_model`]; with [`Overwrite::Files`], [`ErrorKind::AlreadyExists`] for text over a
-/// complete binary model (see [`Overwrite::Files`]).
-pub fn write_model_with(
-    model: &Model,
-    dir: impl AsRef<Path>,
-    format: ModelFormat,
-    overwrite: Overwrite,
-) -> io::Result<()> {
+/// [`ErrorKind::InvalidInput`] if the model would not read back identically (a non-finite or
+/// zero quaternion, a non-finite translation, pixel or 3D point, a missing camera or observed
+/// 3D point, a map key that differs from the record's id, a camera model without a COLMAP id
+/// ([`crate::camera::CameraModel::OpenCvThinPrismTilted`]); text: an image name that is empty,
+/// spans lines or has leading or trailing whitespace; binary: a name with a NUL byte or longer
+/// than 64 KiB, an observed 3D point id above `i64::MAX`), or for a `dir` without a final name
+/// (`/`, `..`); [`ErrorKind::DirectoryNotEmpty`] if `dir` exists and is not empty (with
+/// [`Overwrite::Never`]); [`ErrorKind::AlreadyExists`] for text over a complete binary model
+/// (with [`Overwrite::Files`]); [`ErrorKind::NotADirectory`] if `dir` or its parent is not a
+/// directory; [`ErrorKind::NotFound`] if the parent does not exist; any I/O error of the
+/// writing (in every case with nothing of the model left behind, or the previous files
+/// restored).
+pub fn write_model(model: &Model, dir: impl AsRef<Path>, options: &WriteOptions) -> io::Result<()> {
+    let (format, overwrite) = (options.format, options.overwrite);
     let dir = dir.as_ref();
     let contents = encode_model(model, format)?;
     let names = format.file_names();

@@ -8,6 +8,7 @@ pub(crate) mod lanes;
 pub(crate) mod linalg;
 pub(crate) mod mat3;
 pub mod p3p;
-pub mod roots;
+#[cfg_attr(not(feature = "internals"), allow(dead_code))]
+pub(crate) mod roots;
 pub(crate) mod rotation;
 pub(crate) mod trig;

@@ -28,7 +28,7 @@
 //!
 //! Differences from the paper's presentation (same mathematics): the cubic's coefficients are
 //! `det D1`, `tr(adj(D1) D2)`, `tr(D1 adj(D2))`, `det D2` and its roots come from
-//! [`crate::numeric::roots::real_roots`]; every real root is tried and the most indefinite `D0` (the
+//! the crate's real-root finder; every real root is tried and the most indefinite `D0` (the
 //! best-conditioned plane pair) is used; the rotation is built from orthonormal frames, so it
 //! is a rotation to rounding without a projection step.
 //!

@@ -64,7 +64,7 @@
 
 //!
 //! ```
-//! use eopnp::roots::{quartic_real_roots, real_roots};
+//! use eopnp::internals::roots::{quartic_real_roots, real_roots};
 //!
 //! // (x - 1)(x - 2)(x + 3) = x^3 - 7x + 6, ascending coefficients.
 //! let r = real_roots(&[6.0, -7.0, 0.0, 1.0]);

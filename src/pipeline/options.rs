@@ -38,7 +38,7 @@ pub enum PlanarDetection {
 /// The loss of the final refinement: how much a residual of squared length `r2` costs.
 ///
 /// The scale `s` is in the units of the residuals: pixels for pixel input
-/// ([`crate::Solver::solve_pixels`], [`crate::ransac::Ransac::estimate_pixels`]), normalised
+/// ([`crate::Problem::pixels`], in a solve or RANSAC's fits), normalised
 /// units (pixels divided by the focal length) for normalised input. The refinement minimises
 /// `sum_i w_i rho(r2_i)`, by iteratively reweighted Levenberg-Marquardt (the weight of a point
 /// is `rho'(r2)`), to a stationary point of that cost.

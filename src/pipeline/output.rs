@@ -22,16 +22,19 @@ use crate::error::PnpError;
 use crate::numeric::lanes::{blocks, dispatched, lane_sum, Block, LANES};
 use crate::numeric::rotation::to_unit_quaternion;
 
-/// A camera pose and how it was found.
+/// A camera pose and how it was found. The pose maps world to camera, `x_cam = R X + t`:
+/// [`Solution::rotation`] is `R` (the matrix the solver computed), [`Solution::translation`]
+/// is `t`; [`Solution::pose`] gives them as an `Isometry3`, [`Solution::rvec`] as OpenCV's
+/// rotation vector.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct Solution {
-    /// World-to-camera pose: `x_cam = R X + t`.
-    pub pose: Isometry3<f64>,
-    /// The rotation `R` as a matrix (the same rotation as `pose.rotation`, without the
-    /// quaternion round trip).
+    /// The rotation `R` of the world-to-camera pose `x_cam = R X + t`.
     pub rotation: Matrix3<f64>,
+    /// The translation `t` of the world-to-camera pose `x_cam = R X + t` (the world origin in
+    /// the camera frame).
+    pub translation: Vector3<f64>,
     /// The minimised cost: in [`Refinement::Reprojection`] mode the (weighted) sum of squared
     /// reprojection residuals, normalised for normalised input and in pixels^2 for pixel input
     /// (through the camera model), each passed through the [`crate::Loss`] when one is set
@@ -70,7 +73,7 @@ pub struct Solution {
     /// Correspondences that entered the solve (those with a weight > 0).
     pub used: usize,
     /// Correspondences left out because their pixel could not be undistorted
-    /// ([`crate::Solver::solve_pixels`]; 0 for normalised input).
+    /// ([`crate::Problem::pixels`]; 0 for normalised input).
     pub skipped: usize,
     /// The pose's covariance, when [`crate::Solver::covariance`] asks for it (and the normal
     /// equations at the pose are positive definite); see [`crate::covariance`].
@@ -78,6 +81,36 @@ pub struct Solution {
 }
 
 impl Solution {
+    /// The world-to-camera pose as an isometry (`x_cam = pose * X`): the rotation as a unit
+    /// quaternion (closed form from [`Solution::rotation`], renormalised), the translation.
+    ///
+    /// ```
+    /// use eopnp::solve;
+    /// use nalgebra::{Point2, Point3, Vector3};
+    ///
+    /// let t = Vector3::new(0.1, -0.2, 6.0);
+    /// let world = [
+    ///     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+    ///     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+    /// ];
+    /// let image: Vec<Point2<f64>> = world
+    ///     .iter()
+    ///     .map(|x| { let p = x.coords + t; Point2::new(p.x / p.z, p.y / p.z) })
+    ///     .collect();
+    /// let sol = solve(&world, &image)?;
+    /// // The first point in the camera frame.
+    /// let x_cam = sol.pose() * world[0];
+    /// assert!((x_cam - (world[0] + t)).norm() < 1e-9);
+    /// # Ok::<(), eopnp::PnpError>(())
+    /// ```
+    #[must_use]
+    pub fn pose(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::from(self.translation),
+            to_unit_quaternion(&self.rotation),
+        )
+    }
+
     /// The rotation as OpenCV's rotation vector (`rvec` of `cv2.solvePnP`,
     /// `cv2.Rodrigues`): the axis times the angle in radians, the angle in `[0, pi]`. Accurate
     /// at every angle (computed from the unit quaternion as `2 atan2(|v|, |w|)`, not from an
@@ -104,7 +137,8 @@ impl Solution {
     /// ```
     #[must_use]
     pub fn rvec(&self) -> Vector3<f64> {
-        let q = self.pose.rotation.quaternion();
+        let pose = self.pose();
+        let q = pose.rotation.quaternion();
         let (w, v) = (q.w, q.imag());
         let n = v.norm();
         if n == 0.0 {
@@ -344,10 +378,9 @@ impl Output<'_> {
             },
         };
         let wsum = self.fr.weight_sum;
-        let rot = to_unit_quaternion(&rw);
         let sol = Solution {
-            pose: Isometry3::from_parts(Translation3::from(tw), rot),
             rotation: rw,
+            translation: tw,
             cost: if mode == Refinement::Algebraic {
                 f / self.scale
             } else if let Some((cost, _)) = s10 {
@@ -385,8 +418,8 @@ impl Output<'_> {
             return Err(PnpError::NoSolution);
         }
         let finite = sol.rotation.iter().all(|x| x.is_finite())
-            && sol.pose.translation.vector.iter().all(|x| x.is_finite())
-            && sol.pose.rotation.coords.iter().all(|x| x.is_finite());
+            && sol.translation.iter().all(|x| x.is_finite())
+            && to_unit_quaternion(&rw).coords.iter().all(|x| x.is_finite());
         if finite {
             Ok(Some(sol))
         } else {
@@ -410,8 +443,7 @@ pub(crate) fn rank_all(
         };
         if !all.iter().any(|o: &Solution| {
             (o.rotation - s.rotation).norm() <= 1e-6
-                && (o.pose.translation.vector - s.pose.translation.vector).norm()
-                    <= 1e-6 * (1.0 + s.pose.translation.vector.norm())
+                && (o.translation - s.translation).norm() <= 1e-6 * (1.0 + s.translation.norm())
         }) {
             all.push(s);
         }

@@ -3,7 +3,7 @@
 //!
 //! ```
 //! use eopnp::ransac::Ransac;
-//! use eopnp::Solver;
+//! use eopnp::{Problem, Solver};
 //! use nalgebra::{Point2, Point3, Vector3};
 //!
 //! // 40 points seen by a camera at (0, 0, -6); every fourth correspondence is wrong.
@@ -18,9 +18,9 @@
 //! }
 //! // Normalised image points, focal length 1000 px, 2 px threshold.
 //! let r = Ransac::default().threshold_px(2.0).seed(7);
-//! let sol = r.estimate(&Solver::default(), &world, &image, (1000.0, 1000.0), None)?;
+//! let sol = r.estimate(&Solver::default(), &Problem::normalised(&world, &image).focal(1000.0, 1000.0))?;
 //! assert_eq!(sol.num_inliers, 30);
-//! assert!((sol.solution.pose.translation.vector - Vector3::new(0.0, 0.0, 6.0)).norm() < 1e-9);
+//! assert!((sol.solution.translation - Vector3::new(0.0, 0.0, 6.0)).norm() < 1e-9);
 //! # Ok::<(), eopnp::PnpError>(())
 //! ```
 //!
@@ -34,12 +34,12 @@
 //!    `T^2`). Scoring a hypothesis stops as soon as its partial cost exceeds the best one.
 //! 3. Local optimisation: every new best hypothesis is refitted by EOPnP (the given
 //!    [`Solver`], i.e. by default the maximum-likelihood pose) on its inliers, repeated while
-//!    the MSAC cost drops (at most [`LO_STEPS`] times).
+//!    the MSAC cost drops (at most 4 times).
 //! 4. Adaptive stopping: after `k = ln(1 - p) / ln(1 - w^3)` iterations, `w` the best inlier
 //!    ratio and `p` = [`Ransac::confidence`], clamped to
 //!    [`Ransac::min_iterations`]..=[`Ransac::max_iterations`].
 //! 5. Final fit: EOPnP on the inliers, re-classify, refit, until the inlier set stops changing
-//!    (at most [`FINAL_STEPS`] refits). The final classification uses the threshold
+//!    (at most 10 refits). The final classification uses the threshold
 //!    `T * final_threshold_factor` (default 2): a fixed threshold `T` tuned for scoring noisy
 //!    three-point hypotheses cuts the tail of the true inliers' residual distribution off the
 //!    accurate final pose (on the bundled model, 4 px drops good observations that COLMAP kept
@@ -71,13 +71,14 @@ use crate::camera::Camera;
 use crate::covariance::Metric;
 use crate::error::{InputKind, PnpError};
 use crate::pipeline::PixelInputs;
+use crate::problem::{Observations, Problem};
 use crate::solver::undistort_all;
 use crate::{Solution, Solver};
 
 /// Maximum EOPnP refits per local optimisation.
-pub const LO_STEPS: u32 = 4;
+pub(crate) const LO_STEPS: u32 = 4;
 /// Maximum refits of the final fit.
-pub const FINAL_STEPS: u32 = 10;
+pub(crate) const FINAL_STEPS: u32 = 10;
 /// Attempts to draw three distinct indices before giving up on one iteration (only reachable
 /// with absurdly few points).
 const SAMPLE_ATTEMPTS: u32 = 64;
@@ -102,27 +103,26 @@ const SPRT_EPS_MIN: f64 = 0.1;
 /// the three of the sample; a problem with fewer points (N = 4, 5) needs all of them.
 const MIN_FIT_POINTS: usize = 6;
 
-/// RANSAC options. `Ransac::default()` is the recommended configuration; the fields can also
-/// be set directly.
+/// RANSAC options. `Ransac::default()` is the recommended configuration; set options with the
+/// builder methods (`Ransac::default().threshold_px(2.0).seed(7)`), which document each
+/// default. The fields are public for reading (bindings show and copy them).
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct Ransac {
-    /// Inlier threshold on the pixel reprojection error. Default: `4.0`.
+    /// [`Ransac::threshold_px`].
     pub threshold_px: f64,
-    /// Probability that at least one all-inlier sample is drawn (adaptive stopping).
-    /// Default: `0.999`.
+    /// [`Ransac::confidence`].
     pub confidence: f64,
-    /// Hard bound on the iterations (samples). Default: `10_000`.
+    /// [`Ransac::max_iterations`].
     pub max_iterations: u32,
-    /// Iterations always done. Default: `20`.
+    /// [`Ransac::min_iterations`].
     pub min_iterations: u32,
-    /// Seed of the sampling generator. Default: `0`.
+    /// [`Ransac::seed`].
     pub seed: u64,
-    /// Local optimisation of every new best hypothesis by EOPnP. Default: `true`.
+    /// [`Ransac::local_optimisation`].
     pub local_optimisation: bool,
-    /// The final inlier classification uses `threshold_px * final_threshold_factor`
-    /// (see the module documentation). Default: `2.0`. `1.0` keeps the scoring threshold.
+    /// [`Ransac::final_threshold_factor`].
     pub final_threshold_factor: f64,
 }
 
@@ -191,49 +191,52 @@ fn needed_iterations(confidence: f64, w: f64) -> f64 {
 }
 
 impl Ransac {
-    /// Sets [`Ransac::threshold_px`].
+    /// The inlier threshold on the reprojection error, in pixels (for normalised input, in
+    /// units of [`Problem::focal`]'s focal lengths). Default: `4.0`.
     #[must_use]
     pub fn threshold_px(mut self, px: f64) -> Self {
         self.threshold_px = px;
         self
     }
 
-    /// Sets [`Ransac::confidence`].
+    /// The probability that at least one all-inlier sample is drawn (adaptive stopping).
+    /// Default: `0.999`.
     #[must_use]
     pub fn confidence(mut self, p: f64) -> Self {
         self.confidence = p;
         self
     }
 
-    /// Sets [`Ransac::max_iterations`].
+    /// A hard bound on the iterations (samples). Default: `10_000`.
     #[must_use]
     pub fn max_iterations(mut self, n: u32) -> Self {
         self.max_iterations = n;
         self
     }
 
-    /// Sets [`Ransac::min_iterations`].
+    /// The iterations always done. Default: `20`.
     #[must_use]
     pub fn min_iterations(mut self, n: u32) -> Self {
         self.min_iterations = n;
         self
     }
 
-    /// Sets [`Ransac::seed`].
+    /// The seed of the sampling generator. Default: `0`.
     #[must_use]
     pub fn seed(mut self, seed: u64) -> Self {
         self.seed = seed;
         self
     }
 
-    /// Sets [`Ransac::local_optimisation`].
+    /// Local optimisation of every new best hypothesis by EOPnP. Default: `true`.
     #[must_use]
     pub fn local_optimisation(mut self, on: bool) -> Self {
         self.local_optimisation = on;
         self
     }
 
-    /// Sets [`Ransac::final_threshold_factor`].
+    /// The final inlier classification uses `threshold_px * final_threshold_factor` (see the
+    /// module documentation). Default: `2.0`; `1.0` keeps the scoring threshold.
     #[must_use]
     pub fn final_threshold_factor(mut self, f: f64) -> Self {
         self.final_threshold_factor = f;
@@ -265,17 +268,23 @@ impl Ransac {
         Ok(())
     }
 
-    /// Robust pose from normalised image points `(x/z, y/z)`.
+    /// The robust pose of a [`Problem`]: RANSAC with P3P samples, EOPnP (`solver`) for the
+    /// local optimisation and the final fit.
     ///
     /// The pixel reprojection error of point `i` is `sqrt(w_i (fx^2 dx^2 + fy^2 dy^2))`,
-    /// `(dx, dy)` the normalised residual, `focal = (fx, fy)` in pixels and `w_i` the optional
-    /// per-point weight (1 if `None`; [`Ransac::estimate_pixels`] passes the lens distortion's
-    /// local scale, as [`Solver::solve_pixels`]). EOPnP fits minimise the same error.
+    /// `(dx, dy)` the normalised residual and `w_i` the point's weight (1 without weights):
+    /// for [`Problem::pixels`], `(fx, fy)` are the camera's and the pixels are undistorted and
+    /// weighted by the lens distortion's local scale as in [`Solver::solve`] (the threshold
+    /// then applies to first-order pixel errors through the distortion; a pixel that cannot
+    /// be undistorted is an outlier, `false` in the mask); for [`Problem::normalised`], they
+    /// are [`Problem::focal`]'s. The fits minimise the same error (and, in the default mode,
+    /// the final fit the pixel error through the camera). A point of weight 0 is never an
+    /// inlier of a fit. The time in the statistics includes the undistortion.
     ///
     /// When `solver` asks for the pose covariance ([`Solver::covariance`]), the returned
-    /// solution carries it: the covariance of the returned pose from its inliers (with their
-    /// weights), in normalised image units, exactly what [`Solver::solve_weighted`] with that
-    /// option reports for the same pose and points.
+    /// solution carries the covariance of the returned pose from its inliers (with their
+    /// weights), exactly what [`Solver::solve`] with that option reports for the same pose and
+    /// points.
     ///
     /// # Errors
     /// [`PnpError::LengthMismatch`], [`PnpError::WeightsLength`], [`PnpError::TooFewPoints`]
@@ -286,6 +295,23 @@ impl Ransac {
     /// the final pose's inliers are no more than wrong poses reach by chance at this threshold
     /// (see "Consensus" in the module documentation).
     pub fn estimate(
+        &self,
+        solver: &Solver,
+        problem: &Problem<'_>,
+    ) -> Result<RansacSolution, PnpError> {
+        let (world, weights) = (problem.world, problem.weights);
+        match problem.observations {
+            Observations::Normalised { points, focal } => {
+                self.estimate_normalised(solver, world, points, focal, weights)
+            }
+            Observations::Pixels { points, camera } => {
+                self.estimate_pixels(solver, camera, world, points, weights)
+            }
+        }
+    }
+
+    /// [`Ransac::estimate`] of normalised image points.
+    fn estimate_normalised(
         &self,
         solver: &Solver,
         world: &[Point3<f64>],
@@ -352,7 +378,7 @@ impl Ransac {
             None => vec![1.0; n],
         };
         let fmax = fx.max(fy);
-        let prob = Problem {
+        let prob = ScoringSet {
             world,
             image,
             weights,
@@ -425,7 +451,7 @@ impl Ransac {
                         else {
                             break;
                         };
-                        let t = s.pose.translation.vector;
+                        let t = s.translation;
                         match prob.score(&s.rotation, &t, th2, cand.cost) {
                             Some(better) if better.cost < cand.cost => cand = better,
                             _ => break,
@@ -455,7 +481,7 @@ impl Ransac {
                 break;
             };
             r = s.rotation;
-            t = s.pose.translation.vector;
+            t = s.translation;
             solution = Some(s);
             let stable = prev_mask == mask;
             prev_mask.clone_from(&mask);
@@ -490,47 +516,8 @@ impl Ransac {
         })
     }
 
-    /// Robust pose from observed (distorted) pixels and a camera model: the pixels are
-    /// undistorted and weighted as in [`Solver::solve_pixels`], then
-    /// [`Ransac::estimate`] runs in normalised coordinates with the camera's focal lengths, so
-    /// the threshold applies to (first-order) pixel reprojection errors through the lens
-    /// distortion. A pixel that cannot be undistorted is an outlier (`false` in the mask).
-    /// The time in the statistics includes the undistortion. With [`Solver::covariance`], the
-    /// covariance of the returned pose from its inliers, in pixels through the camera (as
-    /// [`Solver::solve_pixels_weighted`] reports it for the same pose and points).
-    ///
-    /// # Errors
-    /// As [`Ransac::estimate`].
-    pub fn estimate_pixels(
-        &self,
-        solver: &Solver,
-        camera: &Camera,
-        world: &[Point3<f64>],
-        pixels: &[Point2<f64>],
-    ) -> Result<RansacSolution, PnpError> {
-        self.estimate_pixels_impl(solver, camera, world, pixels, None)
-    }
-
-    /// As [`Ransac::estimate_pixels`] with one non-negative weight per correspondence,
-    /// multiplying the lens distortion's local scale (a point of weight 0 is never an inlier
-    /// of a fit).
-    ///
-    /// # Errors
-    /// [`PnpError::WeightsLength`], [`PnpError::NonFinite`] and [`PnpError::InvalidWeight`]
-    /// for the first bad weight (its index is the correspondence's), otherwise as
-    /// [`Ransac::estimate`].
-    pub fn estimate_pixels_weighted(
-        &self,
-        solver: &Solver,
-        camera: &Camera,
-        world: &[Point3<f64>],
-        pixels: &[Point2<f64>],
-        weights: &[f64],
-    ) -> Result<RansacSolution, PnpError> {
-        self.estimate_pixels_impl(solver, camera, world, pixels, Some(weights))
-    }
-
-    fn estimate_pixels_impl(
+    /// [`Ransac::estimate`] of pixels through a camera.
+    fn estimate_pixels(
         &self,
         solver: &Solver,
         camera: &Camera,
@@ -575,6 +562,22 @@ impl Ransac {
     }
 }
 
+/// The RANSAC seed of problem `index` of a batch (`Ransac::estimate_batch`, feature
+/// `rayon`) whose base seed is `base`: SplitMix64 of the
+/// base mixed with SplitMix64 of the index, so that nearby indices and bases give unrelated
+/// sample sequences.
+#[must_use]
+pub fn problem_seed(base: u64, index: usize) -> u64 {
+    splitmix64(base ^ splitmix64(index as u64))
+}
+
+fn splitmix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
 /// The weight of correspondence `i` in the covariance of a RANSAC pose: its caller's weight
 /// (1 without weights) if it is an inlier, 0 otherwise.
 fn inlier_weight(inliers: &[bool], weights: Option<&[f64]>, i: usize) -> f64 {
@@ -589,7 +592,7 @@ mod chance;
 mod score;
 
 pub(crate) use score::index;
-use score::{sample3, FitBuffers, Problem, Scored};
+use score::{sample3, FitBuffers, Scored, ScoringSet};
 
 /// `impl sample_consensus::Estimator` (feature `sample-consensus`), so rust-cv's consensus
 /// algorithms (e.g. `arrsac::Arrsac`) can drive the [`crate::p3p`] minimal solver; refit the

@@ -158,8 +158,8 @@ pub fn trans_err_pct(t: &Vector3<f64>, t_true: &Vector3<f64>) -> f64 {
 /// (R, t) of a solution, x_cam = R X + t.
 pub fn pose_of(s: &Solution) -> (Matrix3<f64>, Vector3<f64>) {
     (
-        s.pose.rotation.to_rotation_matrix().into_inner(),
-        s.pose.translation.vector,
+        s.pose().rotation.to_rotation_matrix().into_inner(),
+        s.translation,
     )
 }
 

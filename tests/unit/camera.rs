@@ -150,7 +150,7 @@ fn project_then_undistort_is_identity() {
 #[test]
 fn undistortion_weight_is_the_projection_jacobian_determinant() {
     for cam in cameras() {
-        let (fx, fy) = cam.intrinsics_scale();
+        let (fx, fy) = cam.focal_lengths();
         let mut worst = 0.0f64;
         for i in 0..=20 {
             for j in 0..=20 {

@@ -1,4 +1,5 @@
 use super::binary::{parse_cameras_bin, parse_images_bin, parse_points_bin};
+use super::model::quaternion_to_matrix;
 use super::*;
 use nalgebra::Matrix3;
 
@@ -19,7 +20,7 @@ fn binary_count_cannot_allocate_beyond_the_file() {
     let mut b = Vec::new();
     b.extend_from_slice(&1_000_000_000_000u64.to_le_bytes());
     b.extend_from_slice(&[0u8; 30]);
-    let limits = ReadLimits::default();
+    let limits = ReadOptions::default();
     let len = b.len() as u64;
     let e = parse_points_bin(Path::new("points3D.bin"), &mut &b[..], len, &limits).unwrap_err();
     assert_eq!(e.location, Location::Offset(0));
@@ -226,7 +227,7 @@ fn registration_rmse_is_the_pixel_rmse_of_its_pose() {
                 assert_eq!((got.n, got.skipped), (300, 0));
                 let (world, pixels) = model.correspondences(id);
                 let r = got.solution.rotation;
-                let t = got.solution.pose.translation.vector;
+                let t = got.solution.translation;
                 let want = pixel_rmse(&cam, &world, &pixels, None, &r, &t);
                 assert!(want > 0.1 && want < 2.0, "image {id}: {want} px");
                 assert!(

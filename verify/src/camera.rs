@@ -20,7 +20,7 @@ use crate::checks::{g64, TOL_POLY};
 use crate::fd::{nodes, H_COMPLEX, H_REL};
 use crate::report::{Measurement, Tracker};
 use crate::strategies as st;
-use eopnp::kernels as k;
+use eopnp::internals::kernels as k;
 use num_complex::Complex64;
 use rand::Rng;
 use std::ops::{Add, Mul, Sub};

@@ -23,7 +23,7 @@ use crate::fd::{self, CHART_D1, CHART_D3, CHART_D4, EVAL_ROUNDING, H_COMPLEX, H_
 use crate::reference::{self as rf, gamma, M9};
 use crate::report::{Measurement, Tracker};
 use crate::strategies as st;
-use eopnp::kernels as k;
+use eopnp::internals::kernels as k;
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use num_complex::Complex64;
 

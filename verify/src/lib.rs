@@ -1,4 +1,4 @@
-//! Independent numeric verification of the generated kernels of `eopnp` (`eopnp::kernels`).
+//! Independent numeric verification of the generated kernels of `eopnp` (`eopnp::internals::kernels`).
 //!
 //! Nothing here calls `eopnp-codegen`: every kernel is compared with the mathematical definition
 //! in docs/algorithm.md evaluated numerically with nalgebra (`reference`), with finite differences and

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 /// The outcome of one check over its samples.
 #[derive(Clone, Debug)]
 pub struct Measurement {
-    /// Kernel name (as in `eopnp::kernels::ALL_KERNEL_OPS`).
+    /// Kernel name (as in `eopnp::internals::kernels::ALL_KERNEL_OPS`).
     pub kernel: &'static str,
     /// What the kernel is compared with.
     pub check: &'static str,
@@ -123,7 +123,7 @@ impl Measurement {
 }
 
 /// The Markdown table: kernel | check | samples | worst error (norm) | bound | worst/bound |
-/// ops after CSE | naive ops (terms), with the op counts from `eopnp::kernels::ALL_KERNEL_OPS`.
+/// ops after CSE | naive ops (terms), with the op counts from `eopnp::internals::kernels::ALL_KERNEL_OPS`.
 #[must_use]
 pub fn table(ms: &[Measurement]) -> String {
     let mut out = String::new();
@@ -132,7 +132,7 @@ pub fn table(ms: &[Measurement]) -> String {
     );
     out.push_str("|---|---|---|---|---|---|---|---|\n");
     for m in ms {
-        let ops = eopnp::kernels::ALL_KERNEL_OPS
+        let ops = eopnp::internals::kernels::ALL_KERNEL_OPS
             .iter()
             .find(|o| o.name == m.kernel);
         let (cse, naive) = match ops {

@@ -6,7 +6,7 @@
 //! of `u S_C`, whereas `|C|` itself can cancel to ~0 for `M = K^T K`. Tolerance 1e-12: both
 //! sides have depth <= 40, so their first-order error bound is `gamma_40 S_C ~ 4.4e-15 S_C`.
 
-use eopnp::kernels as k;
+use eopnp::internals::kernels as k;
 use eopnp_verify::checks::{self, Variant, N_COST, TOL_POLY};
 use eopnp_verify::{reference as rf, strategies as st};
 use proptest::prelude::*;

@@ -6,7 +6,7 @@
 //! per-sample bounds derived in `eopnp_verify::fd` (derivatives of `F` along one-parameter
 //! subgroups `t -> Rot_u(2 atan t)`).
 
-use eopnp::kernels as k;
+use eopnp::internals::kernels as k;
 use eopnp_verify::checks::{self, LocalAgainst, N_COST, TOL_POLY};
 use eopnp_verify::{reference as rf, strategies as st};
 use nalgebra::{Matrix3, Vector3};

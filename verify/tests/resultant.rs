@@ -13,7 +13,7 @@
 //! - The cubic / quartic / matrix kernels against the formulas of docs/algorithm.md (1e-12 of the
 //!   absolute-value scale, as for the cost).
 
-use eopnp::kernels as k;
+use eopnp::internals::kernels as k;
 use eopnp_verify::checks::{self, N_RESULTANT};
 use eopnp_verify::reference as rf;
 

@@ -1,4 +1,4 @@
-//! Verification of `eopnp::roots` against an independent reference: the eigenvalues of the
+//! Verification of `eopnp::internals::roots` against an independent reference: the eigenvalues of the
 //! (balanced) companion matrix computed by nalgebra's real Schur decomposition, refined by
 //! Aberth-Ehrlich iteration and, for real roots, Newton with a compensated residual. Properties over random coefficients, polynomials built from known roots
 //! (including near-repeated roots), roots spread over 1e-6..1e6, and leading coefficients near
@@ -37,7 +37,7 @@
 //!     either list has a counterpart within the double-root tolerance or is itself a
 //!     near-double root (`check_agree`).
 
-use eopnp::roots::{
+use eopnp::internals::roots::{
     cubic_real_roots, quartic_real_roots, real_roots, real_roots_near, Roots, DEFAULT_IMAG_TOL,
     MAX_DEGREE,
 };

@@ -463,4 +463,3 @@ pub(super) fn read_csv<R: BufRead>(
         world,
     })
 }
-

@@ -11,8 +11,8 @@ use serde::de::{DeserializeSeed, Error as _, IgnoredAny, MapAccess, SeqAccess, V
 use serde::{Deserialize, Deserializer};
 
 use super::limits::{read_failure, Limits};
-use crate::source::bytes_text;
 use super::{Problem, Start};
+use crate::source::bytes_text;
 use crate::Failure;
 
 /// The most parameters a JSON camera may list (the largest model has 18).
@@ -207,7 +207,6 @@ impl<'de, const N: usize> Visitor<'de> for CoordsVisitor<N> {
     }
 }
 
-
 /// What made [`JsonGuard`] stop the JSON reader.
 enum Violation {
     /// A string or number longer than the limit, on this line.
@@ -359,4 +358,3 @@ fn json_failure(name: &str, e: &serde_json::Error, start: &Start) -> Failure {
         line + start.line - 1
     ))
 }
-

@@ -35,7 +35,6 @@ impl Default for Limits {
     }
 }
 
-
 pub(super) fn too_large(name: &str, cap: u64) -> Failure {
     Failure::input(format!(
         "{name}: larger than {}, the input size limit of `eopnp solve` (--max-input-size)",
@@ -96,4 +95,3 @@ pub(super) fn read_failure(name: &str, e: &io::Error, limits: &Limits) -> Failur
         Failure::input(format!("{name}: {e}"))
     }
 }
-

@@ -43,7 +43,6 @@ impl Problem {
     }
 }
 
-
 /// Parses `--camera "MODEL P1 P2 ..."`.
 fn parse_camera_arg(s: &str) -> Result<Camera, Failure> {
     let mut it = s.split_whitespace();
@@ -61,7 +60,6 @@ fn parse_camera_arg(s: &str) -> Result<Camera, Failure> {
     }
     Camera::from_colmap(model, 0, 0, params).map_err(|e| Failure::input(format!("--camera: {e}")))
 }
-
 
 /// The name standard input goes by in messages.
 pub const STDIN_NAME: &str = "<stdin>";
@@ -121,7 +119,6 @@ pub fn read_problem(
     let ext = format_ext.or(ext.as_deref());
     read_problem_from(&name, src, ext, camera_arg, limits)
 }
-
 
 /// The buffered bytes of `src`, more read if needed (empty at the end of the input).
 pub(crate) fn fill<R: BufRead>(src: &mut R) -> io::Result<&[u8]> {
@@ -246,7 +243,6 @@ pub fn parse_problem(
     read_problem_from(name, bytes, ext, camera_arg, &Limits::default())
 }
 
-
 /// `s` for a message: control and other invisible characters escaped (`\u{1}`, `\t`), quotes
 /// as they are; at most 60 characters.
 pub(crate) fn shown(s: &str) -> String {
@@ -270,7 +266,6 @@ fn truncate(s: &str) -> String {
         s.to_string()
     }
 }
-
 
 #[cfg(test)]
 #[path = "../../tests/unit/input.rs"]

@@ -19,7 +19,7 @@ pub(super) struct Scored {
 }
 
 /// The data of one problem: squared pixel error of a pose at each point.
-pub(super) struct Problem<'a> {
+pub(super) struct ScoringSet<'a> {
     pub(super) world: &'a [Point3<f64>],
     pub(super) image: &'a [Point2<f64>],
     pub(super) weights: Vec<f64>,
@@ -31,7 +31,7 @@ pub(super) struct Problem<'a> {
     pub(super) pixel: Option<PixelInputs<'a>>,
 }
 
-impl Problem<'_> {
+impl ScoringSet<'_> {
     #[inline]
     pub(super) fn sq_err(&self, r: &Matrix3<f64>, t: &Vector3<f64>, i: usize) -> f64 {
         let p = r * self.world[i].coords + t;
@@ -74,7 +74,7 @@ impl Problem<'_> {
         })
     }
 
-    /// As [`Problem::score`] for a P3P hypothesis, with Wald's sequential probability ratio test
+    /// As [`ScoringSet::score`] for a P3P hypothesis, with Wald's sequential probability ratio test
     /// (Chum and Matas 2008) on the points in the random order `order`: the hypothesis is
     /// rejected as soon as the likelihood ratio of "bad model" over "good model" exceeds
     /// [`SPRT_A`], `eps` the inlier ratio of a good model, `delta` the probability that a bad
@@ -163,6 +163,7 @@ impl Problem<'_> {
                 Some(&buf.weights),
                 self.rows,
                 px.as_ref(),
+                None,
             )
             .ok()
     }

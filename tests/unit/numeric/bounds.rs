@@ -7,6 +7,7 @@
 
 use super::hook::{hits, with_limit};
 use super::*;
+use crate::Problem;
 
 use crate::{PnpError, Solver};
 use nalgebra::{Matrix3, Point2, Point3, Rotation3, Vector3};
@@ -85,7 +86,9 @@ fn solver_on_top_returns_true_pose(bound: Bound, limit: usize) -> usize {
     for (what, w, i, r) in problems() {
         for exhaustive in [false, true] {
             let (res, hit) = with_limit(bound, limit, || {
-                Solver::default().exhaustive(exhaustive).solve(&w, &i)
+                Solver::default()
+                    .exhaustive(exhaustive)
+                    .solve(&Problem::normalised(&w, &i))
             });
             total += hit;
             assert_true_pose(
@@ -115,7 +118,9 @@ fn ordinary_solves_never_exhaust_a_constant_bound() {
     for seed in 0..300 {
         for (n, planar) in [(4, false), (6, false), (10, true), (50, false)] {
             let (w, i, r) = problem(n, planar, seed);
-            let all_sols = Solver::default().solve_all(&w, &i).unwrap();
+            let all_sols = Solver::default()
+                .solve_all(&Problem::normalised(&w, &i))
+                .unwrap();
             let e = crate::numeric::rotation::rotation_error_deg(&all_sols[0].rotation, &r);
             assert!(e < 1e-6 || n == 4, "seed {seed} n {n}: {e}");
         }
@@ -162,7 +167,7 @@ fn frame_eigen_sweeps() {
             let (res, hit) = with_limit(Bound::FrameEigenSweeps, 1, || {
                 Solver::default()
                     .exhaustive(exhaustive)
-                    .solve(&world, &image)
+                    .solve(&Problem::normalised(&world, &image))
             });
             total += hit;
             assert_true_pose(&res, &rt, &format!("thin cloud, seed {seed}"));
@@ -219,7 +224,7 @@ fn newton_damping() {
         let (res, _) = with_limit(Bound::NewtonDamping, 0, || {
             Solver::default()
                 .refinement(crate::Refinement::Algebraic)
-                .solve(&w, &i)
+                .solve(&Problem::normalised(&w, &i))
         });
         assert_true_pose(&res, &r, &format!("algebraic, {what}"));
     }
@@ -237,7 +242,9 @@ fn m_eigen_decomposition() {
     for (what, w, i, r) in problems() {
         let planar = what.contains("planar true");
         let (res, hit) = with_limit(Bound::MEigen, 1, || {
-            Solver::default().exhaustive(true).solve(&w, &i)
+            Solver::default()
+                .exhaustive(true)
+                .solve(&Problem::normalised(&w, &i))
         });
         assert!(hit >= 1, "{what}");
         hits += hit;
@@ -246,7 +253,9 @@ fn m_eigen_decomposition() {
         } else {
             assert_eq!(res.err(), Some(PnpError::NoSolution), "exhaustive, {what}");
         }
-        let (res, hit) = with_limit(Bound::MEigen, 1, || Solver::default().solve(&w, &i));
+        let (res, hit) = with_limit(Bound::MEigen, 1, || {
+            Solver::default().solve(&Problem::normalised(&w, &i))
+        });
         if planar || hit == 0 {
             assert_true_pose(&res, &r, &format!("default, {what}"));
         } else {
@@ -275,7 +284,10 @@ fn p3p_eigen_decomposition() {
     for seed in 0..5 {
         let (w, i, r) = problem(50, false, 20 + seed);
         let (res, hit) = with_limit(Bound::P3pEigen, 1, || {
-            ransac.estimate(&Solver::default(), &w, &i, (500.0, 500.0), None)
+            ransac.estimate(
+                &Solver::default(),
+                &Problem::normalised(&w, &i).focal(500.0, 500.0),
+            )
         });
         assert!(hit >= 300, "seed {seed}: {hit}");
         assert_eq!(
@@ -288,7 +300,10 @@ fn p3p_eigen_decomposition() {
             "seed {seed}"
         );
         let (res, _) = with_limit(Bound::P3pEigen, 5, || {
-            ransac.estimate(&Solver::default(), &w, &i, (500.0, 500.0), None)
+            ransac.estimate(
+                &Solver::default(),
+                &Problem::normalised(&w, &i).focal(500.0, 500.0),
+            )
         });
         let sol = res.map(|s| s.solution);
         assert_true_pose(&sol, &r, &format!("RANSAC, P3pEigen = 5, seed {seed}"));
@@ -391,7 +406,7 @@ fn undistortion_steps() {
         for limit in [1, 2] {
             let what = format!("solve_pixels, Undistort = {limit}, seed {seed}");
             let (res, hit) = with_limit(Bound::Undistort, limit, || {
-                Solver::default().solve_pixels(&w, &px, &cam)
+                Solver::default().solve(&Problem::pixels(&w, &px, &cam))
             });
             let (refused, _) = with_limit(Bound::Undistort, limit, || {
                 px.iter().filter(|p| cam.undistort(**p).is_err()).count()
@@ -442,7 +457,7 @@ fn undistortion_steps() {
         pixels.push(cam.project(Point2::new(c.x / c.z, c.y / c.z)));
     }
     let (res, hit) = with_limit(Bound::Undistort, 1, || {
-        Solver::default().solve_pixels(&world, &pixels, &cam)
+        Solver::default().solve(&Problem::pixels(&world, &pixels, &cam))
     });
     assert_eq!(hit, 8);
     assert_eq!(res.as_ref().map(|s| s.skipped).ok(), Some(8));

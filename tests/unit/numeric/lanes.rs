@@ -5,6 +5,7 @@
 
 use super::wide;
 use crate::camera::Camera;
+use crate::Problem;
 use crate::{Loss, PnpError, Refinement, Solution, Solver};
 use nalgebra::{Point2, Point3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -75,18 +76,20 @@ fn wide_and_baseline_builds_give_the_same_bits() {
             Solver::default().refinement(Refinement::Algebraic),
             Solver::default().loss(Loss::Cauchy(1e-3)),
         ] {
-            let (a, b) = both(|| solver.solve(&world, &image));
+            let (a, b) = both(|| solver.solve(&Problem::normalised(&world, &image)));
             assert_eq!(a, b, "seed {seed}, n {n}: solve");
-            let (a, b) = both(|| solver.solve_weighted(&world, &image, &weights));
+            let (a, b) =
+                both(|| solver.solve(&Problem::normalised(&world, &image).weights(&weights)));
             assert_eq!(a, b, "seed {seed}, n {n}: solve_weighted");
             compared += 2;
         }
         for cam in &cams {
             let pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
-            let (a, b) = both(|| Solver::default().solve_pixels(&world, &pixels, cam));
+            let (a, b) = both(|| Solver::default().solve(&Problem::pixels(&world, &pixels, cam)));
             assert_eq!(a, b, "seed {seed}, n {n}: solve_pixels");
             let loss = Solver::default().loss(Loss::Huber(1.0));
-            let (a, b) = both(|| loss.solve_pixels_weighted(&world, &pixels, cam, &weights));
+            let (a, b) =
+                both(|| loss.solve(&Problem::pixels(&world, &pixels, cam).weights(&weights)));
             assert_eq!(a, b, "seed {seed}, n {n}: solve_pixels_weighted with Huber");
             compared += 2;
         }

@@ -112,8 +112,8 @@ fn near_180_degrees_in_the_users_axes() {
             })
             .collect();
         let sol = run(&opts, &world, &image, None, &opts.reproj, None, None).unwrap();
-        let er = crate::metrics::rotation_error_deg(&sol.rotation, &r);
-        let et = (sol.pose.translation.vector - t).norm() / t.norm();
+        let er = crate::numeric::rotation::rotation_error_deg(&sol.rotation, &r);
+        let et = (sol.translation - t).norm() / t.norm();
         worst = (worst.0.max(er), worst.1.max(et));
         assert!(er < 1e-6 && et < 1e-8, "trial {trial}: {er:e} deg, {et:e}");
     }

@@ -1,0 +1,116 @@
+//! The input of every solve: [`Problem`], world points and their observations.
+
+use nalgebra::{Point2, Point3};
+
+use crate::camera::Camera;
+
+/// One pose problem: world points and their observations, either normalised image points or
+/// observed pixels through a camera, with optional per-point weights. Every entry point that
+/// solves takes one: [`Solver::solve`](crate::Solver::solve),
+/// [`Solver::solve_all`](crate::Solver::solve_all), [`Solver::refine`](crate::Solver::refine),
+/// [`Ransac::estimate`](crate::ransac::Ransac::estimate) and the batch forms.
+///
+/// ```
+/// use eopnp::camera::Camera;
+/// use eopnp::{Problem, Solver};
+/// use nalgebra::{Point2, Point3, Vector3};
+///
+/// let t = Vector3::new(0.1, -0.2, 6.0);
+/// let world = [
+///     Point3::new(-1.0, -1.0, 0.5), Point3::new(1.0, -1.0, -0.5), Point3::new(1.0, 1.0, 0.2),
+///     Point3::new(-1.0, 1.0, -0.1), Point3::new(0.3, 0.2, 1.0), Point3::new(-0.4, 0.6, -0.8),
+/// ];
+/// let image: Vec<Point2<f64>> = world
+///     .iter()
+///     .map(|x| { let p = x.coords + t; Point2::new(p.x / p.z, p.y / p.z) })
+///     .collect();
+///
+/// // Normalised image points (x/z, y/z).
+/// let sol = Solver::default().solve(&Problem::normalised(&world, &image))?;
+/// assert!((sol.translation - t).norm() < 1e-9);
+///
+/// // Observed pixels through a camera, with a weight per point.
+/// let cam = Camera::pinhole(800.0, 800.0, 320.0, 240.0)?;
+/// let pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
+/// let weights = [1.0, 1.0, 2.0, 1.0, 1.0, 0.5];
+/// let sol = Solver::default().solve(&Problem::pixels(&world, &pixels, &cam).weights(&weights))?;
+/// assert!((sol.translation - t).norm() < 1e-9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct Problem<'a> {
+    pub(crate) world: &'a [Point3<f64>],
+    pub(crate) observations: Observations<'a>,
+    pub(crate) weights: Option<&'a [f64]>,
+}
+
+/// The observations of a [`Problem`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Observations<'a> {
+    /// Normalised image points `(x/z, y/z)`, with the focal lengths `(fx, fy)` in pixels that
+    /// make RANSAC's threshold a pixel distance (plain solves ignore them).
+    Normalised {
+        points: &'a [Point2<f64>],
+        focal: (f64, f64),
+    },
+    /// Observed pixels and the camera that took them.
+    Pixels {
+        points: &'a [Point2<f64>],
+        camera: &'a Camera,
+    },
+}
+
+impl<'a> Problem<'a> {
+    /// World points and their normalised image points `(x/z, y/z)`: the camera's projection
+    /// already undone. Residuals, costs and a robust loss's scale are then in normalised units
+    /// (multiply by the focal length for pixels).
+    #[must_use]
+    pub fn normalised(world: &'a [Point3<f64>], image: &'a [Point2<f64>]) -> Self {
+        Problem {
+            world,
+            observations: Observations::Normalised {
+                points: image,
+                focal: (1.0, 1.0),
+            },
+            weights: None,
+        }
+    }
+
+    /// World points and the pixels where `camera` observed them (any supported model, lens
+    /// distortion included). In the default mode the pose minimises the pixel error through
+    /// the camera model; costs and a robust loss's scale are in pixels.
+    #[must_use]
+    pub fn pixels(world: &'a [Point3<f64>], pixels: &'a [Point2<f64>], camera: &'a Camera) -> Self {
+        Problem {
+            world,
+            observations: Observations::Pixels {
+                points: pixels,
+                camera,
+            },
+            weights: None,
+        }
+    }
+
+    /// One non-negative weight per correspondence, scaling its squared residuals (a point of
+    /// weight 0 is ignored: the result is exactly that of dropping it). Default: all 1.
+    #[must_use]
+    pub fn weights(mut self, weights: &'a [f64]) -> Self {
+        self.weights = Some(weights);
+        self
+    }
+
+    /// For normalised image points: the camera's focal lengths `(fx, fy)` in pixels, so that
+    /// RANSAC's inlier threshold ([`Ransac::threshold_px`](crate::ransac::Ransac::threshold_px))
+    /// is a pixel distance. Default `(1, 1)`: the threshold in normalised units. Plain solves do
+    /// not use it; a pixel problem has its camera's and ignores this.
+    #[must_use]
+    pub fn focal(mut self, fx: f64, fy: f64) -> Self {
+        if let Observations::Normalised { points, .. } = self.observations {
+            self.observations = Observations::Normalised {
+                points,
+                focal: (fx, fy),
+            };
+        }
+        self
+    }
+}
