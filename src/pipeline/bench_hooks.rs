@@ -8,7 +8,7 @@ use super::frame::{self, WorkingFrame};
 use super::moments::{self, System};
 use super::newton::{self, NewtonOptions};
 use super::nullspace::{self, Candidates};
-use super::reprojection::{self, ReprojOptions};
+use super::refine::{self, ReprojOptions};
 use crate::numeric::bounds::M_EIGEN_MAX_ITER;
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, SVector, Vector3};
 
@@ -114,7 +114,7 @@ pub fn newton(p: &Prepared) -> f64 {
 /// options); returns the final cost.
 #[must_use]
 pub fn reprojection(world: &[Point3<f64>], image: &[Point2<f64>], p: &Prepared) -> f64 {
-    reprojection::refine_reprojection(
+    refine::refine_reprojection(
         world,
         image,
         None,

@@ -32,11 +32,11 @@ pub(crate) mod newton;
 pub(crate) mod nullspace;
 pub(crate) mod options;
 pub(crate) mod output;
-pub(crate) mod pixel;
 pub(crate) mod planar;
-pub(crate) mod reprojection;
+pub(crate) mod refine;
+pub(crate) mod refine_pixels;
+pub(crate) mod search;
 pub(crate) mod select;
-pub(crate) mod triples;
 
 pub use nullspace::CandidateSource;
 pub(crate) use nullspace::MAX_CANDIDATES;
@@ -45,8 +45,8 @@ pub use options::{Loss, PlanarDetection, Refinement};
 pub use output::{Solution, Solutions};
 
 pub(crate) use frame::check_lengths;
-pub(crate) use pixel::PixelInputs;
-pub(crate) use reprojection::ReprojOptions;
+pub(crate) use refine::ReprojOptions;
+pub(crate) use refine_pixels::PixelInputs;
 
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, Point2, Point3};
@@ -115,8 +115,7 @@ pub(crate) fn run(
     // few, the best refined pose to S8 (S10 first if it applies). Without a usable start, the
     // search below runs.
     if early_exit && opts.refinement == Refinement::Reprojection {
-        if let Some(sp) = triples::SmallProblem::new(world, image, weights, fr, reproj.row_weights)
-        {
+        if let Some(sp) = search::SmallProblem::new(world, image, weights, fr, reproj.row_weights) {
             let data = (world, image, weights);
             if let Some((m, s9)) = small_n(opts, &prep, planar_sys.as_ref(), &sp, data, reproj) {
                 return out.finish_refined(&m, reproj, &s9);
@@ -231,7 +230,7 @@ type Correspondences<'a> = (&'a [Point3<f64>], &'a [Point2<f64>], Option<&'a [f6
 /// S4''' and S9 for at most five active points (default mode): the P3P starts (and, in planar
 /// scenes, the minimum of f from the p1 start, S4' + S6), S9 from the best few, best first; a
 /// run is abandoned when its model says it cannot end below the best refined cost
-/// ([`triples::cannot_reach`]), and a start inside the basin of a pose already refined or of
+/// ([`search::cannot_reach`]), and a start inside the basin of a pose already refined or of
 /// a pose where a run was so abandoned is skipped (a run that enters one is abandoned). The
 /// refined pose with the most points in front, then the lowest reprojection error, with its
 /// S9 outcome; `None` if no run gives a finite pose.
@@ -239,13 +238,13 @@ fn small_n(
     opts: &Options,
     prep: &Prepared,
     planar_sys: Option<&System>,
-    sp: &triples::SmallProblem,
+    sp: &search::SmallProblem,
     (world, image, weights): Correspondences<'_>,
     reproj: &ReprojOptions,
-) -> Option<(Minimum, reprojection::ReprojOutcome)> {
+) -> Option<(Minimum, refine::ReprojOutcome)> {
     let (fr, sys, m45, scale) = (&prep.fr, &prep.sys, &prep.m45, prep.scale);
-    let mut starts = triples::Starts::new();
-    triples::starts(sp, &mut starts);
+    let mut starts = search::Starts::new();
+    search::starts(sp, &mut starts);
     // Planar scenes: also the minimum of f from the p1 start, which lies in the basin of the
     // global minimum of the reprojection error in about 1 of 3,000 planar N = 4 problems
     // where no P3P pose does.
@@ -255,19 +254,19 @@ fn small_n(
                 .refine(&r0, newton::cost_at(m45, &r0), CandidateSource::Planar1)
                 .map_or((r0, 0), |m| (m.r, m.iterations));
             let t = sys.translation(&r);
-            triples::add(sp, &r, &t, (CandidateSource::Planar1, it), &mut starts);
+            search::add(sp, &r, &t, (CandidateSource::Planar1, it), &mut starts);
         }
     }
     // Every refined pose (at most one per start, so never more than a `Starts` holds), and
     // every pose where a run was abandoned because it could not end below the best
-    // ([`triples::cannot_reach`]): a start or a run that comes near one of those heads into
+    // ([`search::cannot_reach`]): a start or a run that comes near one of those heads into
     // the same basin.
-    let mut found = triples::Starts::new();
-    let mut beaten = triples::Starts::new();
-    let mut best: Option<(triples::Start, reprojection::ReprojOutcome)> = None;
+    let mut found = search::Starts::new();
+    let mut beaten = search::Starts::new();
+    let mut best: Option<(search::Start, refine::ReprojOutcome)> = None;
     for s in starts
         .iter()
-        .take(triples::refined(sp, planar_sys.is_some()))
+        .take(search::refined(sp, planar_sys.is_some()))
     {
         if found.iter().chain(&beaten).any(|f| f.near(&s.r, &s.t)) {
             continue;
@@ -283,7 +282,7 @@ fn small_n(
             .as_ref()
             .and_then(|(b, _)| (s.in_front <= b.in_front).then_some(b.cost));
         let mut cannot_reach = false;
-        let o = reprojection::refine_reprojection_until(
+        let o = refine::refine_reprojection_until(
             world,
             image,
             weights,
@@ -292,17 +291,17 @@ fn small_n(
             &s.t,
             reproj,
             &mut |c| match c {
-                reprojection::Checkpoint::Accepted(r, t) => {
+                refine::Checkpoint::Accepted(r, t) => {
                     found.iter().chain(&beaten).any(|f| f.near(r, t))
                 }
-                reprojection::Checkpoint::Step { e, pred } => {
-                    cannot_reach = to_beat.is_some_and(|b| triples::cannot_reach(e, pred, b));
+                refine::Checkpoint::Step { e, pred } => {
+                    cannot_reach = to_beat.is_some_and(|b| search::cannot_reach(e, pred, b));
                     cannot_reach
                 }
             },
         );
         if cannot_reach && !beaten.is_full() {
-            beaten.push(triples::Start {
+            beaten.push(search::Start {
                 r: o.r,
                 t: o.t,
                 cost: o.e,
@@ -313,12 +312,12 @@ fn small_n(
         if !finite
             || matches!(
                 o.stop,
-                reprojection::ReprojStop::SkippedZeroDepth | reprojection::ReprojStop::Abandoned
+                refine::ReprojStop::SkippedZeroDepth | refine::ReprojStop::Abandoned
             )
         {
             continue;
         }
-        let refined = triples::Start {
+        let refined = search::Start {
             r: o.r,
             t: o.t,
             in_front: s.in_front,

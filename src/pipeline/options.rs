@@ -2,7 +2,7 @@
 //! S6 and S9, and the exhaustive search. `crate::Solver` is the public builder over [`Options`].
 
 use super::newton::NewtonOptions;
-use super::reprojection::ReprojOptions;
+use super::refine::ReprojOptions;
 
 /// Which cost the returned pose minimises.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]

@@ -1,6 +1,6 @@
 //! S8 of docs/algorithm.md, with S9 before it in the default mode: a refined minimum in the working
 //! frame becomes the returned [`Solution`]. S9 moves it to the minimum of the reprojection
-//! error ([`super::reprojection`]); the pose is carried back to the world frame, and its
+//! error ([`super::refine`]); the pose is carried back to the world frame, and its
 //! costs, cheirality and diagnostics are filled in. The only way out of the solver: a pose that
 //! is not finite in the world frame is [`PnpError::NoSolution`], never an `Ok`.
 
@@ -14,8 +14,8 @@ use super::frame::WorkingFrame;
 use super::newton;
 use super::nullspace::{CandidateSource, MAX_CANDIDATES};
 use super::options::Refinement;
-use super::pixel::{self, PixelInputs};
-use super::reprojection::{self, Composed, ReprojOptions, ReprojOutcome};
+use super::refine::{self, Composed, ReprojOptions, ReprojOutcome};
+use super::refine_pixels::{self, PixelInputs};
 use super::select::{in_front, Minimum};
 use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
@@ -245,7 +245,7 @@ impl Output<'_> {
         let mut s10 = None;
         if mode == Refinement::Reprojection {
             if let Some(px) = self.pixel.filter(|px| px.refine) {
-                let po = pixel::refine_pixels(self.world, px, self.fr, &r, &t, opts);
+                let po = refine_pixels::refine_pixels(self.world, px, self.fr, &r, &t, opts);
                 let out = &po.out;
                 // S10 ran from `m` (with `front_check`: not from an S9 outcome).
                 if refinement_counts {
@@ -257,7 +257,7 @@ impl Output<'_> {
                 let finite = out.r.iter().all(|x| x.is_finite())
                     && out.t.iter().all(|x| x.is_finite())
                     && out.e.is_finite();
-                if finite && out.stop != reprojection::ReprojStop::SkippedZeroDepth {
+                if finite && out.stop != refine::ReprojStop::SkippedZeroDepth {
                     r = out.r;
                     t = out.t;
                     iters = out.iterations;
@@ -276,7 +276,7 @@ impl Output<'_> {
         if mode == Refinement::Reprojection && s10.is_none() {
             let out = match s9 {
                 Some(o) => *o,
-                None => reprojection::refine_reprojection(
+                None => refine::refine_reprojection(
                     self.world,
                     self.image,
                     self.weights,
@@ -296,7 +296,7 @@ impl Output<'_> {
             if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
                 r = out.r;
                 t = out.t;
-                if out.stop != reprojection::ReprojStop::SkippedZeroDepth {
+                if out.stop != refine::ReprojStop::SkippedZeroDepth {
                     depth_signs_kept = true;
                     if opts.row_weights == (1.0, 1.0) && out.e.is_finite() {
                         s9_error = Some(out.e);

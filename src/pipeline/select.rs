@@ -21,7 +21,7 @@ pub(crate) struct Minimum {
     pub cheirality: Option<bool>,
     /// An exact fit: the start itself, certified at the rounding level of `f` (S6 skipped);
     /// S9 (or S10) then applies the step of its `xtol` stop
-    /// ([`super::reprojection::ReprojOptions::exact_start`]).
+    /// ([`super::refine::ReprojOptions::exact_start`]).
     pub exact: bool,
 }
 

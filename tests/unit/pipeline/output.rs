@@ -122,8 +122,8 @@ fn reprojection_error_counts_the_points_in_front_as_s7() {
 fn s10_counts_the_points_in_front_as_s7() {
     use crate::camera::Camera;
     use crate::pipeline::options::Loss;
-    use crate::pipeline::pixel::{refine_pixels, PixelInputs};
-    use crate::pipeline::reprojection::ReprojOptions;
+    use crate::pipeline::refine::ReprojOptions;
+    use crate::pipeline::refine_pixels::{refine_pixels, PixelInputs};
     let cam = Camera::from_colmap("SIMPLE_RADIAL", 640, 480, vec![500.0, 320.0, 240.0, -0.1])
         .expect("a valid camera");
     let mut rng = Pcg64::seed_from_u64(0x510_f407);

@@ -209,7 +209,7 @@ pub(super) struct Normal {
 
 /// The residuals one Levenberg-Marquardt run minimises ([`levenberg_marquardt`]): S9's
 /// normalised residuals ([`Problem`]) or S10's pixel residuals through the camera
-/// ([`super::pixel`]).
+/// ([`super::refine_pixels`]).
 pub(super) trait Residuals {
     /// One O(N) pass at `pose`: cost, `J^T W J` (into `h`), gradient and depth range (and,
     /// without `reference`, `max_abs_q`). With `reference`, `None` as soon as a depth differs
@@ -235,7 +235,7 @@ fn trace(h: &Hessian) -> f64 {
 }
 
 /// The inputs of one refinement, borrowed from the caller: S9's (normalised points, row
-/// weights) or S10's (pixels, the camera's metric, [`super::pixel`]).
+/// weights) or S10's (pixels, the camera's metric, [`super::refine_pixels`]).
 pub(super) struct Problem<'a, M> {
     pub(super) world: &'a [Point3<f64>],
     /// The observations: normalised image points (S9) or pixels (S10).
@@ -537,5 +537,5 @@ fn levenberg_marquardt_until<P: Residuals>(
 }
 
 #[cfg(test)]
-#[path = "../../tests/unit/pipeline/reprojection.rs"]
+#[path = "../../tests/unit/pipeline/refine.rs"]
 mod tests;

@@ -11,9 +11,9 @@
 //! camera model. With a robust loss the weights are iteratively reweighted (`rho'(r2)` per
 //! point), and a step is accepted only if `E` itself decreases.
 //!
-//! It runs S9's Levenberg-Marquardt iteration ([`super::reprojection::levenberg_marquardt`]:
+//! It runs S9's Levenberg-Marquardt iteration ([`super::refine::levenberg_marquardt`]:
 //! damping, depth-sign guard, reuse of `J^T W J`, final step) and S9's vectorised pass
-//! ([`super::reprojection::pass`]) with the camera's metric ([`CameraMetric`]): at the
+//! ([`super::refine::pass`]) with the camera's metric ([`CameraMetric`]): at the
 //! normalised projection of a point, `C = w rho' J^T J` and `e~ = w rho' J^T e` (`J` the
 //! camera's Jacobian, `e` the pixel residual) take the place of S9's row weights and
 //! normalised residual. The lens model is fixed at compile time ([`Projector::with_projection`]).
@@ -30,8 +30,8 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::frame::{WorkingFrame, MIN_UNIT};
 use super::options::Loss;
-use super::reprojection::pass::{LaneMetric, Metric};
-use super::reprojection::{levenberg_marquardt, Composed, Problem, ReprojOptions, ReprojOutcome};
+use super::refine::pass::{LaneMetric, Metric};
+use super::refine::{levenberg_marquardt, Composed, Problem, ReprojOptions, ReprojOutcome};
 use crate::camera::{Project, ProjectionJob, Projector};
 use crate::numeric::mat3::pow2_scale;
 
