@@ -34,7 +34,7 @@ macro_rules! bench_kernel {
 
 fn kernels_bench(c: &mut Criterion) {
     const PLANAR: [usize; 6] = [0, 1, 3, 4, 6, 7];
-    // M of real problems: the normal matrix `K^T K` of S2 in the working frame is a 9 x 9
+    // M of real problems: the normal matrix `K^T K` of `moments` in the working frame is a 9 x 9
     // positive semidefinite matrix; the kernels' cost does not depend on its values, so a
     // seeded random `A^T A` (A: 12 x 9) stands in for it.
     let mut state = 0x2545_F491_4F6C_DD1Du64;

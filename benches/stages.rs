@@ -5,11 +5,10 @@
 //! RUSTFLAGS="--cfg eopnp_bench" cargo bench --bench stages
 //! ```
 //!
-//! Stages: S1+S2 accumulation, the
-//! 9x9 symmetric eigen-decomposition (and the fast path's smallest eigenvector and eigenvalue
-//! count), the non-planar null-space cases (S4, cases 1-4 together),
-//! damped Newton (S6, one start) and the reprojection refinement (S9). Inputs of each stage
-//! are computed outside the timed closure.
+//! Stages: `frame` + `moments` accumulation, the 9x9 symmetric eigen-decomposition (and the fast
+//! path's smallest eigenvector and eigenvalue count), the non-planar null-space cases (`nullspace`,
+//! cases 1-4 together), damped Newton (`newton`, one start) and the reprojection refinement
+//! (`refine`). Inputs of each stage are computed outside the timed closure.
 
 #[cfg(eopnp_bench)]
 use eopnp_testkit as common;
@@ -132,14 +131,14 @@ mod stages_bench {
         }
         g.finish();
 
-        let mut g = c.benchmark_group("stage/reprojection");
+        let mut g = c.benchmark_group("stage/refine");
         for (n, set) in &sets {
             g.bench_with_input(BenchmarkId::from_parameter(n), set, |b, set| {
                 let mut i = 0usize;
                 b.iter(|| {
                     let (p, q) = &set[i % set.len()];
                     i = i.wrapping_add(1);
-                    black_box(bench_hooks::reprojection(
+                    black_box(bench_hooks::refine(
                         black_box(&p.world),
                         black_box(&p.image),
                         black_box(q),

@@ -9,7 +9,8 @@
 //! - `solve`: [`Solver::solve`] on the image's correspondences already undistorted (computed
 //!   once, outside the timing): "the solve on normalised points", the reference.
 //! - `solve_pixels`: [`Solver::solve_pixels`] on their pixels through the image's camera
-//!   (undistortion, the search on the undistorted points, the pixel-error refinement S10).
+//!   (undistortion, the search on the undistorted points, the pixel-error refinement
+//!   `refine_pixels`).
 //! - `gather`: [`Registrar::correspondences`], the gathering of a registration alone.
 //! - `registrar`: [`Registrar::register`] by one registrar for the whole run (as
 //!   `eopnp register` and `eopnp.register_images`): the gathering, `solve_pixels`, and the

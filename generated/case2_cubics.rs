@@ -2,7 +2,7 @@
 // Committed copy: generated/case2_cubics.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 23 mul, 6 add. Naive expansion: 14 terms, 31 mul, 6 add.
 
-/// Back-substitution for case 2 of EOPnP (docs/algorithm.md S4.2): the two gradient cubics `dC/dx` and `dC/dy` as polynomials in `x` at the given hidden `y`.
+/// Back-substitution for case 2 of EOPnP (docs/algorithm.md, `nullspace` case 2): the two gradient cubics `dC/dx` and `dC/dy` as polynomials in `x` at the given hidden `y`.
 ///
 /// # Inputs
 /// - `q`: `Q = A^T A` (symmetric 3x3) as `[Q00, Q01, Q02, Q11, Q12, Q22]`

@@ -2,7 +2,7 @@
 // Committed copy: generated/case2_resultant.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 109 mul, 53 add. Naive expansion: 186 terms, 1116 mul, 181 add.
 
-/// Case 2 of EOPnP (docs/algorithm.md S4.2, G4): `r = x v1 + y v2` minimises `C2(x, y) = |A a - b|^2`, `a = [x^2, x y, y^2]`. The stationary points solve `g1 = dC2/dx = 0`, `g2 = dC2/dy = 0`, cubics in `x`; their resultant in `x` (the 6x6 Sylvester determinant of eq. 22) is odd of degree 9 in the hidden `y`: `k1 y + k3 y^3 + k5 y^5 + k7 y^7 + k9 y^9` (eq. 23), i.e. the quartic `k1 + k3 beta + k5 beta^2 + k7 beta^3 + k9 beta^4` in `beta = y^2` (eq. 24).
+/// Case 2 of EOPnP (docs/algorithm.md, `nullspace` case 2, G4): `r = x v1 + y v2` minimises `C2(x, y) = |A a - b|^2`, `a = [x^2, x y, y^2]`. The stationary points solve `g1 = dC2/dx = 0`, `g2 = dC2/dy = 0`, cubics in `x`; their resultant in `x` (the 6x6 Sylvester determinant of eq. 22) is odd of degree 9 in the hidden `y`: `k1 y + k3 y^3 + k5 y^5 + k7 y^7 + k9 y^9` (eq. 23), i.e. the quartic `k1 + k3 beta + k5 beta^2 + k7 beta^3 + k9 beta^4` in `beta = y^2` (eq. 24).
 ///
 /// Evaluated structurally: the 3x3 Bezout matrix of `g1, g2` (entries polynomial in `y`), its determinant by cofactor expansion with the polynomial products unrolled, sign flipped (`det Bezout = -det Sylvester`).
 ///

@@ -2,7 +2,7 @@
 // Committed copy: generated/case3_cubics.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 23 mul, 12 add. Naive expansion: 20 terms, 32 mul, 12 add.
 
-/// Back-substitution for case 3 of EOPnP (docs/algorithm.md S4.3): the two gradient cubics `dC/dx` and `dC/dy` as polynomials in `x` at the given hidden `y`.
+/// Back-substitution for case 3 of EOPnP (docs/algorithm.md, `nullspace` case 3): the two gradient cubics `dC/dx` and `dC/dy` as polynomials in `x` at the given hidden `y`.
 ///
 /// # Inputs
 /// - `c`: the 15 coefficients `c_ij` of `k1^i k2^j` in `CASE3_MONOMIALS` order

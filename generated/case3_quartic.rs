@@ -2,7 +2,7 @@
 // Committed copy: generated/case3_quartic.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 12 mul, 6 add. Naive expansion: 21 terms, 15 mul, 6 add.
 
-/// Case 3 of EOPnP (docs/algorithm.md S4.3): the coefficients of `C3(k1, k2) = k^T H k`, `k = [k1^2, k2^2, k1 k2, k1, k2, 1]`, from the symmetric 6x6 `H = Bm^T Bm`.
+/// Case 3 of EOPnP (docs/algorithm.md, `nullspace` case 3): the coefficients of `C3(k1, k2) = k^T H k`, `k = [k1^2, k2^2, k1 k2, k1, k2, 1]`, from the symmetric 6x6 `H = Bm^T Bm`.
 ///
 /// # Inputs
 /// - `h`: the 21 entries `H[i][j]`, `i <= j`, row by row: (0,0), (0,1), ..., (5,5)

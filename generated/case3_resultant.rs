@@ -2,7 +2,7 @@
 // Committed copy: generated/case3_resultant.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 296 mul, 187 add. Naive expansion: 1164 terms, 6981 mul, 1154 add.
 
-/// Case 3 of EOPnP (docs/algorithm.md S4.3, G5): `r = v1 + k1 v2 + k2 v3` minimises the bivariate quartic `C3(k1, k2) = |B k|^2`. With `x = k1` and the hidden `y = k2`, `dC3/dx` and `dC3/dy` are cubics in `x`; their resultant in `x` (the 6x6 Sylvester determinant) has full degree 9 in `y`.
+/// Case 3 of EOPnP (docs/algorithm.md, `nullspace` case 3, G5): `r = v1 + k1 v2 + k2 v3` minimises the bivariate quartic `C3(k1, k2) = |B k|^2`. With `x = k1` and the hidden `y = k2`, `dC3/dx` and `dC3/dy` are cubics in `x`; their resultant in `x` (the 6x6 Sylvester determinant) has full degree 9 in `y`.
 ///
 /// Evaluated structurally: the 3x3 Bezout matrix (entries polynomial in `y`), its determinant by cofactor expansion with the polynomial products unrolled, sign flipped (`det Bezout = -det Sylvester`).
 ///

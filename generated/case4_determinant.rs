@@ -2,7 +2,7 @@
 // Committed copy: generated/case4_determinant.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 458 mul, 408 add. Naive expansion: 17395 terms, 105206 mul, 17386 add.
 
-/// Case 4 of EOPnP (docs/algorithm.md S4.4, G6): the coefficients of `det M(k1)`, a polynomial of degree 8 in the hidden `k1` (eq. 34). Evaluated structurally: the entries of `M(k1)` (see [`case4_matrix`]) as polynomials in `k1`, then the 3x3 determinant by cofactor expansion with the polynomial products unrolled.
+/// Case 4 of EOPnP (docs/algorithm.md, `nullspace` case 4, G6): the coefficients of `det M(k1)`, a polynomial of degree 8 in the hidden `k1` (eq. 34). Evaluated structurally: the entries of `M(k1)` (see [`case4_matrix`]) as polynomials in `k1`, then the 3x3 determinant by cofactor expansion with the polynomial products unrolled.
 ///
 /// # Inputs
 /// - `t`: `T(k1)` as 21 numbers `t[i][j][n]` = coefficient of `k1^n` in `T_ij` (`n <= 1` for `j = 0, 1`; `n <= 2` for `j = 2`), in the order of `CASE4_T_LAYOUT`

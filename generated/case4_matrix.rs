@@ -2,7 +2,7 @@
 // Committed copy: generated/case4_matrix.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 306 mul, 285 add. Naive expansion: 331 terms, 552 mul, 298 add.
 
-/// Case 4 of EOPnP (docs/algorithm.md S4.4, G6): the 3x3 matrix `M(k1)` of the three-quadrics system after hiding `k1`, linear in `y = [k2, k3, 1]`: `M(k1) y = 0` at a solution. Rows come from the monomial identities `k3 z1 = k2 z3`, `k3 z3 = k2 z2`, `z3^2 = z1 z2` with `z = [k2^2, k3^2, k2 k3] = T(k1) y`, derived symbolically.
+/// Case 4 of EOPnP (docs/algorithm.md, `nullspace` case 4, G6): the 3x3 matrix `M(k1)` of the three-quadrics system after hiding `k1`, linear in `y = [k2, k3, 1]`: `M(k1) y = 0` at a solution. Rows come from the monomial identities `k3 z1 = k2 z3`, `k3 z3 = k2 z2`, `z3^2 = z1 z2` with `z = [k2^2, k3^2, k2 k3] = T(k1) y`, derived symbolically.
 ///
 /// # Inputs
 /// - `t`: `T(k1)` as 21 numbers `t[i][j][n]` = coefficient of `k1^n` in `T_ij` (`n <= 1` for `j = 0, 1`; `n <= 2` for `j = 2`), in the order of `CASE4_T_LAYOUT`

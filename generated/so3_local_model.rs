@@ -2,9 +2,9 @@
 // Committed copy: generated/so3_local_model.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 426 mul, 364 add. Naive expansion: 594 terms, 1773 mul, 584 add.
 
-/// Local model of `f(R) = vec(R)^T M vec(R)` at the rotation `R` in the CGR chart centred on `R` (`s -> R(s) R`, docs/algorithm.md S6): the value, gradient and Hessian at `s = 0` of `C_k(s) = rbar(s)^T M_k rbar(s)`, `M_k = D^T M D`, `D = blockdiag(R^T, R^T, R^T)`.
+/// Local model of `f(R) = vec(R)^T M vec(R)` at the rotation `R` in the CGR chart centred on `R` (`s -> R(s) R`, docs/algorithm.md, `newton`): the value, gradient and Hessian at `s = 0` of `C_k(s) = rbar(s)^T M_k rbar(s)`, `M_k = D^T M D`, `D = blockdiag(R^T, R^T, R^T)`.
 ///
-/// Since `C_k(s) = (1 + s^T s)^2 f(R(s) R)`, `g` is also the gradient of `f` in the chart and the exact Hessian of `f` is `H_C - 4 f I` (docs/algorithm.md S6, trap T3).
+/// Since `C_k(s) = (1 + s^T s)^2 f(R(s) R)`, `g` is also the gradient of `f` in the chart and the exact Hessian of `f` is `H_C - 4 f I` (docs/algorithm.md, `newton`, trap T3).
 ///
 /// # Inputs
 /// - `m`: the 45 entries `M[i][j]`, `i <= j` (order of `COST_M_UPPER`)

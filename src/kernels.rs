@@ -15,7 +15,7 @@
 //! | [`cost_coefficients`] | the 35 coefficients of the quartic cost C(s) from the 45 entries of M (G1) |
 //! | [`cost`], [`cost_gradient`], [`cost_hessian`] | C, grad C, hess C at s from the coefficients (G2) |
 //! | [`planar_cost_coefficients`], [`planar_cost_gradient`], [`planar_cost_hessian`] | the planar analogue on the first two columns of R (G3) |
-//! | [`so3_local_model`] | f, gradient and Hessian in the CGR chart centred on a rotation (S6) |
+//! | [`so3_local_model`] | f, gradient and Hessian in the CGR chart centred on a rotation (`newton`) |
 //! | [`case2_resultant`], [`case2_cubics`] | case 2: the quartic in beta = alpha2^2 and the back-substitution cubics (G4) |
 //! | [`case3_quartic`], [`case3_resultant`], [`case3_cubics`] | case 3: the bivariate quartic, its degree-9 resultant, the cubics (G5) |
 //! | [`case4_matrix`], [`case4_determinant`] | case 4: M(k1) and its degree-8 determinant (G6) |
@@ -25,14 +25,14 @@
 //! Symbols follow docs/algorithm.md: `s1, s2, s3` are the CGR parameters, `mIJ` the entry `M[I][J]`,
 //! `rIJ` the rotation entry `R[I-1][J-1]`.
 //!
-//! The solver calls the case kernels (S4, S4'); `eopnp::camera` calls the distortion kernels.
-//! `so3_local_model` defines S6's local model, which the solver evaluates in a factored form
-//! for 4-wide vectors (`pipeline::newton::local_model`: 630 instead of 1,773 instructions per
-//! call, measured with callgrind in the AVX2 build; a unit test holds the two equal to
-//! rounding). The global-chart
-//! cost kernels (`cost_coefficients`, `cost`, `cost_gradient`, `cost_hessian` and their
-//! planar analogues) are the paper's form of the same cost, kept as an exactly and numerically
-//! checked reference (the solver works in a chart centred on each iterate instead).
+//! The solver calls the case kernels (`nullspace`, `planar`); `eopnp::camera` calls the distortion
+//! kernels. `so3_local_model` defines `newton`'s local model, which the solver evaluates in a
+//! factored form for 4-wide vectors (`pipeline::newton::local_model`: 630 instead of 1,773
+//! instructions per call, measured with callgrind in the AVX2 build; a unit test holds the two
+//! equal to rounding). The global-chart cost kernels (`cost_coefficients`, `cost`, `cost_gradient`,
+//! `cost_hessian` and their planar analogues) are the paper's form of the same cost, kept as an
+//! exactly and numerically checked reference (the solver works in a chart centred on each iterate
+//! instead).
 //!
 //! ```
 //! use eopnp::internals::kernels::{cost, cost_coefficients};

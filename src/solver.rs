@@ -91,16 +91,16 @@ impl Solver {
         self.opts.refinement
     }
 
-    /// Maximum damped-Newton iterations per candidate in S6. Default: `50`.
+    /// Maximum damped-Newton iterations per candidate in `newton`. Default: `50`.
     #[must_use]
     pub fn newton_iterations(mut self, n: u32) -> Self {
         self.opts.newton.max_iterations = n;
         self
     }
 
-    /// S6 stops when the step norm (radians, roughly) falls to this. Default: `1e-12`. When S9
-    /// follows (the default [`Refinement::Reprojection`]), S6 uses at least `1e-6` (the minimum
-    /// of the algebraic cost located to ~1e-9): S9 then moves the pose on to the
+    /// `newton` stops when the step norm (radians, roughly) falls to this. Default: `1e-12`. When
+    /// `refine` follows (the default [`Refinement::Reprojection`]), `newton` uses at least `1e-6`
+    /// (the minimum of the algebraic cost located to ~1e-9): `refine` then moves the pose on to the
     /// maximum-likelihood one and converges to its own tolerance.
     #[must_use]
     pub fn newton_step_tolerance(mut self, tol: f64) -> Self {
@@ -108,9 +108,10 @@ impl Solver {
         self
     }
 
-    /// Maximum Levenberg-Marquardt iterations of the reprojection refinement (S9, and S10
-    /// through a camera). Default: `200` (a run from a start in a flat valley of the error can
-    /// need more than 50, docs/algorithm.md S4'''; a run that converges sooner stops sooner).
+    /// Maximum Levenberg-Marquardt iterations of the reprojection refinement (`refine`, and
+    /// `refine_pixels` through a camera). Default: `200` (a run from a start in a flat valley of
+    /// the error can need more than 50: docs/algorithm.md, `search`; a run that converges sooner
+    /// stops sooner).
     #[must_use]
     pub fn reprojection_iterations(mut self, n: u32) -> Self {
         self.opts.reproj.max_iterations = n;
@@ -125,11 +126,11 @@ impl Solver {
     }
 
     /// `true` runs every candidate generator and refines every start to convergence for every
-    /// problem (docs/algorithm.md S4-S6 literally: no certified early exit, no skipping of starts
-    /// that lie near an already refined minimum). Default: `false`: the case-1 (planar: p1) start is refined
-    /// first, and accepted without the rest of the search when a Lagrangian dual certificate
-    /// proves it is the global minimum of the cost and more than half of the points are in
-    /// front of it; S7 would select the same minimum.
+    /// problem (the stages `nullspace` to `newton` of docs/algorithm.md, literally: no certified
+    /// early exit, no skipping of starts that lie near an already refined minimum). Default:
+    /// `false`: the case-1 (planar: p1) start is refined first, and accepted without the rest of
+    /// the search when a Lagrangian dual certificate proves it is the global minimum of the cost
+    /// and more than half of the points are in front of it; `select` would select the same minimum.
     #[must_use]
     pub fn exhaustive(mut self, exhaustive: bool) -> Self {
         self.opts.exhaustive = exhaustive;
@@ -138,11 +139,10 @@ impl Solver {
 
     /// The loss of the final refinement ([`Loss`]; default [`Loss::Squared`], the
     /// maximum-likelihood pose for Gaussian noise). A robust loss ([`Loss::Huber`],
-    /// [`Loss::Cauchy`]) is applied by S10 to the pixel residuals through the camera (pixel
-    /// input: [`Problem::pixels`], RANSAC's fits) or to the
-    /// normalised residuals (normalised input), after S9. An unusable scale (not positive,
-    /// or with a square outside the normal f64 range) is [`PnpError::InvalidOption`]
-    /// (`"loss"`) at solve time.
+    /// [`Loss::Cauchy`]) is applied by `refine_pixels` to the pixel residuals through the camera
+    /// (pixel input: [`Problem::pixels`], RANSAC's fits) or to the normalised residuals
+    /// (normalised input), after `refine`. An unusable scale (not positive, or with a square
+    /// outside the normal f64 range) is [`PnpError::InvalidOption`] (`"loss"`) at solve time.
     ///
     /// ```
     /// use eopnp::{Loss, Problem, Solver};
@@ -368,7 +368,7 @@ impl Solver {
         let t = initial.translation.vector;
         self.check_loss()?;
         let px = self.normalised_loss(image, weights);
-        let sol = pipeline::refine(
+        let sol = pipeline::run_from_prior(
             &self.opts,
             world,
             image,
@@ -396,7 +396,7 @@ impl Solver {
         let mut reproj = self.opts.reproj;
         reproj.row_weights = u.rows;
         let px = self.camera_loss(&u, camera);
-        let mut sol = pipeline::refine(
+        let mut sol = pipeline::run_from_prior(
             &self.opts,
             &u.world,
             &u.image,
@@ -432,8 +432,8 @@ impl Solver {
         self.run(world, image, weights, &opts, pixel, all)
     }
 
-    /// S10's inputs for normalised input: only with a robust loss (the identity camera,
-    /// residuals in normalised units); S9 alone minimises the squared loss.
+    /// `refine_pixels`' inputs for normalised input: only with a robust loss (the identity camera,
+    /// residuals in normalised units); `refine` alone minimises the squared loss.
     pub(crate) fn normalised_loss<'a>(
         &self,
         image: &'a [Point2<f64>],
@@ -449,8 +449,8 @@ impl Solver {
         })
     }
 
-    /// S10's inputs for pixel input through `camera` (the used correspondences of `u`): it
-    /// runs for a camera with distortion or a robust loss.
+    /// `refine_pixels`' inputs for pixel input through `camera` (the used correspondences of `u`):
+    /// it runs for a camera with distortion or a robust loss.
     pub(crate) fn camera_loss<'a>(
         &self,
         u: &'a Undistorted<'_>,
@@ -461,18 +461,18 @@ impl Solver {
             weights: u.user_weights.as_deref(),
             projector: camera.projector(),
             loss: self.opts.loss,
-            refine: self.s10_refines(camera),
+            refine: self.refine_pixels_runs(camera),
             scale: u.focal.0.max(u.focal.1),
         }
     }
 
     /// The pixel-input path of `solve_pixels` and `refine_pixels`: the loss checked, then the
     /// correspondences undistorted ([`undistort_all`]), with the first-order weights
-    /// ([`Undistorted::weights`]) unless S10 ends the solve (the default mode, through a
-    /// camera with distortion or with a robust loss): S10 minimises the pixel error itself,
-    /// and the solve on the undistorted points before it only gives its start, from the
-    /// caller's weights alone (none: the unweighted passes). Measured on the bundled COLMAP
-    /// model: the same S10 passes, `solve_pixels` 0.898M -> 0.771M instructions per image
+    /// ([`Undistorted::weights`]) unless `refine_pixels` ends the solve (the default mode, through
+    /// a camera with distortion or with a robust loss): `refine_pixels` minimises the pixel error
+    /// itself, and the solve on the undistorted points before it only gives its start, from the
+    /// caller's weights alone (none: the unweighted passes). Measured on the bundled COLMAP model:
+    /// the same `refine_pixels` passes, `solve_pixels` 0.898M -> 0.771M instructions per image
     /// (with the weights no longer formed by the undistortion).
     fn undistort<'a>(
         &self,
@@ -483,13 +483,13 @@ impl Solver {
     ) -> Result<Undistorted<'a>, PnpError> {
         self.check_loss()?;
         let first_order =
-            !(self.opts.refinement == Refinement::Reprojection && self.s10_refines(camera));
+            !(self.opts.refinement == Refinement::Reprojection && self.refine_pixels_runs(camera));
         undistort_all(world, pixels, camera, user_weights, first_order)
     }
 
-    /// Whether S10 refines a solve through `camera` in the default mode: a camera with
+    /// Whether `refine_pixels` refines a solve through `camera` in the default mode: a camera with
     /// distortion, or a robust loss.
-    fn s10_refines(&self, camera: &Camera) -> bool {
+    fn refine_pixels_runs(&self, camera: &Camera) -> bool {
         camera.has_distortion() || self.opts.loss != Loss::Squared
     }
 

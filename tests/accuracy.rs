@@ -14,7 +14,7 @@
 //!    scenes General / Planar / QuasiSingular, rotations Uniform / Near180 (the same at the
 //!    CGR singularity of the solver's own frame: `tests/unit/pipeline/driver.rs`). Rotation
 //!    error < 1e-6 deg and |t - t_gt| / |t_gt| < 1e-8. The same
-//!    for algebraic mode (S0-S8) with 1,000 trials per configuration.
+//!    for algebraic mode (no `refine` stage) with 1,000 trials per configuration.
 //! 2. Noisy (paper protocol, General, Uniform): N = 6..15 at sigma = 2 px and N = 10 at
 //!    sigma = 0.5, 1, 2, 3, 5 px, 4,000 trials each: default mode mean and median rotation and
 //!    translation errors within 1 % of the LM-from-ground-truth reference, algebraic mode within
@@ -43,16 +43,16 @@ const NOISE_FREE_T_REL: f64 = 1e-8;
 const NOISE_FREE_TRIALS: u64 = 10_000;
 /// Trials per noise-free configuration in algebraic mode (an extra check; see its test).
 const NOISE_FREE_ALGEBRAIC_TRIALS: u64 = 1_000;
-/// Trials per noisy configuration (at least 1,000). At 1,000 trials the sampling
-/// noise of a *median* ratio is comparable to the gap between the algebraic mode's inherent
-/// bias (3-6 %, docs/algorithm.md S9) and the 8 % bound: measured, N = 13 sigma = 2 gave a median
+/// Trials per noisy configuration (at least 1,000). At 1,000 trials the sampling noise of a
+/// *median* ratio is comparable to the gap between the algebraic mode's inherent bias (3-6 %,
+/// docs/algorithm.md, `refine`) and the 8 % bound: measured, N = 13 sigma = 2 gave a median
 /// rotation ratio of 1.084 with 1,000 trials and 1.061 with 4,000 (all other ratios 1.025-1.056).
 /// More trials reduce the noise; the tolerance is unchanged.
 const NOISY_TRIALS: u64 = 4_000;
 /// `solve_all` suite: a candidate is the ML pose (LM from the ground truth, run to
 /// convergence) when its rotation is within this many degrees of it (and its translation within
 /// [`SOLVE_ALL_T_REL`]): two correct minimisers of the same cost agree to ~1e-9 degrees
-/// (docs/algorithm.md S9; the LM reference against scipy: at most 2.6e-7), distinct local
+/// (docs/algorithm.md, `refine`; the LM reference against scipy: at most 2.6e-7), distinct local
 /// minima are degrees apart.
 const SOLVE_ALL_ROT_DEG: f64 = 1e-5;
 /// `solve_all` suite: translation tolerance relative to |t_LM| (see [`SOLVE_ALL_ROT_DEG`]).
@@ -276,8 +276,8 @@ fn noise_free_quasi_singular_near180() {
     ignore = "release-mode suite: cargo test --release --test accuracy"
 )]
 fn noise_free_algebraic_mode() {
-    // S0-S8 alone must also be exact on noise-free data (docs/algorithm.md section 7 measures
-    // exactly this mode). Same bounds, all scenes and rotation kinds, but 1,000 trials per
+    // The algebraic mode alone must also be exact on noise-free data (docs/algorithm.md section 7
+    // measures exactly this mode). Same bounds, all scenes and rotation kinds, but 1,000 trials per
     // configuration (36,000 solves, to stay within the runtime budget of one test); the
     // 10,000-trial requirement is carried by the default-mode tests above.
     let solver = Solver::default().refinement(Refinement::Algebraic);
@@ -393,12 +393,12 @@ fn check_noisy(n: usize, sigma: f64, failures: &mut Failures) {
             ratios[0].1, ratios[1].1, ratios[2].1, ratios[3].1
         );
         for (what, ratio) in ratios {
-            // Default mode: S9 reaches the LM-from-GT minimum within 1e-6 deg in 1000/1000
-            // trials for N >= 5 (docs/algorithm.md S9), so the statistics coincide; 1 % is the
-            // requirement. Algebraic mode: S0-S8 minimise f, whose minimiser is 3-5 % worse
-            // (docs/algorithm.md S9: ratio of means 1.030-1.049; per-configuration ratios of means
-            // and medians of the reference prototype's noisy runs: 0.995-1.065 for these configurations);
-            // 8 % is the requirement.
+            // Default mode: `refine` reaches the LM-from-GT minimum within 1e-6 deg in 1000/1000
+            // trials for N >= 5 (docs/algorithm.md, `refine`), so the statistics coincide; 1 % is
+            // the requirement. Algebraic mode: the stages up to `select` minimise f, whose
+            // minimiser is 3-5 % worse (docs/algorithm.md, `refine`: ratio of means 1.030-1.049;
+            // per-configuration ratios of means and medians of the reference prototype's noisy
+            // runs: 0.995-1.065 for these configurations); 8 % is the requirement.
             if !((ratio - 1.0).abs() <= tol) {
                 failures.push(format!(
                     "[N={n} sigma={sigma}] {mode} {what} / LM-from-GT = {ratio:.4} (allowed 1 +- {tol})"

@@ -21,8 +21,8 @@ fn problem(n: usize, seed: u64) -> (Vec<Point3<f64>>, Vec<Point2<f64>>, Matrix3<
 
 #[test]
 fn user_bounds_newton_lm_ransac() {
-    // S6 and S9 with one iteration each: the pose is still exact (S9 corrects what S6 did
-    // not finish) and the reported counts are at most the bound.
+    // `newton` and `refine` with one iteration each: the pose is still exact (`refine` corrects
+    // what `newton` did not finish) and the reported counts are at most the bound.
     let (w, i, r) = problem(10, 7);
     let res = Solver::default()
         .newton_iterations(1)
@@ -32,8 +32,8 @@ fn user_bounds_newton_lm_ransac() {
     assert!(res.newton_iterations <= 1 && res.reprojection_iterations <= 1);
     let err = eopnp::internals::metrics::rotation_error_deg(&res.rotation, &r);
     assert!(err < 1e-6, "one iteration each: {err:e} deg");
-    // With no iteration at all the pose is S5's projection of the case-1 null vector, which is
-    // exact for noise-free data.
+    // With no iteration at all the pose is the projection of the case-1 null vector onto SO(3),
+    // which is exact for noise-free data.
     let res0 = Solver::default()
         .newton_iterations(0)
         .reprojection_iterations(0)

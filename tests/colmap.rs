@@ -139,8 +139,8 @@ fn default_mode_reproduces_colmap_poses() {
             r.translation_error_pct
         );
         assert!(r.solution.cheirality_ok);
-        // With COLMAP's 3D points fixed, the default pose minimises the pixel error through
-        // the camera (S10), so its RMS reprojection error is never above that of COLMAP's
+        // With COLMAP's 3D points fixed, the default pose minimises the pixel error through the
+        // camera (`refine_pixels`), so its RMS reprojection error is never above that of COLMAP's
         // pose (to rounding).
         println!(
             "image {id}: rmse {:.9} px vs COLMAP's {:.9} px (relative {:+.2e}), rotation {:.2e} deg",

@@ -1,7 +1,8 @@
 //! Noise-free input (issue 17): when the case-1 start is an exact fit (the algebraic cost at the
-//! rounding level of its lower bound 0), S6 is skipped and S9's Gauss-Newton step makes the pose
-//! exact. The pose must be as exact as the one S6 + S9 reach (the exhaustive mode, which has no
-//! fast path), and a start with real noise, however small, must not be taken for exact.
+//! rounding level of its lower bound 0), `newton` is skipped and `refine`'s Gauss-Newton step makes
+//! the pose exact. The pose must be as exact as the one `newton` + `refine` reach (the exhaustive
+//! mode, which has no fast path), and a start with real noise, however small, must not be taken for
+//! exact.
 use eopnp::Solver;
 use eopnp_testkit::{trial_seed, Problem, ProblemOptions, RotationKind, Scene};
 
@@ -17,12 +18,12 @@ fn problem(name: &str, n: usize, sigma_px: f64, trial: u64) -> Problem {
     })
 }
 
-/// Noise-free general scenes, N = 6, 10, 100, 1000: S6 is skipped (`newton_iterations == 0`)
+/// Noise-free general scenes, N = 6, 10, 100, 1000: `newton` is skipped (`newton_iterations == 0`)
 /// in most trials (all but the few where the case-1 start is not certified), and wherever it is
 /// the pose is within 1e-11 degrees of the truth and of the exhaustive mode's pose (which runs
-/// S6 from every start), the translation within 1e-12 relative.
+/// `newton` from every start), the translation within 1e-12 relative.
 #[test]
-fn exact_fit_skips_s6_and_stays_exact() {
+fn exact_fit_skips_newton_and_stays_exact() {
     let fast = Solver::default();
     let full = Solver::default().exhaustive(true);
     for n in [6, 10, 100, 1000] {
@@ -57,15 +58,15 @@ fn exact_fit_skips_s6_and_stays_exact() {
                 a.reprojection_iterations
             );
         }
-        eprintln!("N = {n}: S6 skipped in {skipped} of {TRIALS} noise-free trials");
+        eprintln!("N = {n}: `newton` skipped in {skipped} of {TRIALS} noise-free trials");
         assert!(
             skipped >= TRIALS * 9 / 10,
-            "N = {n}: S6 skipped in only {skipped} of {TRIALS} noise-free trials"
+            "N = {n}: `newton` skipped in only {skipped} of {TRIALS} noise-free trials"
         );
     }
 }
 
-/// sigma = 0.01 px (and above): the case-1 start is not an exact fit, S6 runs.
+/// sigma = 0.01 px (and above): the case-1 start is not an exact fit, `newton` runs.
 #[test]
 fn noise_is_never_taken_for_an_exact_fit() {
     let solver = Solver::default();
@@ -79,17 +80,17 @@ fn noise_is_never_taken_for_an_exact_fit() {
                     .expect("general scene");
                 assert!(
                     s.newton_iterations > 0,
-                    "N = {n}, sigma = {sigma} px, trial {trial}: S6 skipped"
+                    "N = {n}, sigma = {sigma} px, trial {trial}: `newton` skipped"
                 );
             }
         }
     }
 }
 
-/// The same with weights (uniform in [0.5, 2]) and with pixels through a camera with strong
-/// radial distortion (SIMPLE_RADIAL, k = -0.2, the noise-free image points projected through
-/// it; S10 then refines the pixel error from the exact start): S6 skipped in most trials, the
-/// pose within 1e-11 degrees of the truth and 1e-12 relative (measured: at most 1.1e-13
+/// The same with weights (uniform in [0.5, 2]) and with pixels through a camera with strong radial
+/// distortion (SIMPLE_RADIAL, k = -0.2, the noise-free image points projected through it;
+/// `refine_pixels` then refines the pixel error from the exact start): `newton` skipped in most
+/// trials, the pose within 1e-11 degrees of the truth and 1e-12 relative (measured: at most 1.1e-13
 /// degrees and 1.5e-15).
 #[test]
 fn exact_fit_with_weights_and_through_a_camera() {
@@ -131,7 +132,7 @@ fn exact_fit_with_weights_and_through_a_camera() {
             }
         }
         eprintln!(
-            "N = {n}: S6 skipped in {weighted} (weights) and {pixels} (pixels) of {TRIALS} trials"
+            "N = {n}: `newton` skipped in {weighted} (weights) and {pixels} (pixels) of {TRIALS} trials"
         );
         assert!(weighted >= TRIALS * 9 / 10 && pixels >= TRIALS * 9 / 10);
     }

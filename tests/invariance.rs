@@ -3,12 +3,12 @@
 //! - a world similarity X' = s Q X + b maps the pose (R, t) to (R Q^T, s t - R Q^T b);
 //! - a point of weight 0 is the same as no point; unit weights are the same as no weights.
 //!
-//! Problems are noisy (1 px, general scenes, N = 6..30), so the pose is a genuine minimiser
-//! rather than an exact solution. Tolerances: the solver's answer is located by iterative
-//! stopping rules on a cost that is flat to rounding at the minimum; two correct minimisers
-//! of the same cost agree to ~1e-7 deg (docs/algorithm.md S9), so rotations are compared at 1e-6 deg
-//! (the spec's S9 comparison tolerance) and translations at 1e-8 relative (the same flatness:
-//! measured <= 4e-11 relative between two LMs, see common::lm_refine and test_vectors.rs).
+//! Problems are noisy (1 px, general scenes, N = 6..30), so the pose is a genuine minimiser rather
+//! than an exact solution. Tolerances: the solver's answer is located by iterative stopping rules
+//! on a cost that is flat to rounding at the minimum; two correct minimisers of the same cost agree
+//! to ~1e-7 deg (docs/algorithm.md, `refine`), so rotations are compared at 1e-6 deg (the spec's
+//! `refine` comparison tolerance) and translations at 1e-8 relative (the same flatness: measured <=
+//! 4e-11 relative between two LMs, see common::lm_refine and test_vectors.rs).
 
 // `!(err <= tol)` is deliberate throughout: a NaN error must fail the check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -1,8 +1,8 @@
 //! Zero heap allocations per solve in the core path.
 //!
-//! A counting global allocator (this test binary only) counts the allocations made by the
-//! current thread while counting is switched on; `eopnp::solve`, `Solver::solve` (algebraic and
-//! exhaustive modes, and with a robust loss, which runs S10) and `Solver::solve_all` must make
+//! A counting global allocator (this test binary only) counts the allocations made by the current
+//! thread while counting is switched on; `eopnp::solve`, `Solver::solve` (algebraic and exhaustive
+//! modes, and with a robust loss, which runs `refine_pixels`) and `Solver::solve_all` must make
 //! none after a warm-up call, for N = 4, 10, 100 in general and planar scenes.
 //!
 //! Finding where an allocation comes from: run with `EOPNP_ALLOC_BACKTRACE=1` (and
@@ -97,7 +97,7 @@ fn check_scene(scene: Scene, scene_name: &str) {
             Solver::default().refinement(Refinement::Algebraic),
         ),
         ("exhaustive", Solver::default().exhaustive(true)),
-        // A robust loss runs S10 (the pixel-space refinement, identity camera).
+        // A robust loss runs `refine_pixels` (the pixel-space refinement, identity camera).
         ("cauchy", Solver::default().loss(Loss::Cauchy(2.0 / 800.0))),
         ("huber", Solver::default().loss(Loss::Huber(2.0 / 800.0))),
         (

@@ -1,6 +1,6 @@
-//! The maximum-likelihood pose through every camera model with distortion (S10): on synthetic
-//! problems with strong distortion, the pixel cost of the default pose is never above that of
-//! Levenberg-Marquardt started at the ground truth (relative 1e-9), for plain, weighted and
+//! The maximum-likelihood pose through every camera model with distortion (`refine_pixels`): on
+//! synthetic problems with strong distortion, the pixel cost of the default pose is never above
+//! that of Levenberg-Marquardt started at the ground truth (relative 1e-9), for plain, weighted and
 //! RANSAC solves. The reference LM (`eopnp_testkit::lm_refine_projection`) differentiates the
 //! camera by central differences: independent of the library's analytic Jacobians.
 
@@ -203,8 +203,8 @@ fn default_pose_is_the_pixel_ml_pose_for_every_distortion_model() {
             assert!(sol.converged, "{name} trial {trial}");
             above.push(cost / ml_cost - 1.0);
             rot_to_ml.push(rot_err_deg(&r, &ml.r));
-            // The first-order pose (S9 on undistorted points weighted by |det J|, as before
-            // S10), for the record.
+            // The first-order pose (`refine` on undistorted points weighted by |det J|, as before
+            // `refine_pixels`), for the record.
             let (world, image, weights): (Vec<_>, Vec<_>, Vec<_>) = {
                 let mut w = Vec::new();
                 let mut m = Vec::new();
@@ -235,7 +235,7 @@ fn default_pose_is_the_pixel_ml_pose_for_every_distortion_model() {
         println!(
             "{name}: default pose vs LM from GT over {TRIALS} problems: relative cost \
              difference median {:.1e}, max {:.1e}; rotation to the ML pose median {:.1e} deg, \
-             max {:.1e} deg; first-order pose (before S10) above ML: median {:.2e}, max {:.2e}",
+             max {:.1e} deg; first-order pose (before `refine_pixels`) above ML: median {:.2e}, max {:.2e}",
             median(above.clone()),
             above.iter().copied().fold(f64::MIN, f64::max),
             median(rot_to_ml.clone()),
@@ -246,7 +246,8 @@ fn default_pose_is_the_pixel_ml_pose_for_every_distortion_model() {
     }
 }
 
-/// Integer weights are duplicated points: the weighted S10 minimises the same pixel cost.
+/// Integer weights are duplicated points: the weighted `refine_pixels` minimises the same pixel
+/// cost.
 #[test]
 fn weighted_pixel_refinement_equals_duplicated_points() {
     for case in cases() {

@@ -6,7 +6,7 @@
 //! 1,500 seeded problems each: the pixel reprojection cost of `Solver::solve`'s pose is never
 //! above that of Levenberg-Marquardt run to convergence from the ground truth (the testkit's
 //! independent LM) times (1 + 1e-9). On the search before the small-N search
-//! (docs/algorithm.md S4''') this failed in 3 of the 1,500 general and 12 of the 1,500 planar
+//! (docs/algorithm.md, `search`) this failed in 3 of the 1,500 general and 12 of the 1,500 planar
 //! problems at N = 4 (none at N = 5).
 //!
 //! Also: a point of weight 0 changes nothing (the N = 5 problem with one point weighted 0 gives
@@ -24,9 +24,9 @@ use common::{
 };
 use eopnp::Solver;
 
-/// Same minimum (the tolerances of `tests/accuracy.rs`' `solve_all` suite): two runs of S9
-/// that end at the same minimum agree to about 1e-9 degrees (docs/algorithm.md S9; flat planar
-/// minima to about 1e-7), distinct minima are degrees apart.
+/// Same minimum (the tolerances of `tests/accuracy.rs`' `solve_all` suite): two runs of `refine`
+/// that end at the same minimum agree to about 1e-9 degrees (docs/algorithm.md, `refine`; flat
+/// planar minima to about 1e-7), distinct minima are degrees apart.
 const SAME_ROT_DEG: f64 = 1e-5;
 const SAME_T_REL: f64 = 1e-7;
 /// Problems per (N, scene).
@@ -63,7 +63,7 @@ fn cost_and_lm(solver: &Solver, p: &Problem) -> Result<(f64, f64), eopnp::PnpErr
 /// --release --example small_n -- N SCENE 50000 check`) whose pose was above LM-from-GT's cost
 /// before the changes that fixed them: (N, scene, seed, what was wrong).
 const FIXED_TAIL: [(usize, Scene, u64, &str); 7] = [
-    // S9's iteration bound was 50: the run from the right start stopped in a flat valley
+    // `refine`'s iteration bound was 50: the run from the right start stopped in a flat valley
     // (1.1e-3, 2.2e-5 and 3.6e-6 above LM-from-GT's cost); it is 200 now.
     (4, Scene::General, 0x3e91_779a_d570_a8c8, "iteration bound"),
     (4, Scene::General, 0x8196_e884_51c3_b210, "iteration bound"),

@@ -1,11 +1,11 @@
 //! The 18 reference problems of the reference prototype (`tests/data/test_vectors.json`),
 //! checked as docs/algorithm.md section 8 prescribes.
 //!
-//! - Algebraic mode (S0-S8): noise-free vectors within 1e-9 deg / 1e-9 % of the ground truth;
-//!   noisy vectors within 1e-6 deg / 1e-6 % of the stored output (the same local minimum of the
-//!   same cost); `cheirality_ok` and `degenerate` equal to the stored flags.
-//! - Default mode (S0-S9): within 1e-6 deg of S9 run from the stored S0-S8 output (the
-//!   reference here is the independent LM of `common`, started at the stored pose).
+//! - Algebraic mode (no `refine` stage): noise-free vectors within 1e-9 deg / 1e-9 % of the ground
+//!   truth; noisy vectors within 1e-6 deg / 1e-6 % of the stored output (the same local minimum of
+//!   the same cost); `cheirality_ok` and `degenerate` equal to the stored flags.
+//! - Default mode (with `refine`): within 1e-6 deg of `refine` run from the stored algebraic output
+//!   (the reference here is the independent LM of `common`, started at the stored pose).
 //! - Intermediates (M, G, Rw, ratio): a unit test of the pipeline (`tests/unit/pipeline/driver.rs`).
 
 // `!(err <= tol)` is deliberate throughout: a NaN error must fail the check.
@@ -120,7 +120,7 @@ fn algebraic_mode_matches_reference() {
         };
         // Noise-free: the reference reaches the truth to <= 5.5e-10 deg (docs/algorithm.md section 7,
         // planar N = 4; typically 1e-13), so 1e-9 deg / 1e-9 % is the section-8 tolerance.
-        // Noisy: the same local minimum of the same cost, located to ~1e-8 deg by S6's
+        // Noisy: the same local minimum of the same cost, located to ~1e-8 deg by `newton`'s
         // stopping rules; section 8 prescribes 1e-6 deg / 1e-6 %.
         let (tol_r, tol_t) = if tv.noise_free() {
             (1e-9, 1e-9)
@@ -149,7 +149,7 @@ fn algebraic_mode_matches_reference() {
 }
 
 #[test]
-fn default_mode_matches_s9_from_expected() {
+fn default_mode_matches_refine_from_expected() {
     let solver = Solver::default();
     let mut report = Vec::new();
     let mut failures = Vec::new();
@@ -163,28 +163,29 @@ fn default_mode_matches_s9_from_expected() {
         };
         let (r, t) = pose(&sol);
         // Reference: minimise the same reprojection error (normalised coordinates, isotropic)
-        // from the stored S0-S8 output.
+        // from the stored algebraic-mode output.
         let lm = lm_refine(&tv.world, &tv.image, &tv.r_exp, &tv.t_exp, NORMALISED);
         let er = rot_err_deg(&r, &lm.r);
         let et = trans_err_pct(&t, &lm.t);
         report.push(format!(
-            "{:22} vs S9-from-expected: {er:9.2e} deg {et:9.2e} %  (LM {} it)",
+            "{:22} vs `refine`-from-expected: {er:9.2e} deg {et:9.2e} %  (LM {} it)",
             tv.name, lm.iterations
         ));
         // Two correct minimisers of E agree to ~1e-7 deg (E is flat to rounding there;
-        // docs/algorithm.md S9), hence section 8's 1e-6 deg. Measured on these 18 vectors: this
-        // reference vs reproj_refine.py's S9 from the same start, <= 1.6e-8 deg and
-        // <= 4.2e-9 % (so the 1e-6 % translation tolerance has a 200x margin).
+        // docs/algorithm.md, `refine`), hence section 8's 1e-6 deg. Measured on these 18 vectors:
+        // this reference vs reproj_refine.py's `refine` from the same start, <= 1.6e-8 deg and <=
+        // 4.2e-9 % (so the 1e-6 % translation tolerance has a 200x margin).
         if !(er <= 1e-6 && et <= 1e-6) {
             failures.push(format!(
-                "{}: {er:e} deg, {et:e} % from S9-from-expected",
+                "{}: {er:e} deg, {et:e} % from `refine`-from-expected",
                 tv.name
             ));
         }
         if tv.noise_free() {
             let er = rot_err_deg(&r, &tv.r_gt);
             let et = trans_err_pct(&t, &tv.t_gt);
-            // S9 does not move a noise-free exact pose (docs/algorithm.md S9: <= 1.6e-13 deg).
+            // `refine` does not move a noise-free exact pose (docs/algorithm.md, `refine`: <=
+            // 1.6e-13 deg).
             if !(er <= 1e-9 && et <= 1e-9) {
                 failures.push(format!("{}: {er:e} deg, {et:e} % from the truth", tv.name));
             }

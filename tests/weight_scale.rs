@@ -65,7 +65,7 @@ fn power_of_two_scale_gives_the_same_pose() {
                 let s = solve(&p, &wc);
                 let seed = p.opts.seed;
                 if k >= -1000 {
-                    // Normal weights: S1's weight unit undoes the scale exactly.
+                    // Normal weights: `frame`'s weight unit undoes the scale exactly.
                     assert_eq!(s.rotation, reference.rotation, "seed {seed:#x} 2^{k}");
                     assert_eq!(s.translation, reference.translation, "seed {seed:#x} 2^{k}");
                     assert_eq!(s.reprojection_rmse, reference.reprojection_rmse);

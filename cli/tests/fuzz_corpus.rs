@@ -310,7 +310,7 @@ fn infinite_rmse_point_in_focal_plane() {
 }
 
 /// Found after the weights became scale-free: weights near the top of the f64 range on a
-/// pose with large residuals, so the cost in S1's weight unit was finite but the caller's
+/// pose with large residuals, so the cost in `frame`'s weight unit was finite but the caller's
 /// cost (times the unit) overflowed to +inf. Fixed: the cost saturates at `f64::MAX`.
 #[test]
 fn infinite_cost_huge_weights() {
@@ -319,7 +319,7 @@ fn infinite_cost_huge_weights() {
     ));
 }
 
-/// Found by the first fuzz run of the small-N search (S4'''): four points, one triple nearly
+/// Found by the first fuzz run of the small-N search (`search`): four points, one triple nearly
 /// collinear (the sine of its angle about 1e-7, above P3P's degeneracy cut). The triangle's
 /// frame took its normal from a cross product of nearly parallel edges, orthogonal to the
 /// first edge only to about 1e-16 / 1e-7, and the returned rotation, the P3P pose after one
@@ -332,11 +332,11 @@ fn non_orthonormal_p3p_near_collinear_triple() {
     ));
 }
 
-/// Normalised input with image coordinates up to 1e150 and the Huber loss (10,000 points):
-/// the robust refinement (S10) is fine, but the RMS residual, from the plain sum of squared
-/// residuals, overflowed to +inf after a refinement (the harness allows +inf only for a pose
-/// that was not refined). Fixed: the sum for the RMS residual is kept scaled by a power of two
-/// above the largest residual component (`pixel::Job::scaled_squared_error`).
+/// Normalised input with image coordinates up to 1e150 and the Huber loss (10,000 points): the
+/// robust refinement (`refine_pixels`) is fine, but the RMS residual, from the plain sum of squared
+/// residuals, overflowed to +inf after a refinement (the harness allows +inf only for a pose that
+/// was not refined). Fixed: the sum for the RMS residual is kept scaled by a power of two above the
+/// largest residual component (`pixel::Job::scaled_squared_error`).
 #[test]
 fn infinite_rmse_robust_loss_huge_residuals() {
     harness::solve(include_bytes!(
@@ -345,7 +345,7 @@ fn infinite_rmse_robust_loss_huge_residuals() {
 }
 
 /// A binary COLMAP model with a pixel at 4.4e142 and a point at depth 1.8e-307: registration
-/// reported an infinite cost (seen while the S9 rewrite was in progress; kept as a
+/// reported an infinite cost (seen while the `refine` rewrite was in progress; kept as a
 /// regression input for the registration path).
 #[test]
 fn huge_pixel_registration_has_finite_cost() {

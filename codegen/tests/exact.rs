@@ -107,7 +107,7 @@ fn structured_programs_equal_their_expansions() {
     }
 }
 
-/// The gradient cubics of case 2 as printed in docs/algorithm.md S4.2.
+/// The gradient cubics of case 2 as printed in docs/algorithm.md, `nullspace` case 2.
 fn case2_spec_gradients(qv: &[Poly], p: &[Poly], x: &Poly, y: &Poly) -> (Poly, Poly) {
     let (q00, q01, q02, q11, q12, q22) = (&qv[0], &qv[1], &qv[2], &qv[3], &qv[4], &qv[5]);
     let g1 = q00
@@ -280,7 +280,8 @@ fn case4_determinant_vanishes_at_a_known_root() {
             f[0][0] -= val; // w0 = 1
             forms.push(f);
         }
-        // Mm (constant) and N(k1) columns [deg 1, deg 1, deg 2] per docs/algorithm.md S4.4.
+        // Mm (constant) and N(k1) columns [deg 1, deg 1, deg 2] per docs/algorithm.md, `nullspace`
+        // case 4.
         let mm: [[Q; 3]; 3] =
             std::array::from_fn(|e| [forms[e][2][2], forms[e][3][3], q(2) * forms[e][2][3]]);
         let Some(inv) = inv3(&mm) else { continue };

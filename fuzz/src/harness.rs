@@ -228,7 +228,7 @@ pub fn decode_solver(b: u8) -> Solver {
             .newton_iterations(u32::from(b >> 5))
             .reprojection_iterations(u32::from(b >> 5));
     } else {
-        // A robust loss for the final refinement (S10), at a small or a large scale.
+        // A robust loss for the final refinement (`refine_pixels`), at a small or a large scale.
         let scale = if b & 128 != 0 { 1e-2 } else { 1e-4 };
         s = s.loss(match (b >> 5) & 3 {
             1 => Loss::Huber(scale),

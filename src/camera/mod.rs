@@ -57,7 +57,7 @@
 //! 100 iterations; a pixel whose
 //! undistortion does not converge is an error, never a silently wrong point. For the radial
 //! models the pixel path of the solver runs the same iteration along each pixel's ray, sixteen
-//! pixels at a time (`distortion::radial_undistortion`, docs/algorithm.md S9).
+//! pixels at a time (`distortion::radial_undistortion`, docs/algorithm.md, `refine`).
 
 use nalgebra::Point2;
 
@@ -346,7 +346,7 @@ impl Camera {
 }
 
 /// A projection from normalised points to pixels with its Jacobian: what the per-point loop of
-/// the pixel-space refinement (S10) is generic over.
+/// the pixel-space refinement (`refine_pixels`) is generic over.
 pub(crate) trait Project {
     /// The pixel of the normalised point `(x, y)`.
     fn project(&self, x: f64, y: f64) -> (f64, f64);

@@ -247,9 +247,9 @@ impl<'m> Registrar<'m> {
         let t = solution.translation;
         let keep = mask.as_deref();
         // The estimate's RMS pixel error: in the default mode, on every correspondence, the
-        // solution reports it (S9's or S10's last pass, through the camera: `reprojection_rmse`
-        // is it divided by `max(fx, fy)`); otherwise (RANSAC's inliers, pixels left out, the
-        // algebraic mode's first-order error) one pass of its own.
+        // solution reports it (`refine`'s or `refine_pixels`' last pass, through the camera:
+        // `reprojection_rmse` is it divided by `max(fx, fy)`); otherwise (RANSAC's inliers, pixels
+        // left out, the algebraic mode's first-order error) one pass of its own.
         let (fx, fy) = cam.focal_lengths();
         let rmse_px = if ransac.is_none()
             && solution.skipped == 0

@@ -8,8 +8,9 @@
 //! counted, so that each routine's behaviour *at* its bound (a defined result, never a panic,
 //! a hang or a silent wrong pose) has a test (`tests/unit/numeric/bounds.rs`).
 //!
-//! The user-configurable bounds (S6 `newton_iterations`, S9 `reprojection_iterations`,
-//! RANSAC `max_iterations`) are reached by setting the option; their tests are there too.
+//! The user-configurable bounds (`newton_iterations` of the `newton` stage,
+//! `reprojection_iterations` of `refine`, RANSAC `max_iterations`) are reached by setting the
+//! option; their tests are there too.
 
 /// Jacobi sweeps of the 3 x 3 symmetric eigen-decomposition (about 4-6 are used).
 pub(crate) const SYM_EIGEN3_MAX_SWEEPS: usize = 40;
@@ -17,7 +18,7 @@ pub(crate) const SYM_EIGEN3_MAX_SWEEPS: usize = 40;
 pub(crate) const SVD3_MAX_SWEEPS: usize = 40;
 /// Jacobi sweeps of the smallest eigenvalue of a symmetric 3 x 3 matrix (about 4 are used).
 pub(crate) const MIN_EIGEN3_MAX_SWEEPS: usize = 32;
-/// Damping increases (trial steps) per S6 Newton iteration.
+/// Damping increases (trial steps) per Newton iteration (the `newton` stage).
 pub(crate) const NEWTON_MAX_DAMPING_STEPS: u32 = 64;
 /// QL iterations of nalgebra's symmetric eigen-decomposition of M (9 x 9) and M_p (6 x 6).
 pub(crate) const M_EIGEN_MAX_ITER: usize = 1000;
@@ -36,7 +37,7 @@ pub(crate) const UNDISTORT_MAX_ITERATIONS: u32 = 100;
 /// An iterative routine with a hard bound.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Bound {
-    /// Jacobi sweeps of the 3x3 symmetric eigen-decomposition of the S1 scatter
+    /// Jacobi sweeps of the 3x3 symmetric eigen-decomposition of the `frame` scatter
     /// (`mat3::sym_eigen3`).
     FrameEigenSweeps,
     /// One-sided Jacobi sweeps of the 3x3 SVD (`mat3::svd3`).
@@ -44,9 +45,10 @@ pub(crate) enum Bound {
     /// Jacobi sweeps of the smallest eigenvalue of the 3x3 Newton Hessian
     /// (`mat3::min_eigenvalue_sym3`).
     HessianEigenSweeps,
-    /// Damping increases per S6 Newton iteration.
+    /// Damping increases per Newton iteration (the `newton` stage).
     NewtonDamping,
-    /// QL iterations of nalgebra's symmetric eigen-decomposition of M (9x9) and M_p (6x6) in S4.
+    /// QL iterations of nalgebra's symmetric eigen-decomposition of M (9x9) and M_p (6x6) in
+    /// `nullspace`.
     MEigen,
     /// QL iterations of nalgebra's 3x3 eigen-decomposition in Lambda Twist P3P.
     P3pEigen,

@@ -1,4 +1,4 @@
-//! Blocks of points for the passes vectorised across points (S2 in `accumulate`, S9 in
+//! Blocks of points for the passes vectorised across points (`moments` in `accumulate`, `refine` in
 //! `reproj`): active points are gathered, in order, into blocks of [`LANES`], every quantity
 //! is kept per lane, and the lanes are added pairwise at the end ([`lane_sum`]). The compiler
 //! then runs the per-point code on packed registers: two 128-bit SSE2 registers per quantity

@@ -2,7 +2,7 @@
 //! positive-definiteness test of the certificates and of `M - tau I`), the smallest
 //! eigenvector of the 9x9 positive semidefinite `M` by inverse iteration, the number of
 //! eigenvalues below a threshold (LDL^T inertia with diagonal pivoting, Sturm count as the
-//! fallback), and S9's damped 6 x 6 solve (`L D L^T`, no square root). No allocation; every
+//! fallback), and `refine`'s damped 6 x 6 solve (`L D L^T`, no square root). No allocation; every
 //! loop has a fixed bound.
 
 use nalgebra::{SMatrix, SVector};
@@ -129,7 +129,7 @@ fn cholesky_solve<const D: usize>(f: &Factor<D>, x: &mut [f64; D]) {
 }
 
 /// Inverse-iteration steps, at most: each multiplies the error by `(l1 - sigma) / (l2 - sigma)`.
-/// The vector only seeds a Newton refinement (S6), so a few steps suffice.
+/// The vector only seeds a Newton refinement (`newton`), so a few steps suffice.
 const INVERSE_ITERATIONS: usize = 4;
 /// Inverse iteration stops early once a step changes the unit vector by at most this: the
 /// error left is then about this times `(l1 - sigma) / (l2 - sigma)`, below the distance at
@@ -377,14 +377,14 @@ fn sturm_count_below(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
 /// Solves `(H + lam I) delta = -g` by a 6 x 6 `L D L^T` factorisation ([`ldl_rows`]); `None`
 /// if `H + lam I` is not (numerically) positive definite, including NaN entries.
 ///
-/// `L D L^T`, not Cholesky: the factorisation has no square root. At N = 4 and 5 an S9
+/// `L D L^T`, not Cholesky: the factorisation has no square root. At N = 4 and 5 a `refine`
 /// iteration is one chain of dependent operations (this solve, the step's rotation, the
 /// pass over the points, the normal equations, the next solve), and the Cholesky factor's six
 /// square roots, each followed by the division by it, were the longest links of the chain:
 /// with `L D L^T` (the same instruction count) a general N = 4 solve took about 6 % less time
 /// (docs/speed-log.md).
 // Not inlined: compiled once, its loops unroll the same whatever the caller (inlined into
-// S9's loop, the Cholesky version measured 300 to 620 instructions per call from build to
+// `refine`'s loop, the Cholesky version measured 300 to 620 instructions per call from build to
 // build).
 #[inline(never)]
 pub(crate) fn solve_damped6(h: &[[f64; 6]; 6], lam: f64, g: &[f64; 6]) -> Option<[f64; 6]> {

@@ -485,7 +485,7 @@ pub(crate) struct Ldl3 {
 
 /// The `L D L^T` factor of the symmetric 3 x 3 `a` (its lower triangle read); `None` unless
 /// positive definite (every pivot > 0 and finite: Cholesky's test). No square root, and a
-/// reciprocal per pivot that the solve multiplies by: S6's damped Newton step is one chain of
+/// reciprocal per pivot that the solve multiplies by: `newton`'s damped Newton step is one chain of
 /// dependent operations (the factorisation, the solve, the trial rotation, its cost), which
 /// the Cholesky factor lengthened by three square roots and nine divisions.
 #[inline]

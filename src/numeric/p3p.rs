@@ -3,7 +3,7 @@
 //! Fast Robust Perspective Three Point (P3P) Solver", ECCV 2018).
 //!
 //! Used as the minimal solver of [`crate::ransac`], and by the small-N search of the default
-//! solve (S4''', `pipeline/triples.rs`), which is why it lives with the numerical building
+//! solve (`search`, `pipeline/search.rs`), which is why it lives with the numerical building
 //! blocks (`eopnp::p3p` re-exports it). Written here rather than taken from the
 //! `lambda-twist` crate: its current release (0.7) is built on `cv-core` 0.15 and `nalgebra`
 //! 0.21 (this crate uses nalgebra 0.35, so its poses would need converting between two
@@ -32,7 +32,7 @@
 //! best-conditioned plane pair) is used; the rotation is built from orthonormal frames, so it
 //! is a rotation to rounding without a projection step.
 //!
-//! `p3p_unpolished` (crate-private: the solver's small-N starts, which S9 refines) skips the
+//! `p3p_unpolished` (crate-private: the solver's small-N starts, which `refine` refines) skips the
 //! Gauss-Newton polish, takes `D0` from one real root of the cubic (`one_cubic_root`: every
 //! real root gives a degenerate member whose plane pair, when real, holds every solution)
 //! and its plane pair from the closed-form eigenvalues of `D0` (trace and principal minors,
@@ -94,7 +94,7 @@ pub fn p3p(world: &[Point3<f64>; 3], bearing: &[Vector3<f64>; 3]) -> P3pSolution
 }
 
 /// [`p3p`] without the Gauss-Newton polish of the depths: starting poses for a refinement
-/// that follows anyway (the solver's small-N starts, S4'''), about as accurate as the
+/// that follows anyway (the solver's small-N starts, `search`), about as accurate as the
 /// closed-form depths are.
 pub(crate) fn p3p_unpolished(
     world: &[Point3<f64>; 3],

@@ -5,7 +5,7 @@
 //! [`MAX_DEGREE`] real roots, sorted ascending, each distinct root reported once). No function
 //! panics, allocates, or loops without a hard iteration bound; non-finite input gives no roots.
 //!
-//! # Normalisation (docs/algorithm.md S0)
+//! # Normalisation (docs/algorithm.md, constants and tolerances)
 //!
 //! The coefficients are divided by the largest `|c_i|`; leading coefficients whose normalised
 //! magnitude is below `1e-14` are dropped (a polynomial whose leading coefficient is that small
@@ -85,13 +85,13 @@ use isolate::solve_prepared;
 /// Largest supported polynomial degree (the eopnp resultants have degree 8 and 9).
 pub const MAX_DEGREE: usize = 9;
 
-/// The imaginary-part tolerance of docs/algorithm.md S0 ("keep roots with |Im z| <= 1e-6 (1 + |z|)"),
-/// for use with [`real_roots_near`].
+/// The imaginary-part tolerance of docs/algorithm.md's constants and tolerances ("keep roots
+/// with |Im z| <= 1e-6 (1 + |z|)"), for use with [`real_roots_near`].
 pub const DEFAULT_IMAG_TOL: f64 = 1e-6;
 
 /// Number of coefficients of a polynomial of degree [`MAX_DEGREE`].
 const NC: usize = MAX_DEGREE + 1;
-/// S0: normalised leading coefficients below this are dropped.
+/// Normalisation: normalised leading coefficients below this are dropped.
 const DROP_TOL: f64 = 1e-14;
 const EPS: f64 = f64::EPSILON;
 
@@ -331,8 +331,8 @@ impl Poly {
     }
 }
 
-/// S0 normalisation. Returns the normalised polynomial with exact zero roots divided out, and
-/// whether x = 0 is a root; `None` if there is nothing to solve (see the module docs).
+/// The normalisation (module docs). Returns the normalised polynomial with exact zero roots divided
+/// out, and whether x = 0 is a root; `None` if there is nothing to solve (see the module docs).
 fn prepare(c: &[f64]) -> Option<(Poly, bool)> {
     let mut mx: f64 = 0.0;
     for &v in c {
@@ -383,7 +383,7 @@ fn sgn(x: f64) -> f64 {
 /// All distinct real roots of the polynomial `c[0] + c[1] x + ... + c[n] x^n` (ascending
 /// coefficients), sorted ascending.
 ///
-/// Implements the S0 normalisation exactly (divide by the largest `|c_i|`, drop leading
+/// Implements the normalisation exactly (divide by the largest `|c_i|`, drop leading
 /// coefficients below `1e-14` after that; non-finite input gives no roots). After dropping, the
 /// degree must be at most [`MAX_DEGREE`]: `c` may be longer than 10 only if the extra leading
 /// coefficients are negligible; a genuinely higher degree gives an empty result (documented
@@ -423,7 +423,7 @@ pub fn real_roots_near(c: &[f64], imag_tol: f64) -> Roots {
 /// otherwise, the smallest root recomputed from the product of the roots), then Newton polishing
 /// (at most 4 steps, each accepted only if it reduces |p|).
 ///
-/// Same S0 normalisation as [`real_roots`]: a (near-)zero leading coefficient degrades to the
+/// Same normalisation as [`real_roots`]: a (near-)zero leading coefficient degrades to the
 /// quadratic / linear case. A double root is reported once. The result is checked: if a polished
 /// root still has a residual above the rounding level, or the roots do not sit one in each
 /// interval between critical points where p changes sign (cancellation can turn a close real pair

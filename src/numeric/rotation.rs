@@ -1,6 +1,7 @@
-//! Rotation utilities: CGR (Cayley-Gibbs-Rodrigues) maps, the exponential map, the nearest
-//! rotation (docs/algorithm.md S5), an accurate 3 x 3 SVD, the error metrics of docs/algorithm.md
-//! section 1, and a closed-form rotation -> quaternion conversion (T11).
+//! Rotation utilities: CGR (Cayley-Gibbs-Rodrigues) maps, the exponential map, the nearest rotation
+//! (docs/algorithm.md, `nullspace`, candidate to rotation), an accurate 3 x 3 SVD, the error
+//! metrics of docs/algorithm.md section 1, and a closed-form rotation -> quaternion conversion
+//! (T11).
 //!
 //! | symbol | meaning |
 //! |---|---|
@@ -78,7 +79,8 @@ pub(crate) fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
         + skew(&v) * (2.0 * q0)
 }
 
-/// Nearest rotation to `a` in the Frobenius norm (docs/algorithm.md S5):
+/// Nearest rotation to `a` in the Frobenius norm (docs/algorithm.md, `nullspace`, candidate to
+/// rotation):
 /// `U diag(1, 1, sgn det(U V^T)) V^T` from the SVD `a = U S V^T` (sgn 0 taken as +1).
 ///
 /// Returns `None` if an entry is not finite or `a` is zero.
@@ -98,8 +100,9 @@ pub(crate) fn nearest_rotation(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
 }
 
 /// Non-planar candidate `r` (null-space vector, any scale and sign) to a rotation
-/// (docs/algorithm.md S5): reshape row-major, negate if the determinant is negative, project with
-/// [`nearest_rotation`]. Returns `None` for non-finite or zero `r`.
+/// (docs/algorithm.md, `nullspace`, candidate to rotation): reshape row-major, negate if the
+/// determinant is negative, project with [`nearest_rotation`]. Returns `None` for non-finite or
+/// zero `r`.
 pub(crate) fn candidate_to_rotation(r: &[f64; 9]) -> Option<Matrix3<f64>> {
     let a = Matrix3::from_row_slice(r);
     if !a.iter().all(|x| x.is_finite()) {

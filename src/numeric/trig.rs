@@ -114,8 +114,8 @@ fn series_sum<const N: usize>(c: &[f64; N], z: f64) -> f64 {
 pub(crate) const SMALL_ANGLE: f64 = 0.25;
 
 /// `(sin(a) / a, cos(a))` for `|a| <= SMALL_ANGLE`, from `z = a^2` (both are even: the angle
-/// itself, a square root away, is not needed), by the first 7 terms of each Taylor series
-/// (Horner's rule in `z`): the half-angle functions of the exponential map of S9's and S10's
+/// itself, a square root away, is not needed), by the first 7 terms of each Taylor series (Horner's
+/// rule in `z`): the half-angle functions of the exponential map of `refine`'s and `refine_pixels`'
 /// steps, without two calls of libm. Within 1 ulp of `f64::sin(a) / a` and `f64::cos` (tested).
 #[inline(always)]
 pub(crate) fn sinc_cos_small(z: f64) -> (f64, f64) {

@@ -8,7 +8,7 @@ use super::frame::{self, WorkingFrame};
 use super::moments::{self, System};
 use super::newton::{self, NewtonOptions};
 use super::nullspace::{self, Candidates};
-use super::reprojection::{self, ReprojOptions};
+use super::refine::{self, ReprojOptions};
 use crate::numeric::bounds::M_EIGEN_MAX_ITER;
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, SVector, Vector3};
 
@@ -24,7 +24,8 @@ pub struct Prepared {
     t: Vector3<f64>,
 }
 
-/// S1 + S2: working frame and accumulation of `M` (9x9) and `G`. `None` on invalid input.
+/// `frame` + `moments`: working frame and accumulation of `M` (9x9) and `G`. `None` on invalid
+/// input.
 #[must_use]
 pub fn accumulate(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<SMatrix<f64, 9, 9>> {
     let fr = frame::working_frame(world, image, None, true).ok()?;
@@ -32,7 +33,7 @@ pub fn accumulate(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<SMatri
     acc.system(false).map(|s| s.m)
 }
 
-/// The 9x9 symmetric eigen-decomposition of S3 (eigenvalues, eigenvectors), as the solver
+/// The 9x9 symmetric eigen-decomposition of `nullspace` (eigenvalues, eigenvectors), as the solver
 /// calls it.
 #[must_use]
 pub fn eigen9(m: &SMatrix<f64, 9, 9>) -> Option<(SVector<f64, 9>, SMatrix<f64, 9, 9>)> {
@@ -54,8 +55,8 @@ pub fn count_eigenvalues_below9(m: &SMatrix<f64, 9, 9>, tau: f64) -> usize {
     crate::numeric::linalg::count_eigenvalues_below(m, tau)
 }
 
-/// Every intermediate of one problem (S1-S6, non-planar branch): computed once, outside the
-/// timed code. `None` on invalid input.
+/// Every intermediate of one problem (`frame` to `newton`, non-planar branch): computed once,
+/// outside the timed code. `None` on invalid input.
 #[must_use]
 pub fn prepare(world: &[Point3<f64>], image: &[Point2<f64>]) -> Option<Prepared> {
     let fr = frame::working_frame(world, image, None, true).ok()?;
@@ -95,8 +96,8 @@ impl Prepared {
     }
 }
 
-/// S4, all non-planar null-space cases (1-4) from the four smallest eigenvectors; returns the
-/// number of candidates.
+/// `nullspace`, all non-planar null-space cases (1-4) from the four smallest eigenvectors; returns
+/// the number of candidates.
 #[must_use]
 pub fn nonplanar_candidates(p: &Prepared) -> usize {
     let mut cands = Candidates::new();
@@ -104,17 +105,17 @@ pub fn nonplanar_candidates(p: &Prepared) -> usize {
     cands.len()
 }
 
-/// S6: damped Newton on SO(3) from the case-1 start (default options); returns f.
+/// `newton`: damped Newton on SO(3) from the case-1 start (default options); returns f.
 #[must_use]
 pub fn newton(p: &Prepared) -> f64 {
     newton::refine_so3(&p.m45, p.sys.trace, &p.start, &NewtonOptions::default()).f
 }
 
-/// S9: Levenberg-Marquardt on the reprojection error from the refined case-1 minimum (default
+/// `refine`: Levenberg-Marquardt on the reprojection error from the refined case-1 minimum (default
 /// options); returns the final cost.
 #[must_use]
-pub fn reprojection(world: &[Point3<f64>], image: &[Point2<f64>], p: &Prepared) -> f64 {
-    reprojection::refine_reprojection(
+pub fn refine(world: &[Point3<f64>], image: &[Point2<f64>], p: &Prepared) -> f64 {
+    refine::refine_reprojection(
         world,
         image,
         None,

@@ -1,4 +1,4 @@
-//! S1 of docs/algorithm.md: input validation and the normalised working frame.
+//! The `frame` stage of docs/algorithm.md: input validation and the normalised working frame.
 //!
 //! | symbol | meaning |
 //! |---|---|
@@ -10,14 +10,14 @@
 //! | `P_i` | working-frame point `Rw Pc_i / d` (centred, principal axes, unit RMS) |
 //! | `ratio` | `sv2 / sv0` (planarity; plane normal = working-frame z) |
 //!
-//! Cost: two O(N) passes, no allocation. Pass 1 validates the input and forms the raw
-//! weighted sums of the centroid and the ranges; pass 2
-//! ([`crate::pipeline::moments::accumulate_centred`]) forms, in the centred but unrotated points
-//! `Y = X - c`, every S2 sum (their `sum w Y Y^T` is the scatter matrix) and the image spread.
-//! `Rw` is then the eigenvector matrix of the scatter ([`sym_eigen3_closed`], closed form;
-//! the third pass below uses [`sym_eigen3`], cyclic Jacobi with a sweep bound, for its relative
-//! accuracy), and the sums are carried to the working frame exactly (they are linear and
-//! quadratic in `P = Rw Y / d`): the S2 sums come out of S1 ([`WorkingFrame::sums`]).
+//! Cost: two O(N) passes, no allocation. Pass 1 validates the input and forms the raw weighted sums
+//! of the centroid and the ranges; pass 2 ([`crate::pipeline::moments::accumulate_centred`]) forms,
+//! in the centred but unrotated points `Y = X - c`, every `moments` sum (their `sum w Y Y^T` is the
+//! scatter matrix) and the image spread. `Rw` is then the eigenvector matrix of the scatter
+//! ([`sym_eigen3_closed`], closed form; the third pass below uses [`sym_eigen3`], cyclic Jacobi
+//! with a sweep bound, for its relative accuracy), and the sums are carried to the working frame
+//! exactly (they are linear and quadratic in `P = Rw Y / d`): the `moments` sums come out of
+//! `frame` ([`WorkingFrame::sums`]).
 //!
 //! Trap T9: the scatter's eigenvalues are the squared singular values, so it resolves
 //! `sv1 / sv0` and `sv2 / sv0` only down to about `sqrt(eps)`; and in a nearly planar (or
@@ -50,7 +50,7 @@ use super::moments::{accumulate_centred, Accumulator, CentredMap};
 use crate::error::{DegenerateKind, InputKind, PnpError};
 use crate::numeric::mat3::{pow2_scale, sym_eigen3, sym_eigen3_closed};
 
-/// Fast path of S1: the frame comes from the scatter when `lambda2 >= SCATTER_MIN * lambda0`
+/// Fast path of `frame`: the frame comes from the scatter when `lambda2 >= SCATTER_MIN * lambda0`
 /// (`sv2 / sv0 >= 1e-2`; see the module documentation, trap T9).
 const SCATTER_MIN: f64 = 1e-4;
 /// Raw (unscaled) pass-1 sums are used only when the world and image ranges are at most
@@ -68,11 +68,11 @@ pub(crate) const MIN_POINTS: usize = 4;
 /// weighted sum at f64 precision (2^-52), so such a point does not count towards
 /// [`MIN_POINTS`] (it is still used).
 pub(crate) const NEGLIGIBLE_WEIGHT: f64 = f64::EPSILON;
-/// S1 collinearity test: collinear if `sv1 <= COLLINEAR_TOL * sv0`.
+/// `frame` collinearity test: collinear if `sv1 <= COLLINEAR_TOL * sv0`.
 pub(crate) const COLLINEAR_TOL: f64 = 1e-8;
-/// S1 image-spread test: coincident unless `spread > IMAGE_SPREAD_TOL * max(1, max |m|)`.
+/// `frame` image-spread test: coincident unless `spread > IMAGE_SPREAD_TOL * max(1, max |m|)`.
 pub(crate) const IMAGE_SPREAD_TOL: f64 = 1e-12;
-/// S1 small-image test: the pose is flagged degenerate when
+/// `frame` small-image test: the pose is flagged degenerate when
 /// `spread <= SMALL_IMAGE_TOL * max(1, max |m|)`. The perspective effects that fix the
 /// rotation (beyond the weak-perspective reflection ambiguity) are of relative size `spread`
 /// in the image, and the rounding of the image coordinates is `eps max |m| / spread` relative
@@ -81,7 +81,7 @@ pub(crate) const IMAGE_SPREAD_TOL: f64 = 1e-12;
 /// about 15 (`tests/tiny_image.rs`).
 pub(crate) const SMALL_IMAGE_TOL: f64 = 1e-6;
 
-/// The normalised working frame of S1: `P = Rw (X - c) / d`.
+/// The normalised working frame of `frame`: `P = Rw (X - c) / d`.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct WorkingFrame {
     /// Weighted centroid of the world points.
@@ -104,7 +104,7 @@ pub(crate) struct WorkingFrame {
     pub weight_unit: f64,
     /// `sum w_i / weight_unit` over the active points.
     pub weight_sum: f64,
-    /// The S2 sums of the same input in this frame (`P = Rw (X - c) / d`, weights
+    /// The `moments` sums of the same input in this frame (`P = Rw (X - c) / d`, weights
     /// `w / weight_unit`): equal, up to rounding, to [`crate::pipeline::moments::accumulate`]
     /// with this frame, divided by `weight_unit`.
     pub sums: Accumulator,
@@ -117,13 +117,13 @@ impl WorkingFrame {
         (self.rw * (x.coords - self.c)) * (1.0 / self.d)
     }
 
-    /// S7's depth rule: `count` points in front are more than half of the active points.
+    /// `select`'s depth rule: `count` points in front are more than half of the active points.
     #[inline]
     pub(crate) fn most_in_front(&self, count: usize) -> bool {
         2 * count > self.n_active
     }
 
-    /// Working-frame pose to the world pose (S8): `(R Rw, d t - R Rw c)`.
+    /// Working-frame pose to the world pose (`output`): `(R Rw, d t - R Rw c)`.
     ///
     /// Both poses give the same projection of every point. The result can overflow only if
     /// the world coordinates themselves are near the f64 limit; callers check finiteness.
@@ -283,7 +283,7 @@ fn first_invalid(
     first_negative.map(|index| PnpError::InvalidWeight { index })
 }
 
-/// S1: validate the input and compute the working frame, with the S2 sums in it.
+/// `frame`: validate the input and compute the working frame, with the `moments` sums in it.
 ///
 /// Checks, in this order (the first failing one is reported): lengths of world and image
 /// ([`PnpError::LengthMismatch`]); length of the weights ([`PnpError::WeightsLength`]);
@@ -300,9 +300,9 @@ fn first_invalid(
 /// `align = false` keeps the user's axes (`rw = I`; a test option, valid for non-planar
 /// input only); every check still runs and `ratio` is still computed.
 ///
-/// Inlined (with [`frame_impl`]) into its caller, the solve's S1 + S2, so that the frame is
-/// built where the solve keeps it: returned by value it was copied (560 bytes) three to four
-/// times per solve; with [`Accumulator::system`] inlined too, 22.05k -> 21.30k instructions
+/// Inlined (with [`frame_impl`]) into its caller, the solve's `frame` + `moments`, so that the
+/// frame is built where the solve keeps it: returned by value it was copied (560 bytes) three to
+/// four times per solve; with [`Accumulator::system`] inlined too, 22.05k -> 21.30k instructions
 /// per solve at N = 10 (callgrind).
 #[inline(always)]
 pub(crate) fn working_frame(
@@ -433,7 +433,7 @@ fn frame_impl(
     let cs = xsum / wsum;
     let ms = msum / wsum;
 
-    // Pass 2: every S2 sum of Y = X / sx - cs (weights w / sw) and the image spread.
+    // Pass 2: every `moments` sum of Y = X / sx - cs (weights w / sw) and the image spread.
     let map = CentredMap {
         inv_unit: isx,
         centre: cs,

@@ -1,5 +1,5 @@
-//! S2 of docs/algorithm.md: O(N) accumulation of the sums that give `M` (9 x 9) and `G` (3 x 9);
-//! `W`, `V` and `K` are never formed.
+//! The `moments` stage of docs/algorithm.md: O(N) accumulation of the sums that give `M` (9 x 9)
+//! and `G` (3 x 9); `W`, `V` and `K` are never formed.
 //!
 //! | symbol | meaning (sums over points with weight `w > 0`; `w = 1` without weights) |
 //! |---|---|
@@ -27,7 +27,7 @@ use core::ops::ControlFlow;
 
 use crate::numeric::lanes::{dispatched, lane_sum, weighted_blocks, Block, LANES};
 
-/// The weighted sums of S2 (symmetric matrices stored in full).
+/// The weighted sums of `moments` (symmetric matrices stored in full).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Accumulator {
     /// `sum w` (the N of the unweighted formulas).
@@ -55,13 +55,13 @@ pub(crate) struct Accumulator {
     /// `sum w q P P^T`.
     pub s_q: Matrix3<f64>,
     /// `sum w |m - mean|^2` about the weighted image mean: `sq - (su^2 + sv^2) / sw` in exact
-    /// arithmetic, the last pivot of `W^T W`, but accumulated about the mean (S1's image
+    /// arithmetic, the last pivot of `W^T W`, but accumulated about the mean (`frame`'s image
     /// spread) so that it keeps its relative accuracy when the image points nearly coincide,
     /// where the difference of the sums is left with their rounding alone.
     pub image_scatter: f64,
 }
 
-/// `M` (9 x 9, symmetric PSD) and `G` (3 x 9) of S2, with `f(R) = r^T M r` and `t = G r`.
+/// `M` (9 x 9, symmetric PSD) and `G` (3 x 9) of `moments`, with `f(R) = r^T M r` and `t = G r`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct System {
     /// `M = V^T V - (W^T V)^T G`, symmetrised.
@@ -95,14 +95,14 @@ pub(crate) struct CentredMap {
 /// Output of [`accumulate_centred`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct CentredSums {
-    /// The S2 sums of the mapped points `p = A Y` (or `Y`), with weights `w / sw`.
+    /// The `moments` sums of the mapped points `p = A Y` (or `Y`), with weights `w / sw`.
     pub acc: Accumulator,
-    /// `sum (w / sw) |m / sm - image_mean|^2` (the S1 image spread, before dividing by the
+    /// `sum (w / sw) |m / sm - image_mean|^2` (the `frame` image spread, before dividing by the
     /// weight sum).
     pub spread: f64,
 }
 
-/// The S2 sums of [`accumulate_centred`] as a flat array: row `k` holds the monomial `k` of
+/// The `moments` sums of [`accumulate_centred`] as a flat array: row `k` holds the monomial `k` of
 /// `p` = `1, x, y, z, xx, xy, xz, yy, yz, zz` times `[w, w u, w v, w q]`.
 type Sums = [[f64; 4]; 10];
 
@@ -214,7 +214,7 @@ fn lane<const R: bool>(
 /// Without weights every scaled weight is `isw = 1 / sw`: the terms are formed with weight 1
 /// (the multiplications by `w` dropped: `1 * t = t`) and the sums multiplied by `isw` at the
 /// end. `isw` is a power of two, so `sum isw t = isw sum t` exactly unless a scaled term or
-/// sum falls below the normal range; S1 passes `isw = 1` without weights, where it is the
+/// sum falls below the normal range; `frame` passes `isw = 1` without weights, where it is the
 /// identity.
 #[inline(always)]
 fn centred_pass<const W: bool, const R: bool>(
@@ -311,10 +311,10 @@ fn centred_sums_body(
     }
 }
 
-/// S1/S2 fused pass: the S2 sums of `p = A Y` (`a = Some(A)`) or of `p = Y` (`a = None`),
-/// `Y = X / sx - centre`, with weights `w / sw` (points with `w = 0` are skipped, so they give
-/// bit-identical sums to removing them), plus the S1 image spread. The weights must already
-/// be validated.
+/// `frame`/`moments` fused pass: the `moments` sums of `p = A Y` (`a = Some(A)`) or of `p = Y`
+/// (`a = None`), `Y = X / sx - centre`, with weights `w / sw` (points with `w = 0` are skipped, so
+/// they give bit-identical sums to removing them), plus the `frame` image spread. The weights must
+/// already be validated.
 ///
 /// Cost per point: 3 (+ 15 with `A`) flops for the point, 7 for the spread, 3 for `q` and
 /// `w u, w v, w q` (without weights, `q` only), 6 for the quadratic monomials and 40
@@ -398,7 +398,7 @@ impl Accumulator {
     }
 }
 
-/// Zero the terms containing the working-frame z coordinate (S4' flattening).
+/// Zero the terms containing the working-frame z coordinate (`planar` flattening).
 fn flat_vec(x: &Vector3<f64>) -> Vector3<f64> {
     Vector3::new(x.x, x.y, 0.0)
 }
@@ -416,11 +416,11 @@ fn flat_mat(x: &Matrix3<f64>) -> Matrix3<f64> {
 impl Accumulator {
     /// `M`, `G` and `trace(M)` from the sums (the Cholesky factor of `W^T W` in closed form).
     ///
-    /// `flatten = true` gives the planar system of S4' (working-frame z set to 0): every
+    /// `flatten = true` gives the planar system of `planar` (working-frame z set to 0): every
     /// sum containing z is zeroed, which equals accumulating the flattened points.
     ///
     /// Returns `None` if `W^T W` is not positive definite (all image points coincide, which
-    /// S1 already rejects) or if a result is not finite (e.g. image coordinates so large that
+    /// `frame` already rejects) or if a result is not finite (e.g. image coordinates so large that
     /// `u^2 + v^2` overflows).
     ///
     /// Inlined into its callers, so that `M` and `G` are built where the solve keeps them (see

@@ -1,4 +1,4 @@
-//! S6 of docs/algorithm.md: damped Newton on SO(3) in moving CGR coordinates.
+//! The `newton` stage of docs/algorithm.md: damped Newton on SO(3) in moving CGR coordinates.
 //!
 //! Minimises `f(R) = vec(R)^T M vec(R)` from a starting rotation. Every iteration works in the
 //! CGR chart centred on the current estimate `R_k` (`s -> R(s) R_k`, `s = 0` at `R_k`), so the
@@ -33,7 +33,7 @@ use crate::numeric::lanes::dispatched;
 use crate::numeric::mat3::{ldl3, ldl3_solve, min_eigenvalue_sym3};
 use crate::numeric::rotation::cgr_to_rotation;
 
-/// Options of [`refine_so3`] (docs/algorithm.md S0 table).
+/// Options of [`refine_so3`] (docs/algorithm.md, the table of constants and tolerances).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct NewtonOptions {
     /// Maximum number of iterations. Default: 50.
@@ -176,7 +176,7 @@ fn local_model_body(m: &[[f64; 9]; 9], r: &Matrix3<f64>) -> (Vector3<f64>, Matri
     (g, h)
 }
 
-/// S6: refine the rotation `r0` to a stationary point (normally a local minimum) of
+/// `newton`: refine the rotation `r0` to a stationary point (normally a local minimum) of
 /// `f(R) = vec(R)^T M vec(R)` over SO(3).
 ///
 /// `m45` is the upper triangle of M (`crate::pipeline::moments::m_upper`); `scale` is `trace(M)`

@@ -1,12 +1,13 @@
-//! S4 of docs/algorithm.md: candidate rotations from the (approximate) null space of M, and the
-//! algebra of constrained null-space combinations that the planar branch (S4') shares.
+//! The `nullspace` stage of docs/algorithm.md: candidate rotations from the (approximate) null
+//! space of M, and the algebra of constrained null-space combinations that the planar branch
+//! (`planar`) shares.
 //!
-//! Non-planar branch (docs/algorithm.md S4): `r` is sought in the span of the eigenvectors of the four
-//! smallest eigenvalues of `M`, with the orthonormality constraints of a rotation:
-//! case 1 (`r = v1`), case 2 (`r = x v1 + y v2`, quartic in `beta = y^2`), case 3
-//! (`r = v1 + k1 v2 + k2 v3`, degree-9 resultant), case 4 (`r = v1 + k1 v2 + k2 v3 + k3 v4`,
-//! three quadrics, degree-8 determinant). Planar branch (S4'): the same for the first two columns
-//! of `R` from the 6x6 planar system. The polynomial algebra is the generated code of
+//! Non-planar branch (docs/algorithm.md, `nullspace`): `r` is sought in the span of the
+//! eigenvectors of the four smallest eigenvalues of `M`, with the orthonormality constraints of a
+//! rotation: case 1 (`r = v1`), case 2 (`r = x v1 + y v2`, quartic in `beta = y^2`), case 3
+//! (`r = v1 + k1 v2 + k2 v3`, degree-9 resultant), case 4 (`r = v1 + k1 v2 + k2 v3 + k3 v4`, three
+//! quadrics, degree-8 determinant). Planar branch (`planar`): the same for the first two columns of
+//! `R` from the 6x6 planar system. The polynomial algebra is the generated code of
 //! [`crate::kernels`]; the roots come from [`crate::roots`].
 //!
 //! Every function appends to a fixed-capacity list: no allocation.
@@ -27,28 +28,29 @@ use crate::numeric::rotation::candidate_to_rotation;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum CandidateSource {
-    /// S4.1: the eigenvector of the smallest eigenvalue.
+    /// `nullspace` case 1: the eigenvector of the smallest eigenvalue.
     Case1,
-    /// S4.2: two-dimensional null space (quartic in `beta`).
+    /// `nullspace` case 2: two-dimensional null space (quartic in `beta`).
     Case2,
-    /// S4.3: three-dimensional null space (degree-9 resultant).
+    /// `nullspace` case 3: three-dimensional null space (degree-9 resultant).
     Case3,
-    /// S4.4: four-dimensional null space (three quadrics, degree-8 determinant).
+    /// `nullspace` case 4: four-dimensional null space (three quadrics, degree-8 determinant).
     Case4,
-    /// S4' case p1: planar, one null vector.
+    /// `planar` case p1: planar, one null vector.
     Planar1,
-    /// S4' case p2: planar, two null vectors.
+    /// `planar` case p2: planar, two null vectors.
     Planar2,
-    /// S4'': one of the four fixed extra starting rotations.
+    /// `nullspace`'s extra starts: one of the four fixed extra starting rotations.
     ExtraStart,
     /// The caller's initial pose ([`crate::Solver::refine`]).
     Initial,
-    /// S4''': a P3P pose of three of the points (default mode, at most five points with a
-    /// non-zero weight; docs/algorithm.md S4'''), refined by S9 without S6.
+    /// `search`: a P3P pose of three of the points (default mode, at most five points with a
+    /// non-zero weight; docs/algorithm.md, `search`), refined by `refine` without `newton`.
     P3p,
 }
 
-/// Upper bound on the number of candidates: 1 + 4 + 9 + 8 (S4) + 5 (S4') + 4 (S4'') = 31.
+/// Upper bound on the number of candidates: 1 + 4 + 9 + 8 (`nullspace` cases 1-4) + 5
+/// (`planar`) + 4 (`nullspace`'s extra starts) = 31.
 pub const MAX_CANDIDATES: usize = 32;
 
 /// A candidate rotation before refinement.
@@ -61,10 +63,10 @@ pub(crate) struct Candidate {
 pub(crate) type Candidates = ArrayVec<Candidate, MAX_CANDIDATES>;
 
 /// Relative eigenvalue level below which an eigenvalue of `M` counts as zero for the
-/// `degenerate` diagnostic (docs/algorithm.md S0).
+/// `degenerate` diagnostic (docs/algorithm.md, constants and tolerances).
 const DEGENERATE_EIG: f64 = 1e-10;
 
-/// The four fixed extra starting rotations of S4'' (working frame).
+/// The four fixed extra starting rotations (`nullspace`'s extra starts; working frame).
 const EXTRA_STARTS: [[f64; 3]; 4] = [
     [1.0, 1.0, 1.0],
     [1.0, -1.0, -1.0],
@@ -126,8 +128,8 @@ pub(crate) fn first_start(
     Some((candidate_to_rotation(&v1.into())?, sigma))
 }
 
-/// S4: the candidates of cases 1-4 from the eigenvectors of the four smallest eigenvalues of
-/// `M`, appended to `out`.
+/// `nullspace`: the candidates of cases 1-4 from the eigenvectors of the four smallest eigenvalues
+/// of `M`, appended to `out`.
 pub(crate) fn candidates(m: &SMatrix<f64, 9, 9>, out: &mut Candidates) -> Result<(), PnpError> {
     let eig = nalgebra::SymmetricEigen::try_new(*m, f64::EPSILON, limit(Bound::MEigen));
     let eig = converged(eig, Bound::MEigen).ok_or(PnpError::NoSolution)?;
@@ -139,7 +141,8 @@ pub(crate) fn candidates(m: &SMatrix<f64, 9, 9>, out: &mut Candidates) -> Result
     Ok(())
 }
 
-/// S4'': the four fixed extra starting rotations, appended to `out` while there is room.
+/// `nullspace`'s extra starts: the four fixed extra starting rotations, appended to `out` while
+/// there is room.
 pub(crate) fn extra_starts(out: &mut Candidates) {
     for d in EXTRA_STARTS {
         if !out.is_full() {
@@ -151,14 +154,17 @@ pub(crate) fn extra_starts(out: &mut Candidates) {
     }
 }
 
-/// The row pairs (j, k) of R whose dot products are the constraints f1..f6 (docs/algorithm.md S0).
+/// The row pairs (j, k) of R whose dot products are the constraints f1..f6 (docs/algorithm.md,
+/// constants and tolerances).
 const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
-/// Tolerance on the imaginary part of accepted near-real roots (docs/algorithm.md S0, T8).
+/// Tolerance on the imaginary part of accepted near-real roots (docs/algorithm.md, constants and
+/// tolerances, T8).
 const IMAG_TOL: f64 = 1e-6;
 
-/// `Q^{jk}[a][b]` for basis vectors `v` (docs/algorithm.md S4): `row_j(r) . row_k(r) = alpha^T Q alpha`.
-/// `block(v, j)` returns the j-th 3-block (a row of R, or a column in the planar case).
+/// `Q^{jk}[a][b]` for basis vectors `v` (docs/algorithm.md, `nullspace`):
+/// `row_j(r) . row_k(r) = alpha^T Q alpha`. `block(v, j)` returns the j-th 3-block (a row of R, or
+/// a column in the planar case).
 pub(super) fn quad_form<const M: usize, const D: usize>(
     v: &[SVector<f64, D>; M],
     j: usize,
@@ -223,9 +229,9 @@ fn best_x(cubics: &[f64; 8], cost: impl Fn(f64) -> f64) -> Option<f64> {
     best.map(|(_, x)| x)
 }
 
-/// S4.2 / S4' p2: stationary points of `C2(x, y) = |A a - b|^2`, `a = [x^2, x y, y^2]`, for the
-/// given constraint forms `qs` (rows of `A` are `[Q00, 2 Q01, Q11]`) and right-hand sides `b`.
-/// Calls `emit(x, y)` for each (at most 4, `y > 0`).
+/// `nullspace` case 2 / `planar` p2: stationary points of `C2(x, y) = |A a - b|^2`,
+/// `a = [x^2, x y, y^2]`, for the given constraint forms `qs` (rows of `A` are `[Q00, 2 Q01, Q11]`)
+/// and right-hand sides `b`. Calls `emit(x, y)` for each (at most 4, `y > 0`).
 pub(super) fn case2_solutions<const P: usize>(
     qs: &[SMatrix<f64, 2, 2>; P],
     b: &[f64; P],
@@ -258,7 +264,7 @@ pub(super) fn case2_solutions<const P: usize>(
     }
 }
 
-/// S4 (non-planar branch): cases 1-4 from the eigenvectors `v[0..4]` of the four smallest
+/// `nullspace` (non-planar branch): cases 1-4 from the eigenvectors `v[0..4]` of the four smallest
 /// eigenvalues of M (ascending). Appends the candidate rotations.
 pub(super) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidates) {
     let mut push = |r: SVector<f64, 9>, source: CandidateSource| {
@@ -331,10 +337,10 @@ pub(super) fn nonplanar_candidates(v: &[SVector<f64, 9>; 4], out: &mut Candidate
     });
 }
 
-/// S4.4 with the hidden variable chosen at run time: each of k1, k2, k3 is tried as the hidden
-/// one and the choice whose constant matrix `Mm` is best conditioned is used (docs/algorithm.md S4.4,
-/// "Robustness"); skipped if even that one is numerically singular.
-/// `q4` are the forms of f4, f5, f6 over (v1..v4).
+/// `nullspace` case 4 with the hidden variable chosen at run time: each of k1, k2, k3 is tried as
+/// the hidden one and the choice whose constant matrix `Mm` is best conditioned is used
+/// (docs/algorithm.md, `nullspace` case 4, "Robustness"); skipped if even that one is numerically
+/// singular. `q4` are the forms of f4, f5, f6 over (v1..v4).
 fn case4(
     v: &[SVector<f64, 9>; 4],
     q4: &[SMatrix<f64, 4, 4>; 3],

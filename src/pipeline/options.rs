@@ -1,30 +1,31 @@
 //! What the caller chooses: the cost to minimise, the planar branch, the iteration limits of
-//! S6 and S9, and the exhaustive search. `crate::Solver` is the public builder over [`Options`].
+//! `newton` and `refine`, and the exhaustive search. `crate::Solver` is the public builder over
+//! [`Options`].
 
 use super::newton::NewtonOptions;
-use super::reprojection::ReprojOptions;
+use super::refine::ReprojOptions;
 
 /// Which cost the returned pose minimises.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Refinement {
-    /// EOPnP (S0-S8) followed by Levenberg-Marquardt on the reprojection error (S9, and with
-    /// pixel input through a camera with distortion S10, on the pixel error through the
-    /// camera model): the maximum-likelihood pose for isotropic Gaussian image noise (pixel
-    /// noise for pixel input). Default.
+    /// EOPnP followed by Levenberg-Marquardt on the reprojection error (the `refine` stage, and
+    /// with pixel input through a camera with distortion `refine_pixels`, on the pixel error
+    /// through the camera model): the maximum-likelihood pose for isotropic Gaussian image noise
+    /// (pixel noise for pixel input). Default.
     #[default]
     Reprojection,
-    /// EOPnP alone (S0-S8): the minimiser of the paper's depth-weighted algebraic cost.
+    /// EOPnP alone (no `refine` stage): the minimiser of the paper's depth-weighted algebraic cost.
     Algebraic,
 }
 
-/// How the planar branch (S4') is chosen.
+/// How the planar branch (the `planar` stage) is chosen.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum PlanarDetection {
-    /// From the planarity ratio `sv2 / sv0` of the centred world points (S3):
+    /// From the planarity ratio `sv2 / sv0` of the centred world points (`branch`):
     /// non-planar branch if `ratio >= 1e-6`, planar branch if `ratio < 1e-3`, both in between.
     /// Default.
     #[default]

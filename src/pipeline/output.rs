@@ -1,6 +1,7 @@
-//! S8 of docs/algorithm.md, with S9 before it in the default mode: a refined minimum in the working
-//! frame becomes the returned [`Solution`]. S9 moves it to the minimum of the reprojection
-//! error ([`super::reprojection`]); the pose is carried back to the world frame, and its
+//! The `output` stage of docs/algorithm.md, with `refine` before it in the default mode: a
+//! refined minimum in the working frame becomes the returned [`Solution`]. `refine` moves it to
+//! the minimum of the reprojection error ([`super::refine`]); the pose is carried back to the
+//! world frame, and its
 //! costs, cheirality and diagnostics are filled in. The only way out of the solver: a pose that
 //! is not finite in the world frame is [`PnpError::NoSolution`], never an `Ok`.
 
@@ -14,8 +15,8 @@ use super::frame::WorkingFrame;
 use super::newton;
 use super::nullspace::{CandidateSource, MAX_CANDIDATES};
 use super::options::Refinement;
-use super::pixel::{self, PixelInputs};
-use super::reprojection::{self, Composed, ReprojOptions, ReprojOutcome};
+use super::refine::{self, Composed, ReprojOptions, ReprojOutcome};
+use super::refine_pixels::{self, PixelInputs};
 use super::select::{in_front, Minimum};
 use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
@@ -41,7 +42,8 @@ pub struct Solution {
     /// (saturated at `f64::MAX` when weights near the top of the f64 range make it overflow);
     /// `f / trace(M)` in [`Refinement::Algebraic`] mode.
     pub cost: f64,
-    /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (docs/algorithm.md S7).
+    /// `f / trace(M)`, the paper's algebraic cost of the returned rotation (docs/algorithm.md,
+    /// `select`).
     pub algebraic_cost: f64,
     /// Root-mean-square normalised reprojection residual (weighted, without the loss), in units
     /// of the focal length: multiply by `f` for pixels (pixel input: the RMS pixel residual
@@ -54,16 +56,18 @@ pub struct Solution {
     /// The configuration is close to degenerate and the pose may be ambiguous or wrong: more
     /// than four eigenvalues of `M` are below `1e-10 trace(M)`, or the image points span less
     /// than `1e-6 max(1, max |m|)` (RMS, normalised units), too little for f64 to resolve
-    /// the perspective that fixes the rotation (docs/algorithm.md S1, S7, section 6).
+    /// the perspective that fixes the rotation (docs/algorithm.md, `frame`, `select`, section 6).
     pub degenerate: bool,
     /// Whether the planar branch produced this pose's starting candidate.
     pub planar: bool,
     /// The candidate generator of the winning start.
     pub source: CandidateSource,
-    /// Damped-Newton iterations (S6) of the winning candidate (0 when S6 was skipped: an exact
-    /// fit, whose start is already the minimum of the algebraic cost to rounding).
+    /// Damped-Newton iterations (the `newton` stage) of the winning candidate (0 when `newton` was
+    /// skipped: an exact fit, whose start is already the minimum of the algebraic cost to
+    /// rounding).
     pub newton_iterations: u32,
-    /// Levenberg-Marquardt iterations of the reprojection refinement (S9; 0 in algebraic mode).
+    /// Levenberg-Marquardt iterations of the reprojection refinement (the `refine` stage; 0 in
+    /// algebraic mode).
     pub reprojection_iterations: u32,
     /// The reprojection refinement stopped at a minimum: its gradient or step test passed, or
     /// no step lowered the cost any more. `false` when it ran out of iterations
@@ -154,12 +158,12 @@ impl Solution {
 /// allocation.
 pub type Solutions = ArrayVec<Solution, MAX_CANDIDATES>;
 
-/// What S8 and S9 need of the problem.
+/// What `refine`, `refine_pixels` and `output` need of the problem.
 pub(crate) struct Output<'a> {
     pub world: &'a [Point3<f64>],
     pub image: &'a [Point2<f64>],
     pub weights: Option<&'a [f64]>,
-    /// S10's observations (pixel input, or a robust loss).
+    /// `refine_pixels`' observations (pixel input, or a robust loss).
     pub pixel: Option<&'a PixelInputs<'a>>,
     pub fr: &'a WorkingFrame,
     /// Upper triangle of M (`moments::m_upper`).
@@ -170,9 +174,9 @@ pub(crate) struct Output<'a> {
 }
 
 impl Output<'_> {
-    /// S9 (optional) and S8 for one minimum. The only way out of the solver: a pose that is not
-    /// finite in the world frame (e.g. a translation that overflows when the working-frame
-    /// scale is undone) is [`PnpError::NoSolution`], never an `Ok`.
+    /// `refine` (optional) and `output` for one minimum. The only way out of the solver: a pose
+    /// that is not finite in the world frame (e.g. a translation that overflows when the
+    /// working-frame scale is undone) is [`PnpError::NoSolution`], never an `Ok`.
     pub(crate) fn finish(
         &self,
         m: &Minimum,
@@ -183,9 +187,10 @@ impl Output<'_> {
             .and_then(|s| s.ok_or(PnpError::NoSolution))
     }
 
-    /// [`Output::finish`] for a minimum whose S7 depth test (more than half of the points in
-    /// front, [`in_front`]) is still to be made: `Ok(None)` if it fails. In the default mode
-    /// the first pass of S9 (or S10), which evaluates every depth at the minimum anyway,
+    /// [`Output::finish`] for a minimum whose `select` depth test (more than half of the points
+    /// in front, [`in_front`]) is still to be made: `Ok(None)` if it fails. In the default mode
+    /// the first pass of `refine` (or `refine_pixels`), which evaluates every depth at the
+    /// minimum anyway,
     /// counts them (the same count: the same operations on the same points), so the test
     /// costs no pass of its own; in the algebraic mode the pass of the reported reprojection
     /// error counts them (the same operations again).
@@ -198,52 +203,54 @@ impl Output<'_> {
         self.finish_with(m, mode, opts, None, true)
     }
 
-    /// [`Output::finish`] in the default mode for a pose S9 has already refined: `s9` is
-    /// S9's outcome from `m` (the small-N search runs S9 from several starts to choose among
-    /// them; it is not run again). S10, when it applies, still runs, from `s9`'s pose.
+    /// [`Output::finish`] in the default mode for a pose `refine` has already refined: `refined`
+    /// is `refine`'s outcome from `m` (the small-N `search` runs `refine` from several starts to
+    /// choose among them; it is not run again). `refine_pixels`, when it applies, still runs,
+    /// from `refined`'s pose.
     pub(crate) fn finish_refined(
         &self,
         m: &Minimum,
         opts: &ReprojOptions,
-        s9: &ReprojOutcome,
+        refined: &ReprojOutcome,
     ) -> Result<Solution, PnpError> {
-        self.finish_with(m, Refinement::Reprojection, opts, Some(s9), false)
+        self.finish_with(m, Refinement::Reprojection, opts, Some(refined), false)
             .and_then(|s| s.ok_or(PnpError::NoSolution))
     }
 
-    /// S9 or S10, then S8; `front_check`: S7's depth test at `m` first (`Ok(None)` if it
-    /// fails; see [`Output::finish_if_in_front`]).
+    /// `refine` or `refine_pixels`, then `output`; `front_check`: `select`'s depth test at `m`
+    /// first (`Ok(None)` if it fails; see [`Output::finish_if_in_front`]).
     fn finish_with(
         &self,
         m: &Minimum,
         mode: Refinement,
         opts: &ReprojOptions,
-        s9: Option<&ReprojOutcome>,
+        refined: Option<&ReprojOutcome>,
         front_check: bool,
     ) -> Result<Option<Solution>, PnpError> {
         let mut m = *m;
-        // S9 (or S10) is told whether `m` is an exact fit.
+        // `refine` (or `refine_pixels`) is told whether `m` is an exact fit.
         let opts = &ReprojOptions {
             exact_start: m.exact,
             ..*opts
         };
-        // S7's depth test at `m`, when it is still to be made (`front_check`): counted by the
-        // first pass of S9 or S10, which start from `m`, in the default mode, by the pass of
-        // the reported error in the algebraic mode. S10's count is S7's when its weights are
-        // S7's (`solve_pixels`: the caller's, or none); otherwise (RANSAC's fits: the
-        // first-order weights for S1-S7, whose zeros may differ where a product underflows)
-        // S7 counts before S10.
+        // `select`'s depth test at `m`, when it is still to be made (`front_check`): counted by
+        // the first pass of `refine` or `refine_pixels`, which start from `m`, in the default
+        // mode, by the pass of the reported error in the algebraic mode. `refine_pixels`' count
+        // is `select`'s when its weights are `select`'s (`solve_pixels`: the caller's, or
+        // none); otherwise (RANSAC's fits: the first-order weights for `frame` to `select`,
+        // whose zeros may differ where a product underflows) `select` counts before
+        // `refine_pixels`.
         let refines_pixels = self.pixel.is_some_and(|px| px.refine);
-        let s10_weights_are_s7s = self
-            .pixel
-            .is_some_and(|px| match (px.weights, self.weights) {
-                (None, None) => true,
-                (Some(a), Some(b)) => core::ptr::eq(a, b),
-                _ => false,
-            });
+        let pixel_weights_are_selects =
+            self.pixel
+                .is_some_and(|px| match (px.weights, self.weights) {
+                    (None, None) => true,
+                    (Some(a), Some(b)) => core::ptr::eq(a, b),
+                    _ => false,
+                });
         let refinement_counts = front_check
             && mode == Refinement::Reprojection
-            && (!refines_pixels || s10_weights_are_s7s);
+            && (!refines_pixels || pixel_weights_are_selects);
         let error_counts = front_check && mode == Refinement::Algebraic;
         if front_check && !refinement_counts && !error_counts {
             if !in_front(self.world, self.weights, self.fr, &m.r, &m.t) {
@@ -257,31 +264,32 @@ impl Output<'_> {
             None => in_front(self.world, self.weights, self.fr, &m.r, &m.t),
         };
         let (mut r, mut t) = (m.r, m.t);
-        if let Some(o) = s9.filter(|_| refines_pixels) {
-            // S10 starts from S9's pose.
+        if let Some(o) = refined.filter(|_| refines_pixels) {
+            // `refine_pixels` starts from `refine`'s pose.
             if o.r.iter().all(|x| x.is_finite()) && o.t.iter().all(|x| x.is_finite()) {
                 (r, t) = (o.r, o.t);
             }
         }
         let mut iters = 0;
         let mut converged = true;
-        // What S9 (or S10) already knows at its final pose: the cost (for S9, equal to the
-        // reprojection error when the two residual rows are not reweighted) and the depth
-        // signs, which it never changes (a step that moves a point across z = 0 is rejected).
+        // What `refine` (or `refine_pixels`) already knows at its final pose: the cost (for
+        // `refine`, equal to the reprojection error when the two residual rows are not
+        // reweighted) and the depth signs, which it never changes (a step that moves a point
+        // across z = 0 is rejected).
         //
-        // S10: the pixel error through the camera (or a robust loss), from S7's minimum (S9,
-        // on the first-order error, would only bring the start closer by about as much as
-        // one S10 pass does, at a comparable cost). Its cost and RMS residual replace S9's; it
-        // keeps the depth signs as S9 does. If it cannot run (a point at depth 0, a non-finite
-        // result), S9 runs instead.
-        let mut s9_error = None;
+        // `refine_pixels`: the pixel error through the camera (or a robust loss), from
+        // `select`'s minimum (`refine`, on the first-order error, would only bring the start
+        // closer by about as much as one `refine_pixels` pass does, at a comparable cost). Its
+        // cost and RMS residual replace `refine`'s; it keeps the depth signs as `refine` does.
+        // If it cannot run (a point at depth 0, a non-finite result), `refine` runs instead.
+        let mut refine_error = None;
         let mut depth_signs_kept = false;
-        let mut s10 = None;
+        let mut pixel_refined = None;
         if mode == Refinement::Reprojection {
             if let Some(px) = self.pixel.filter(|px| px.refine) {
-                let po = pixel::refine_pixels(self.world, px, self.fr, &r, &t, opts);
+                let po = refine_pixels::refine_pixels(self.world, px, self.fr, &r, &t, opts);
                 let out = &po.out;
-                // S10 ran from `m` (with `front_check`: not from an S9 outcome).
+                // `refine_pixels` ran from `m` (with `front_check`: not from a `refine` outcome).
                 if refinement_counts {
                     if !front_at_m(out.start_in_front) {
                         return Ok(None);
@@ -291,7 +299,7 @@ impl Output<'_> {
                 let finite = out.r.iter().all(|x| x.is_finite())
                     && out.t.iter().all(|x| x.is_finite())
                     && out.e.is_finite();
-                if finite && out.stop != reprojection::ReprojStop::SkippedZeroDepth {
+                if finite && out.stop != refine::ReprojStop::SkippedZeroDepth {
                     r = out.r;
                     t = out.t;
                     iters = out.iterations;
@@ -301,16 +309,16 @@ impl Output<'_> {
                     } else {
                         f64::INFINITY
                     };
-                    s10 = Some(((out.e * po.unit).min(f64::MAX), rmse));
+                    pixel_refined = Some(((out.e * po.unit).min(f64::MAX), rmse));
                     depth_signs_kept = true;
                 }
             }
         }
-        // S9 when S10 did not run: the normalised reprojection error.
-        if mode == Refinement::Reprojection && s10.is_none() {
-            let out = match s9 {
+        // `refine` when `refine_pixels` did not run: the normalised reprojection error.
+        if mode == Refinement::Reprojection && pixel_refined.is_none() {
+            let out = match refined {
                 Some(o) => *o,
-                None => reprojection::refine_reprojection(
+                None => refine::refine_reprojection(
                     self.world,
                     self.image,
                     self.weights,
@@ -321,7 +329,7 @@ impl Output<'_> {
                 ),
             };
             if refinement_counts && !refines_pixels {
-                // S9 ran from `m`: its first pass counted the depths there.
+                // `refine` ran from `m`: its first pass counted the depths there.
                 if !front_at_m(out.start_in_front) {
                     return Ok(None);
                 }
@@ -330,10 +338,10 @@ impl Output<'_> {
             if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
                 r = out.r;
                 t = out.t;
-                if out.stop != reprojection::ReprojStop::SkippedZeroDepth {
+                if out.stop != refine::ReprojStop::SkippedZeroDepth {
                     depth_signs_kept = true;
                     if opts.row_weights == (1.0, 1.0) && out.e.is_finite() {
-                        s9_error = Some(out.e);
+                        refine_error = Some(out.e);
                     }
                 }
             }
@@ -345,11 +353,12 @@ impl Output<'_> {
         // working precision and r^T M r comes out negative; the nearest admissible value is 0.
         let f = newton::cost_at(self.m45, &r).max(0.0);
         let (rw, tw) = self.fr.to_world(&r, &t);
-        // In S1's weight unit (exact powers of two): `e * weight_unit` is the caller's cost.
+        // In `frame`'s weight unit (exact powers of two): `e * weight_unit` is the caller's
+        // cost.
         // (With the pass of the reprojection error, its count of the points in front.)
-        let (e, front) = match (s9_error, s10) {
+        let (e, front) = match (refine_error, pixel_refined) {
             (Some(e), None) => (e, None),
-            (_, Some(_)) => (0.0, None), // S10's cost and RMS residual are reported instead
+            (_, Some(_)) => (0.0, None), // `refine_pixels`' cost and RMS residual are reported
             (None, None) => {
                 let pose = Composed::new(&r, &self.fr.rw, self.fr.d, &t);
                 let (e, front) = reprojection_error(
@@ -361,7 +370,7 @@ impl Output<'_> {
                     &self.fr.c,
                 );
                 if error_counts {
-                    // S7's depth test at m (the algebraic mode: the pose is m's).
+                    // `select`'s depth test at m (the algebraic mode: the pose is m's).
                     if !self.fr.most_in_front(front) {
                         return Ok(None);
                     }
@@ -383,10 +392,10 @@ impl Output<'_> {
             translation: tw,
             cost: if mode == Refinement::Algebraic {
                 f / self.scale
-            } else if let Some((cost, _)) = s10 {
+            } else if let Some((cost, _)) = pixel_refined {
                 cost
             } else {
-                // The caller's cost (with pixel input in pixels: S9's residuals times the
+                // The caller's cost (with pixel input in pixels: `refine`'s residuals times the
                 // camera's scale); weights near the top of the f64 range can make it overflow
                 // while the pose is exact: it saturates at f64::MAX.
                 let to_pixels = self.pixel.map_or(1.0, |px| px.scale * px.scale);
@@ -395,7 +404,7 @@ impl Output<'_> {
             algebraic_cost: f / self.scale,
             // Infinite (not NaN) when a point lies in the focal plane (depth 0) of the pose,
             // which only an algebraic-mode pose can do (see below).
-            reprojection_rmse: match s10 {
+            reprojection_rmse: match pixel_refined {
                 Some((_, rmse)) => rmse,
                 None if e.is_finite() && wsum > 0.0 => (e / wsum).sqrt(),
                 None => f64::INFINITY,
@@ -428,8 +437,8 @@ impl Output<'_> {
     }
 }
 
-/// `solve_all`: every distinct minimum finished (S9, S8), duplicates (poses within 1e-6)
-/// dropped, ranked cheirality-valid first, then by increasing reprojection error.
+/// `solve_all`: every distinct minimum finished (`refine`, `output`), duplicates (poses within
+/// 1e-6) dropped, ranked cheirality-valid first, then by increasing reprojection error.
 pub(crate) fn rank_all(
     out: &Output<'_>,
     minima: &[Minimum],
@@ -457,15 +466,14 @@ pub(crate) fn rank_all(
 }
 
 dispatched! {
-    /// Weighted sum of squared normalised reprojection residuals at a working-frame pose
-    /// (`pose`: `x_cam = a (X - c) + t`, S9's composed form, whose camera coordinates are the
-    /// world pose's divided by S1's scale `d`: the same projections, at depths of order 1
-    /// whatever the input's scale), with the weights multiplied by `inv_weight` (S1's weight
-    /// unit); and the number of points with non-zero weight and a positive depth, computed
-    /// as [`in_front`] computes it (the same operations, so the same count). Vectorised
-    /// across points like the passes of S2 and S9: the points with non-zero weight, in order,
-    /// in blocks of [`LANES`], one partial sum and count per lane, the lanes added pairwise
-    /// at the end.
+    /// Weighted sum of squared normalised reprojection residuals at a working-frame pose (`pose`:
+    /// `x_cam = a (X - c) + t`, `refine`'s composed form, whose camera coordinates are the world
+    /// pose's divided by `frame`'s scale `d`: the same projections, at depths of order 1 whatever
+    /// the input's scale), with the weights multiplied by `inv_weight` (`frame`'s weight unit); and
+    /// the number of points with non-zero weight and a positive depth, computed as [`in_front`]
+    /// computes it (the same operations, so the same count). Vectorised across points like the
+    /// passes of `moments` and `refine`: the points with non-zero weight, in order, in blocks of
+    /// [`LANES`], one partial sum and count per lane, the lanes added pairwise at the end.
     fn reprojection_error[][](
         world: &[Point3<f64>],
         image: &[Point2<f64>],
@@ -530,12 +538,12 @@ fn residuals(
 ) {
     use core::array::from_fn;
     let xc: [[f64; LANES]; 3] = from_fn(|i| from_fn(|l| blk.x[i][l] - c[i]));
-    // `a . (X - c) + t`: the operations of `in_front` (and of S9's pass).
+    // `a . (X - c) + t`: the operations of `in_front` (and of `refine`'s pass).
     let row = |j: usize| -> [f64; LANES] {
         from_fn(|l| a[j][0] * xc[0][l] + a[j][1] * xc[1][l] + a[j][2] * xc[2][l] + t[j])
     };
     let p = [row(0), row(1), row(2)];
-    // One division per point, as in S9's pass.
+    // One division per point, as in `refine`'s pass.
     let iz: [f64; LANES] = from_fn(|l| 1.0 / p[2][l]);
     let du: [f64; LANES] = from_fn(|l| blk.m[0][l] - p[0][l] * iz[l]);
     let dv: [f64; LANES] = from_fn(|l| blk.m[1][l] - p[1][l] * iz[l]);

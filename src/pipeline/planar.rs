@@ -1,7 +1,7 @@
-//! S4' of docs/algorithm.md: the planar branch. For a (nearly) planar cloud the working-frame z
-//! coordinates vanish, so only the first two columns of `R` are observable: the flattened
-//! system's 6 x 6 `M_p` (the entries of `M` of those columns) gives candidate column pairs
-//! `r6 = [R11, R12, R21, R22, R31, R32]` from its two smallest eigenvectors (cases p1 and p2,
+//! The `planar` stage of docs/algorithm.md: the planar branch. For a (nearly) planar cloud the
+//! working-frame z coordinates vanish, so only the first two columns of `R` are observable: the
+//! flattened system's 6 x 6 `M_p` (the entries of `M` of those columns) gives candidate column
+//! pairs `r6 = [R11, R12, R21, R22, R31, R32]` from its two smallest eigenvectors (cases p1 and p2,
 //! with the case-2 algebra of [`super::nullspace`]), and each is completed to a rotation and
 //! flipped by `diag(-1, -1, 1)` when most flattened points would lie behind the camera.
 
@@ -14,7 +14,7 @@ use super::nullspace::{
 };
 use crate::numeric::bounds::{converged, limit, Bound};
 
-/// S4': the planar candidates of the flattened system `sys_p`, appended to `out`. When the
+/// `planar`: the planar candidates of the flattened system `sys_p`, appended to `out`. When the
 /// eigen-decomposition of `M_p` fails (its iteration bound), only the p1 start, from the
 /// smallest eigenvector by inverse iteration ([`first_start`]): without it the search would
 /// go on from the remaining starts alone and could return a wrong local minimum.
@@ -59,7 +59,7 @@ pub(crate) fn first_start(
     start(&v1, sys_p, world, weights, fr)
 }
 
-/// Eigen-decomposition of the 6x6 planar `M_p` (S4' steps 2-3): the two smallest eigenvalues
+/// Eigen-decomposition of the 6x6 planar `M_p` (`planar` steps 2-3): the two smallest eigenvalues
 /// (ascending) and their unit eigenvectors.
 fn planar_eigen(sys_p: &System) -> Option<([f64; 2], [SVector<f64, 6>; 2])> {
     let mp = planar_m(sys_p);
@@ -74,13 +74,13 @@ fn planar_eigen(sys_p: &System) -> Option<([f64; 2], [SVector<f64, 6>; 2])> {
 }
 
 /// The 6x6 planar `M_p`: `M` of the flattened system restricted to the entries of the first two
-/// columns of `R` (docs/algorithm.md S4' step 2).
+/// columns of `R` (docs/algorithm.md, `planar` step 2).
 fn planar_m(sys_p: &System) -> SMatrix<f64, 6, 6> {
     const IDX: [usize; 6] = [0, 1, 3, 4, 6, 7];
     SMatrix::<f64, 6, 6>::from_fn(|i, j| sys_p.m[(IDX[i], IDX[j])])
 }
 
-/// S4' step 5: the rotation of a planar candidate `r6`, flipped by `diag(-1, -1, 1)` when the
+/// `planar` step 5: the rotation of a planar candidate `r6`, flipped by `diag(-1, -1, 1)` when the
 /// majority of the flattened points would lie behind the camera.
 fn start(
     r6: &SVector<f64, 6>,
@@ -107,8 +107,9 @@ fn start(
     Some(r)
 }
 
-/// S4' cases p1 and p2: candidate first-two-columns vectors `r6 = [R11, R12, R21, R22, R31, R32]`
-/// from the two smallest eigenvectors of the 6x6 planar `M_p`. Calls `emit(r6, source)`.
+/// `planar` cases p1 and p2: candidate first-two-columns vectors
+/// `r6 = [R11, R12, R21, R22, R31, R32]` from the two smallest eigenvectors of the 6x6 planar
+/// `M_p`. Calls `emit(r6, source)`.
 fn planar_vectors(
     v: &[SVector<f64, 6>; 2],
     mut emit: impl FnMut(SVector<f64, 6>, CandidateSource),
@@ -122,7 +123,7 @@ fn planar_vectors(
     });
 }
 
-/// The rotation of a planar candidate (docs/algorithm.md S4' step 5, without the depth test):
+/// The rotation of a planar candidate (docs/algorithm.md, `planar` step 5, without the depth test):
 /// `[c1 c2] = U V^T` of the 3x2 matrix of the two columns, `R = [c1, c2, c1 x c2]`.
 fn planar_rotation(r6: &SVector<f64, 6>) -> Option<Matrix3<f64>> {
     if !r6.iter().all(|x| x.is_finite()) || r6.norm() == 0.0 {

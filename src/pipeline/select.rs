@@ -1,6 +1,6 @@
-//! S7 of docs/algorithm.md: the refined local minima and the choice among them. The pose with the
-//! smallest algebraic cost `f` among the minima with more than half of the points in front of
-//! the camera; without any such minimum, the smallest `f`.
+//! The `select` stage of docs/algorithm.md: the refined local minima and the choice among them. The
+//! pose with the smallest algebraic cost `f` among the minima with more than half of the points in
+//! front of the camera; without any such minimum, the smallest `f`.
 
 use nalgebra::{Matrix3, Point3, Vector3};
 
@@ -19,9 +19,9 @@ pub(crate) struct Minimum {
     pub iterations: u32,
     /// Whether more than half of the points are in front (`None` until it is counted).
     pub cheirality: Option<bool>,
-    /// An exact fit: the start itself, certified at the rounding level of `f` (S6 skipped);
-    /// S9 (or S10) then applies the step of its `xtol` stop
-    /// ([`super::reprojection::ReprojOptions::exact_start`]).
+    /// An exact fit: the start itself, certified at the rounding level of `f` (`newton` skipped);
+    /// `refine` (or `refine_pixels`) then applies the step of its `xtol` stop
+    /// ([`super::refine::ReprojOptions::exact_start`]).
     pub exact: bool,
 }
 
@@ -69,8 +69,8 @@ fn count_in_front_body(
     }
 }
 
-/// S7: sorts `minima` by `f` and returns the index of the first one with more than half of the
-/// points in front (0 if none is); depths are counted lazily, in order of `f`, until one
+/// `select`: sorts `minima` by `f` and returns the index of the first one with more than half of
+/// the points in front (0 if none is); depths are counted lazily, in order of `f`, until one
 /// passes, and recorded in each minimum's `cheirality`.
 pub(crate) fn pick(
     minima: &mut [Minimum],

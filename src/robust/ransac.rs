@@ -327,7 +327,8 @@ impl Ransac {
         Ok(sol)
     }
 
-    /// [`Ransac::estimate`] with S10's observations of every point (`pixel`) for the fits.
+    /// [`Ransac::estimate`] with `refine_pixels`' observations of every point (`pixel`) for the
+    /// fits.
     fn estimate_with(
         &self,
         solver: &Solver,

@@ -427,7 +427,7 @@ pub struct LmResult {
 }
 
 /// Residuals (model - measurement) and their analytic Jacobian w.r.t. (w, t) for the update
-/// R := Exp(w) R, t := t + dt. Dense, world frame: independent of the library's S9.
+/// R := Exp(w) R, t := t + dt. Dense, world frame: independent of the library's `refine`.
 fn residuals_and_jacobian(
     world: &[Point3<f64>],
     obs: &[Point2<f64>],
@@ -494,12 +494,12 @@ pub fn reprojection_cost(
 /// iterations.
 ///
 /// Validation (scratch checks, recorded here):
-/// - against scipy (the reference prototype's `lm_from_gt`, `least_squares(method='lm',
-///   xtol=ftol=gtol=1e-14)`) on 40 numpy-generated problems of the paper protocol (N = 4, 5,
-///   6, 10, 15 at sigma = 0.5, 2, 5 px, and planar N = 4, 6, 10 at 2 px): final costs agree to
-///   2.3e-13 relative (ours lower where they differ most), rotations to 2.6e-7 deg (typically
-///   1e-9; the minimum is flat to rounding, cf. docs/algorithm.md S9), translations to 7.8e-10
-///   relative; all 40 converged in 4-6 iterations;
+/// - against scipy (the reference prototype's `lm_from_gt`,
+///   `least_squares(method='lm', xtol=ftol=gtol=1e-14)`) on 40 numpy-generated problems of the
+///   paper protocol (N = 4, 5, 6, 10, 15 at sigma = 0.5, 2, 5 px, and planar N = 4, 6, 10 at 2 px):
+///   final costs agree to 2.3e-13 relative (ours lower where they differ most), rotations to 2.6e-7
+///   deg (typically 1e-9; the minimum is flat to rounding, cf. docs/algorithm.md, `refine`),
+///   translations to 7.8e-10 relative; all 40 converged in 4-6 iterations;
 /// - noise-free problems (all scenes and rotation kinds, N = 4..100, 1,500 trials): returns
 ///   the truth to 2.3e-13 deg / 1.9e-15 relative;
 /// - paper protocol, N = 10, sigma = 2 px, 1,000 trials of [`Problem::generate`]: mean

@@ -157,12 +157,13 @@ fn pixel_rmse_matches_the_per_point_formula() {
     }
 }
 
-/// A registration's RMS pixel error, which in the default mode comes from the solution (S9's or
-/// S10's last pass), against `pixel_rmse`'s own pass at the same pose: a synthetic model (three
-/// images of 300 points, 1 px noise, a quarter of the keypoints untriangulated) through a
-/// `SIMPLE_RADIAL` camera (S10) and through a pinhole camera with the same intrinsics (S9), with
-/// the squared loss and a robust one (S10 either way). With RANSAC and in the algebraic mode the
-/// registrar runs the pass itself, so these agree by construction.
+/// A registration's RMS pixel error, which in the default mode comes from the solution (`refine`'s
+/// or `refine_pixels`' last pass), against `pixel_rmse`'s own pass at the same pose: a synthetic
+/// model (three images of 300 points, 1 px noise, a quarter of the keypoints untriangulated)
+/// through a `SIMPLE_RADIAL` camera (`refine_pixels`) and through a pinhole camera with the same
+/// intrinsics (`refine`), with the squared loss and a robust one (`refine_pixels` either way). With
+/// RANSAC and in the algebraic mode the registrar runs the pass itself, so these agree by
+/// construction.
 #[test]
 fn registration_rmse_is_the_pixel_rmse_of_its_pose() {
     use crate::camera::Camera;

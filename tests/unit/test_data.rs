@@ -1,6 +1,6 @@
 //! Test fixtures shared by unit tests, read from `tests/data/`: the problems of
 //! `test_vectors.json` (the reference prototype's test vectors) with the intermediates it
-//! stored, and the prototype's S6 minima (`reference_newton.json`).
+//! stored, and the prototype's `newton` minima (`reference_newton.json`).
 
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, Vector3};
 use serde_json::Value;

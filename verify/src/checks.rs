@@ -333,7 +333,7 @@ pub fn hessian(variant: Variant, against: Against, n: usize) -> Measurement {
 }
 
 // ----------------------------------------------------------------------------------------------
-// S6 local model
+// `newton` local model
 
 /// What the local model is compared with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -563,7 +563,7 @@ fn resultant_vs_sylvester(
 }
 
 /// Check 4, case 2: `case2_resultant` vs nalgebra's determinant of the Sylvester matrix of the
-/// S4.2 cubics at random `y`: `k1 y + k3 y^3 + ... + k9 y^9 = det Syl(g1, g2)(y)`.
+/// `nullspace` case 2 cubics at random `y`: `k1 y + k3 y^3 + ... + k9 y^9 = det Syl(g1, g2)(y)`.
 #[must_use]
 pub fn case2_resultant(n: usize) -> Measurement {
     let seed = 101;
@@ -589,14 +589,15 @@ pub fn case2_resultant(n: usize) -> Measurement {
     t.finish()
 }
 
-/// `case2_cubics` vs the S4.2 formulas: per coefficient `|d a_n| / |a_n|_abs <= 1e-12`.
+/// `case2_cubics` vs the `nullspace` case 2 formulas: per coefficient
+/// `|d a_n| / |a_n|_abs <= 1e-12`.
 #[must_use]
 pub fn case2_cubics(n: usize) -> Measurement {
     let seed = 102;
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case2_cubics",
-        "vs g1, g2 of docs/algorithm.md S4.2",
+        "vs g1, g2 of docs/algorithm.md, `nullspace` case 2",
         "max_n |d a_n| / |a_n|_abs",
         format!("{TOL_POLY:.0e}"),
     );
@@ -714,14 +715,15 @@ pub fn case3_quartic(n: usize) -> Measurement {
     t.finish()
 }
 
-/// `case3_cubics` vs the S4.3 gradient cubics: per coefficient `|d a_n| / |a_n|_abs <= 1e-12`.
+/// `case3_cubics` vs the `nullspace` case 3 gradient cubics: per coefficient
+/// `|d a_n| / |a_n|_abs <= 1e-12`.
 #[must_use]
 pub fn case3_cubics(n: usize) -> Measurement {
     let seed = 112;
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case3_cubics",
-        "vs dC3/dx, dC3/dy of docs/algorithm.md S4.3",
+        "vs dC3/dx, dC3/dy of docs/algorithm.md, `nullspace` case 3",
         "max_n |d a_n| / |a_n|_abs",
         format!("{TOL_POLY:.0e}"),
     );
@@ -742,7 +744,8 @@ pub fn case3_cubics(n: usize) -> Measurement {
     t.finish()
 }
 
-/// `case3_resultant` vs nalgebra's determinant of the Sylvester matrix of the S4.3 cubics.
+/// `case3_resultant` vs nalgebra's determinant of the Sylvester matrix of the `nullspace` case 3
+/// cubics.
 #[must_use]
 pub fn case3_resultant(n: usize) -> Measurement {
     let seed = 113;
@@ -829,15 +832,15 @@ fn case4_random(rng: &mut rand_pcg::Pcg64) -> [f64; 21] {
     std::array::from_fn(|_| st::normal(rng) * st::log_uniform(rng, -1.0, 1.0))
 }
 
-/// `case4_matrix` evaluated at random `k1` vs `M(k1)` from the S4.4 row formulas with numeric
-/// `T(k1)`: per entry `|dM_ij| / |M|_abs,ij <= 1e-12`.
+/// `case4_matrix` evaluated at random `k1` vs `M(k1)` from the `nullspace` case 4 row formulas with
+/// numeric `T(k1)`: per entry `|dM_ij| / |M|_abs,ij <= 1e-12`.
 #[must_use]
 pub fn case4_matrix(n: usize) -> Measurement {
     let seed = 121;
     let mut rng = st::rng(seed);
     let mut t = Tracker::new(
         "case4_matrix",
-        "vs row_i, row_ii, row_iii of docs/algorithm.md S4.4",
+        "vs row_i, row_ii, row_iii of docs/algorithm.md, `nullspace` case 4",
         "max_ij |dM_ij| / |M|_abs,ij",
         format!("{TOL_POLY:.0e}"),
     );

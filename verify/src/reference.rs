@@ -167,7 +167,7 @@ pub fn cost_g<T: ComplexField<RealField = f64> + Copy>(m: &M9, s: &[T; 3]) -> T 
     acc
 }
 
-/// `grad C(s) = 2 J(s)^T M rbar(s)` (docs/algorithm.md S0/G2), generic.
+/// `grad C(s) = 2 J(s)^T M rbar(s)` (docs/algorithm.md, G2), generic.
 #[must_use]
 pub fn grad_g<T: ComplexField<RealField = f64> + Copy>(m: &M9, s: &[T; 3]) -> [T; 3] {
     let r = rbar_g(s);
@@ -200,7 +200,7 @@ pub fn grad(m: &M9, s: &[f64; 3]) -> Vector3<f64> {
     2.0 * jac(s).transpose() * (m * rbar(s))
 }
 
-/// `hess C(s) = 2 J^T M J + 2 sum_a (M rbar)_a HR_a` (docs/algorithm.md S6/G2).
+/// `hess C(s) = 2 J^T M J + 2 sum_a (M rbar)_a HR_a` (docs/algorithm.md, `newton` and G2).
 #[must_use]
 pub fn hess(m: &M9, s: &[f64; 3]) -> Matrix3<f64> {
     let j = jac(s);
@@ -279,7 +279,8 @@ pub fn m_upper45(m: &M9) -> [f64; 45] {
     std::array::from_fn(|k| m[pairs[k]])
 }
 
-/// `PLANAR` (docs/algorithm.md S0): the entries of `r` in the first two columns of `R`.
+/// `PLANAR` (docs/algorithm.md, constants and tolerances): the entries of `r` in the first two
+/// columns of `R`.
 pub const PLANAR: [usize; 6] = [0, 1, 3, 4, 6, 7];
 
 /// The 21 planar upper-triangle entries of `M` (planar kernel input layout).
@@ -302,9 +303,9 @@ pub fn planar_restrict(m: &M9) -> M9 {
 }
 
 // ----------------------------------------------------------------------------------------------
-// S6: the local model on SO(3)
+// `newton`: the local model on SO(3)
 
-/// `D = blockdiag(R^T, R^T, R^T)` (docs/algorithm.md S6), so that `vec(A R) = D vec(A)`.
+/// `D = blockdiag(R^T, R^T, R^T)` (docs/algorithm.md, `newton`), so that `vec(A R) = D vec(A)`.
 #[must_use]
 pub fn blockdiag_rt(r: &Matrix3<f64>) -> M9 {
     let mut d = M9::zeros();
@@ -321,7 +322,7 @@ pub fn vec_r(r: &Matrix3<f64>) -> V9 {
     V9::from_fn(|a, _| r[(a / 3, a % 3)])
 }
 
-/// The explicit S6 model at `R`: `M_k = D^T M D`, `f = e^T M_k e`, `g = 2 J0^T M_k e`,
+/// The explicit `newton` model at `R`: `M_k = D^T M D`, `f = e^T M_k e`, `g = 2 J0^T M_k e`,
 /// `H_C = 2 J0^T M_k J0 + 2 sum_j (M_k e)_j HR_j`, with their absolute-value scales
 /// (`|D|`, `|J0|`, `|HR_j|` in place of `D`, `J0`, `HR_j`; `D e = vec(R)`).
 #[must_use]
@@ -370,7 +371,7 @@ pub struct LocalModel {
     pub sh: Matrix3<f64>,
 }
 
-/// `F(s) = f(R(s) R)`, `R(s) = Rbar(s) / (1 + s^T s)` (docs/algorithm.md S6), generic.
+/// `F(s) = f(R(s) R)`, `R(s) = Rbar(s) / (1 + s^T s)` (docs/algorithm.md, `newton`), generic.
 #[must_use]
 pub fn chart_f<T: ComplexField<RealField = f64> + Copy>(m: &M9, r: &Matrix3<f64>, s: &[T; 3]) -> T {
     let rb = rbar_g(s);
@@ -566,7 +567,7 @@ pub fn poly_eval(a: &[f64], x: f64) -> (f64, f64) {
 }
 
 // ----------------------------------------------------------------------------------------------
-// S4.2 case 2
+// `nullspace` case 2
 
 /// Case 2 inputs from `A` (6 x 3) and `b` (6): `Q = A^T A` as `[Q00, Q01, Q02, Q11, Q12, Q22]`,
 /// `p = A^T b`.
@@ -587,7 +588,7 @@ pub fn case2_inputs(a: &SMatrix<f64, 6, 3>, b: &SVector<f64, 6>) -> ([f64; 6], [
     )
 }
 
-/// The gradient cubics of `C2` at `y`, written out from docs/algorithm.md S4.2:
+/// The gradient cubics of `C2` at `y`, written out from docs/algorithm.md, `nullspace` case 2:
 ///
 /// `g1 = 4 Q00 x^3 + 6 Q01 y x^2 + (2 (Q11 + 2 Q02) y^2 - 4 p0) x + (2 Q12 y^3 - 2 p1 y)`,
 /// `g2 = 2 Q01 x^3 + 2 (Q11 + 2 Q02) y x^2 + (6 Q12 y^2 - 2 p1) x + (4 Q22 y^3 - 4 p2 y)`.
@@ -631,7 +632,7 @@ pub fn case2_cubics(
 }
 
 // ----------------------------------------------------------------------------------------------
-// S4.3 case 3
+// `nullspace` case 3
 
 /// My own enumeration of the case-3 monomials `k1^i k2^j` (G5: (4,0), (3,1), ..., (0,0)).
 #[must_use]
@@ -645,7 +646,7 @@ pub fn case3_monomials() -> Vec<[u8; 2]> {
     out
 }
 
-/// `k = [k1^2, k2^2, k1 k2, k1, k2, 1]` (S4.3).
+/// `k = [k1^2, k2^2, k1 k2, k1, k2, 1]` (`nullspace` case 3).
 #[must_use]
 pub fn case3_k(k1: f64, k2: f64) -> SVector<f64, 6> {
     SVector::<f64, 6>::from_column_slice(&[k1 * k1, k2 * k2, k1 * k2, k1, k2, 1.0])
@@ -669,9 +670,10 @@ pub fn case3_table(c: &[f64; 15]) -> [[f64; 5]; 5] {
     t
 }
 
-/// The gradient cubics of `C3 = sum c_ij x^i y^j` at `y` (docs/algorithm.md S4.3, by the power
-/// rule on the table): `dC3/dx = sum_ij i c_ij x^(i-1) y^j`, `dC3/dy = sum_ij j c_ij x^i y^(j-1)`.
-/// Returns ascending coefficients in `x` of both cubics and their absolute-value scales.
+/// The gradient cubics of `C3 = sum c_ij x^i y^j` at `y` (docs/algorithm.md, `nullspace` case 3, by
+/// the power rule on the table): `dC3/dx = sum_ij i c_ij x^(i-1) y^j`,
+/// `dC3/dy = sum_ij j c_ij x^i y^(j-1)`. Returns ascending coefficients in `x` of both cubics and
+/// their absolute-value scales.
 #[must_use]
 #[allow(clippy::needless_range_loop)] // i, j are the exponents
 pub fn case3_cubics(c: &[f64; 15], y: f64) -> ([f64; 4], [f64; 4], [f64; 4], [f64; 4]) {
@@ -695,7 +697,7 @@ pub fn case3_cubics(c: &[f64; 15], y: f64) -> ([f64; 4], [f64; 4], [f64; 4], [f6
 }
 
 // ----------------------------------------------------------------------------------------------
-// S4.4 case 4
+// `nullspace` case 4
 
 /// My own enumeration of the case-4 input layout `[i, j, n]` (`n <= 1` for `j < 2`, `n <= 2`
 /// for `j = 2`), compared with `CASE4_T_LAYOUT` in a test.
@@ -725,7 +727,7 @@ pub fn case4_t_at(t: &[f64; 21], k1: f64) -> (Matrix3<f64>, Matrix3<f64>) {
     (tv, ta)
 }
 
-/// `M(k1)` from docs/algorithm.md S4.4 with numeric `T = T(k1)` (rows `T_i`):
+/// `M(k1)` from docs/algorithm.md, `nullspace` case 4 with numeric `T = T(k1)` (rows `T_i`):
 ///
 /// `row_i   = (T00 - T21) T2 + T01 T1 - T20 T0 + [-T22, T02, 0]`,
 /// `row_ii  = (T20 - T11) T2 + T21 T1 - T10 T0 + [-T12, T22, 0]`,

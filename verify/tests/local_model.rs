@@ -1,6 +1,6 @@
 //! Check 3: `so3_local_model(m, r) -> [f, g0..g2, hc00, hc01, hc02, hc11, hc12, hc22]` at random
 //! rotations (Haar-uniform, exact 180 deg rotations `2 a a^T - I`, exact axis flips), against
-//! `vec(R)^T M vec(R)`, the explicit S6 formulas with `M_k = D^T M D` (1e-12 of the
+//! `vec(R)^T M vec(R)`, the explicit `newton` formulas with `M_k = D^T M D` (1e-12 of the
 //! absolute-value scales), and against derivatives of `F(s) = f(R(s) R)`: `g = grad F(0)`,
 //! `H_C - 4 f I = hess F(0)`, by central / second differences and by the complex step, with
 //! per-sample bounds derived in `eopnp_verify::fd` (derivatives of `F` along one-parameter
@@ -85,10 +85,10 @@ proptest! {
     }
 }
 
-/// The S6 local model as the solver assembles it (`f`, `g`, `H = H_C - 4 f I` from the kernel)
-/// on the `M` of realistic problems (8 points, 0.02 image noise, any rotation), at random
-/// rotations, against central and second differences of `F(s) = f(R(s) R_k)` with fixed
-/// tolerances relative to `trace(M)`. (Formerly a unit test of the solver's Newton stage.)
+/// The `newton` local model as the solver assembles it (`f`, `g`, `H = H_C - 4 f I` from the
+/// kernel) on the `M` of realistic problems (8 points, 0.02 image noise, any rotation), at random
+/// rotations, against central and second differences of `F(s) = f(R(s) R_k)` with fixed tolerances
+/// relative to `trace(M)`. (Formerly a unit test of the solver's Newton stage.)
 #[test]
 fn solver_local_model_on_realistic_problems() {
     use rand::{Rng, SeedableRng};
@@ -181,8 +181,8 @@ fn solver_local_model_on_realistic_problems() {
 }
 
 /// `M = V^T V - (W^T V)^T (W^T W)^-1 W^T V` of the problem, from the explicit rows of each point
-/// (`W_i = [[1, 0, -u], [0, 1, -v]]`, `V_i = [[X^T, 0, -u X^T], [0, X^T, -v X^T]]`) in the
-/// user's frame: an independent S2, for realistic (rank-deficient, structured) matrices.
+/// (`W_i = [[1, 0, -u], [0, 1, -v]]`, `V_i = [[X^T, 0, -u X^T], [0, X^T, -v X^T]]`) in the user's
+/// frame: an independent `moments` stage, for realistic (rank-deficient, structured) matrices.
 fn explicit_m(world: &[nalgebra::Point3<f64>], image: &[nalgebra::Point2<f64>]) -> rf::M9 {
     let n = world.len();
     let mut w = nalgebra::DMatrix::<f64>::zeros(2 * n, 3);

@@ -1,12 +1,13 @@
-//! Check 4: the resultant kernels of cases 2, 3, 4 (docs/algorithm.md S4.2-S4.4, G4-G7).
+//! Check 4: the resultant kernels of cases 2, 3, 4 (docs/algorithm.md, `nullspace` cases 2-4,
+//! G4-G7).
 //!
-//! - Against nalgebra's determinant of the numerically built matrix (6 x 6 Sylvester matrix of
-//!   eq. 22 for cases 2, 3, written from the S4.2 / S4.3 cubic formulas; `M(k1)` for case 4) at
-//!   random hidden values. Determinants are ill-conditioned, so the bound is derived per sample
-//!   (`eopnp_verify::checks::resultant_vs_sylvester` and `case4_determinant`): kernel rounding
-//!   `gamma_64` times the permanent of the absolute-value Bezout / entry matrix, plus the
-//!   rounding of the numeric entries, plus nalgebra's LU error (a-posteriori, Higham Thm 9.3
-//!   with Hadamard-bounded cofactors). Errors are reported relative to Hadamard's bound.
+//! - Against nalgebra's determinant of the numerically built matrix (6 x 6 Sylvester matrix of eq.
+//!   22 for cases 2, 3, written from the cubic formulas of `nullspace` cases 2 and 3; `M(k1)` for
+//!   case 4) at random hidden values. Determinants are ill-conditioned, so the bound is derived per
+//!   sample (`eopnp_verify::checks::resultant_vs_sylvester` and `case4_determinant`): kernel
+//!   rounding `gamma_64` times the permanent of the absolute-value Bezout / entry matrix, plus the
+//!   rounding of the numeric entries, plus nalgebra's LU error (a-posteriori, Higham Thm 9.3 with
+//!   Hadamard-bounded cofactors). Errors are reported relative to Hadamard's bound.
 //! - Known roots: exactly representable systems with a built-in common root, where the exact
 //!   resultant vanishes, so the only error is the kernel's rounding. The resultant at the root
 //!   and the cubics (case 4: `M(k1*) y* = 0`) at it are two measurements, each asserted.

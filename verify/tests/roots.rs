@@ -4,9 +4,10 @@
 //! (including near-repeated roots), roots spread over 1e-6..1e6, and leading coefficients near
 //! zero; 2000 cases per property.
 //!
-//! Notation: `p` is the polynomial actually solved, i.e. the input after the S0 rule (divided by
-//! its largest |c_i|, leading coefficients below 1e-14 dropped), `n` its degree, `eps` = 2^-52 and
-//! `S(x) = sum |c_i| |x|^i` (the scale of the rounding error of any evaluation of p at x).
+//! Notation: `p` is the polynomial actually solved, i.e. the input after the normalisation rule of
+//! docs/algorithm.md's constants and tolerances (divided by its largest |c_i|, leading coefficients
+//! below 1e-14 dropped), `n` its degree, `eps` = 2^-52 and `S(x) = sum |c_i| |x|^i` (the scale of
+//! the rounding error of any evaluation of p at x).
 //!
 //! Tolerances:
 //! (a) Backward error: every returned root satisfies `|p(x)| <= 4 n eps S(x)`, `p(x)` evaluated by
@@ -56,8 +57,9 @@ const CASES: u32 = 2000;
 // Independent reference arithmetic
 // ---------------------------------------------------------------------------------------------
 
-/// The S0 rule, written independently: normalised coefficients of the polynomial actually solved.
-fn s0(c: &[f64]) -> Option<Vec<f64>> {
+/// The normalisation rule, written independently: normalised coefficients of the polynomial
+/// actually solved.
+fn normalised(c: &[f64]) -> Option<Vec<f64>> {
     if c.iter().any(|v| !v.is_finite()) {
         return None;
     }
@@ -210,7 +212,7 @@ fn check_structure(r: &Roots, what: &str) -> Result<(), TestCaseError> {
 
 /// (a): backward error of every returned root. Returns the largest |p(x)| / (eps S(x)).
 fn check_backward(c: &[f64], r: &Roots, what: &str) -> Result<f64, TestCaseError> {
-    let Some(p) = s0(c) else {
+    let Some(p) = normalised(c) else {
         prop_assert!(r.is_empty(), "{what}: roots of a constant {c:?}");
         return Ok(0.0);
     };
@@ -238,7 +240,7 @@ fn check_backward(c: &[f64], r: &Roots, what: &str) -> Result<f64, TestCaseError
 /// how many of them were certified and checked.
 fn check_found(c: &[f64], r: &Roots, what: &str) -> Result<Found, TestCaseError> {
     let mut found = Found::default();
-    let Some(p) = s0(c) else {
+    let Some(p) = normalised(c) else {
         return Ok(found);
     };
     let n = (p.len() - 1) as f64;
@@ -329,7 +331,7 @@ fn check_agree(
     general: &Roots,
     what: &str,
 ) -> Result<bool, TestCaseError> {
-    let Some(p) = s0(c) else {
+    let Some(p) = normalised(c) else {
         prop_assert!(closed.is_empty() && general.is_empty());
         return Ok(false);
     };
@@ -466,8 +468,9 @@ fn gen_base(rng: &mut Pcg64, kind: u32, deg: usize) -> Vec<f64> {
     }
 }
 
-/// Kinds 0-2 as in `gen_base`; kind 3: a polynomial of degree `deg - 1` of kind 0-2 plus a
-/// leading coefficient of relative size 1e-16..1e-10 (dropped below 1e-14 by S0, kept above).
+/// Kinds 0-2 as in `gen_base`; kind 3: a polynomial of degree `deg - 1` of kind 0-2 plus a leading
+/// coefficient of relative size 1e-16..1e-10 (dropped below 1e-14 by the normalisation, kept
+/// above).
 fn gen_poly(rng: &mut Pcg64, kind: u32, deg: usize) -> Vec<f64> {
     if kind < 3 {
         return gen_base(rng, kind, deg);
@@ -546,7 +549,7 @@ proptest! {
         for x in &plain {
             prop_assert!(near.iter().any(|y| y == x), "near must contain {x}");
         }
-        let p = s0(&c).unwrap();
+        let p = normalised(&c).unwrap();
         let n = (p.len() - 1) as f64;
         // Radius of the pair in the rounded polynomial: p ~ q(re) ((x - re)^2 + b^2) + delta with
         // |delta| <= 4 n eps S(re) (construction rounding and solver evaluation, as in (a)), so the

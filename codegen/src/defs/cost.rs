@@ -1,4 +1,5 @@
-//! The EOPnP cost C(s) = rbar(s)^T M rbar(s) (docs/algorithm.md sections 1, 2 and 4: G1-G3, S6).
+//! The EOPnP cost C(s) = rbar(s)^T M rbar(s) (docs/algorithm.md sections 1, 2 and 4: G1-G3,
+//! `newton`).
 //!
 //! Defined once, from the Cayley map itself: `Rbar(s) = (1 - s^T s) I + 2 [s]x + 2 s s^T`,
 //! `rbar = vec(Rbar)` row-major. Every other cost kernel (coefficients, value, gradient, Hessian,
@@ -10,7 +11,8 @@ use crate::program::Kernel;
 
 const DEF: &str = "codegen/src/defs/cost.rs";
 
-/// Entries of r = vec(R) (row-major) in the first two columns of R (docs/algorithm.md S0 `PLANAR`).
+/// Entries of r = vec(R) (row-major) in the first two columns of R (docs/algorithm.md, constants
+/// and tolerances: `PLANAR`).
 pub const PLANAR: [usize; 6] = [0, 1, 3, 4, 6, 7];
 
 /// `rbar(s)` for symbolic `s = (s1, s2, s3)`.
@@ -347,21 +349,21 @@ pub fn planar_cost_at(order: Order) -> Kernel {
     k
 }
 
-/// S6: the local model of f(R) = vec(R)^T M vec(R) at a rotation R in the CGR chart centred on R
-/// (s -> R(s) R): `[f, g0, g1, g2, hc00, hc01, hc02, hc11, hc12, hc22]` = the coefficients c34,
-/// c31..c33 and the Hessian of C_k at 0 from c25..c30, for `M_k = D^T M D`,
+/// `newton`: the local model of f(R) = vec(R)^T M vec(R) at a rotation R in the CGR chart centred
+/// on R (s -> R(s) R): `[f, g0, g1, g2, hc00, hc01, hc02, hc11, hc12, hc22]` = the coefficients
+/// c34, c31..c33 and the Hessian of C_k at 0 from c25..c30, for `M_k = D^T M D`,
 /// `D = blockdiag(R^T, R^T, R^T)`.
 pub fn so3_local_model() -> Kernel {
     let mut k = Kernel::new("so3_local_model", DEF);
     k.doc(
         "Local model of `f(R) = vec(R)^T M vec(R)` at the rotation `R` in the CGR chart \
-           centred on `R` (`s -> R(s) R`, docs/algorithm.md S6): the value, gradient and Hessian at \
+           centred on `R` (`s -> R(s) R`, docs/algorithm.md, `newton`): the value, gradient and Hessian at \
            `s = 0` of `C_k(s) = rbar(s)^T M_k rbar(s)`, `M_k = D^T M D`, \
            `D = blockdiag(R^T, R^T, R^T)`.",
     );
     k.doc(
         "Since `C_k(s) = (1 + s^T s)^2 f(R(s) R)`, `g` is also the gradient of `f` in the chart \
-           and the exact Hessian of `f` is `H_C - 4 f I` (docs/algorithm.md S6, trap T3).",
+           and the exact Hessian of `f` is `H_C - 4 f I` (docs/algorithm.md, `newton`, trap T3).",
     );
     let upper = upper_names("m", &(0..9).collect::<Vec<_>>());
     let names: Vec<String> = upper.iter().map(|(_, _, n)| n.clone()).collect();

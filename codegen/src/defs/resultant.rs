@@ -1,4 +1,5 @@
-//! Hidden-variable resultants of the null-space cases (docs/algorithm.md S4.2-S4.4, section 4 G4-G7).
+//! Hidden-variable resultants of the null-space cases (docs/algorithm.md, `nullspace` cases 2-4,
+//! section 4 G4-G7).
 //!
 //! Cases 2 and 3 minimise a bivariate quartic cost `C(x, y)`; its stationary points solve
 //! `dC/dx = dC/dy = 0`, two cubics in `x` with coefficients polynomial in the hidden `y`. Their
@@ -158,7 +159,7 @@ pub fn resultant(case: Case) -> Kernel {
     match case {
         Case::Two => {
             k.doc(
-                "Case 2 of EOPnP (docs/algorithm.md S4.2, G4): `r = x v1 + y v2` minimises \
+                "Case 2 of EOPnP (docs/algorithm.md, `nullspace` case 2, G4): `r = x v1 + y v2` minimises \
                    `C2(x, y) = |A a - b|^2`, `a = [x^2, x y, y^2]`. The stationary points solve \
                    `g1 = dC2/dx = 0`, `g2 = dC2/dy = 0`, cubics in `x`; their resultant in `x` \
                    (the 6x6 Sylvester determinant of eq. 22) is odd of degree 9 in the hidden \
@@ -177,7 +178,7 @@ pub fn resultant(case: Case) -> Kernel {
         }
         Case::Three => {
             k.doc(
-                "Case 3 of EOPnP (docs/algorithm.md S4.3, G5): `r = v1 + k1 v2 + k2 v3` minimises \
+                "Case 3 of EOPnP (docs/algorithm.md, `nullspace` case 3, G5): `r = v1 + k1 v2 + k2 v3` minimises \
                    the bivariate quartic `C3(k1, k2) = |B k|^2`. With `x = k1` and the hidden \
                    `y = k2`, `dC3/dx` and `dC3/dy` are cubics in `x`; their resultant in `x` (the \
                    6x6 Sylvester determinant) has full degree 9 in `y`.",
@@ -217,7 +218,7 @@ pub fn cubics(case: Case) -> Kernel {
     let (c, x, yi) = cost_for(&mut k, case);
     let y = k.input_scalar("y", "the hidden variable (a root of the resultant)");
     k.doc(&format!(
-        "Back-substitution for case {n} of EOPnP (docs/algorithm.md S4.{n}): the two gradient cubics \
+        "Back-substitution for case {n} of EOPnP (docs/algorithm.md, `nullspace` case {n}): the two gradient cubics \
          `dC/dx` and `dC/dy` as polynomials in `x` at the given hidden `y`.",
         n = if case == Case::Two { 2 } else { 3 },
     ));
@@ -242,7 +243,7 @@ pub fn cubics(case: Case) -> Kernel {
 pub fn case3_quartic() -> Kernel {
     let mut k = Kernel::new("case3_quartic", DEF);
     k.doc(
-        "Case 3 of EOPnP (docs/algorithm.md S4.3): the coefficients of \
+        "Case 3 of EOPnP (docs/algorithm.md, `nullspace` case 3): the coefficients of \
            `C3(k1, k2) = k^T H k`, `k = [k1^2, k2^2, k1 k2, k1, k2, 1]`, from the symmetric 6x6 \
            `H = Bm^T Bm`.",
     );
@@ -312,10 +313,11 @@ pub fn case4_input_names() -> Vec<(usize, usize, usize, String)> {
 /// Builds the case-4 matrix M(k1) symbolically inside `k`; returns its entries as [`UPoly`]s in
 /// k1 (coefficients polynomials in the 21 inputs).
 ///
-/// Derivation (docs/algorithm.md S4.4): with `z = [k2^2, k3^2, k2 k3] = T(k1) y`, `y = [k2, k3, 1]`,
-/// the monomial identities `k3 z1 - k2 z3 = 0`, `k3 z3 - k2 z2 = 0` and `z3^2 - z1 z2 = 0`
-/// are polynomials of degree <= 2 in (k2, k3); replacing every quadratic monomial by its
-/// T-expression makes each one linear in y. That reduction is done here by substitution.
+/// Derivation (docs/algorithm.md, `nullspace` case 4): with `z = [k2^2, k3^2, k2 k3] = T(k1) y`,
+/// `y = [k2, k3, 1]`, the monomial identities `k3 z1 - k2 z3 = 0`, `k3 z3 - k2 z2 = 0` and
+/// `z3^2 - z1 z2 = 0` are polynomials of degree <= 2 in (k2, k3); replacing every quadratic
+/// monomial by its T-expression makes each one linear in y. That reduction is done here by
+/// substitution.
 fn case4_matrix_upolys(k: &mut Kernel) -> (Vec<Vec<UPoly>>, Var) {
     let names = case4_input_names();
     let tv = k.input_array(
@@ -394,7 +396,7 @@ fn case4_matrix_upolys(k: &mut Kernel) -> (Vec<Vec<UPoly>>, Var) {
 pub fn case4_matrix() -> Kernel {
     let mut k = Kernel::new("case4_matrix", DEF);
     k.doc(
-        "Case 4 of EOPnP (docs/algorithm.md S4.4, G6): the 3x3 matrix `M(k1)` of the three-quadrics \
+        "Case 4 of EOPnP (docs/algorithm.md, `nullspace` case 4, G6): the 3x3 matrix `M(k1)` of the three-quadrics \
            system after hiding `k1`, linear in `y = [k2, k3, 1]`: `M(k1) y = 0` at a solution. \
            Rows come from the monomial identities `k3 z1 = k2 z3`, `k3 z3 = k2 z2`, \
            `z3^2 = z1 z2` with `z = [k2^2, k3^2, k2 k3] = T(k1) y`, derived symbolically.",
@@ -428,7 +430,7 @@ pub fn case4_matrix() -> Kernel {
 pub fn case4_determinant() -> Kernel {
     let mut k = Kernel::new("case4_determinant", DEF);
     k.doc(
-        "Case 4 of EOPnP (docs/algorithm.md S4.4, G6): the coefficients of `det M(k1)`, a polynomial \
+        "Case 4 of EOPnP (docs/algorithm.md, `nullspace` case 4, G6): the coefficients of `det M(k1)`, a polynomial \
            of degree 8 in the hidden `k1` (eq. 34). Evaluated structurally: the entries of \
            `M(k1)` (see [`case4_matrix`]) as polynomials in `k1`, then the 3x3 determinant by \
            cofactor expansion with the polynomial products unrolled.",

@@ -26,8 +26,8 @@ pub(super) struct ScoringSet<'a> {
     pub(super) fx2: f64,
     pub(super) fy2: f64,
     pub(super) rows: (f64, f64),
-    /// S10's observations of every point (pixel input, or a robust loss), gathered with the
-    /// inliers of each fit.
+    /// `refine_pixels`' observations of every point (pixel input, or a robust loss), gathered with
+    /// the inliers of each fit.
     pub(super) pixel: Option<PixelInputs<'a>>,
 }
 

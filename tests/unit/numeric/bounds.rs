@@ -215,11 +215,11 @@ fn newton_damping() {
     assert_eq!(hit, 1);
     assert_eq!(out.r, r0);
     assert_eq!(out.iterations, 1);
-    // The solver on top: S6 accepts no step, so every start stays where it is; the starts of
-    // noise-free problems are exact (case 1 / p1) and S9 polishes them.
+    // The solver on top: `newton` accepts no step, so every start stays where it is; the starts of
+    // noise-free problems are exact (case 1 / p1) and `refine` polishes them.
     let hits = solver_on_top_returns_true_pose(Bound::NewtonDamping, 0);
     assert!(hits >= 100, "{hits}");
-    // Algebraic mode (no S9): the starts themselves are returned, still the true pose.
+    // Algebraic mode (no `refine`): the starts themselves are returned, still the true pose.
     for (what, w, i, r) in problems() {
         let (res, _) = with_limit(Bound::NewtonDamping, 0, || {
             Solver::default()
@@ -358,7 +358,7 @@ fn root_bracket_iterations() {
     assert!(out.iter().all(|x| x.is_finite()));
     assert!(out.len() <= 8);
     // The solver on top (the case-2 to 4 and p2 polynomials, in the full search): the roots it
-    // gets are only approximate, the Newton refinement (S6) that follows converges anyway.
+    // gets are only approximate, the Newton refinement (`newton`) that follows converges anyway.
     for limit in [0, 1, 2] {
         let hits = solver_on_top_returns_true_pose(Bound::RootBracket, limit);
         assert!(hits >= 100, "limit {limit}: {hits}");

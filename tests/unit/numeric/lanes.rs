@@ -1,7 +1,8 @@
 //! Unit tests of the dispatched passes (`src/numeric/lanes.rs`): the AVX2 + FMA build and the
-//! baseline build give the same solutions, to the bit, through every pass they serve (S1/S2's
-//! centred sums with and without weights and the axis rotation; S9's and S10's pass with and
-//! without the Hessian, the depth check, a robust loss, camera models with distortion).
+//! baseline build give the same solutions, to the bit, through every pass they serve
+//! (`frame`/`moments`' centred sums with and without weights and the axis rotation; `refine`'s and
+//! `refine_pixels`' pass with and without the Hessian, the depth check, a robust loss, camera
+//! models with distortion).
 
 use super::wide;
 use crate::camera::Camera;

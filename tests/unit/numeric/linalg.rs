@@ -120,9 +120,9 @@ fn non_finite_input_gives_none() {
     assert!(smallest_eigenvector(&m, 9.0).is_none());
 }
 
-/// `solve_damped6` (S9's step, `L D L^T`): the residual of `(H + lam I) delta = -g` at the
+/// `solve_damped6` (`refine`'s step, `L D L^T`): the residual of `(H + lam I) delta = -g` at the
 /// level of the rounding for positive definite `H + lam I` over condition numbers up to 1e12
-/// (S9's normal equations span about that), and `None` where it is not positive definite or
+/// (`refine`'s normal equations span about that), and `None` where it is not positive definite or
 /// has a NaN entry.
 #[test]
 fn damped_solve_solves_positive_definite_systems_and_refuses_the_others() {

@@ -1,12 +1,12 @@
-//! Unit tests of the pipeline's driver (`src/pipeline/mod.rs`): the S1/S2 intermediates
+//! Unit tests of the pipeline's driver (`src/pipeline/mod.rs`): the `frame`/`moments` intermediates
 //! against the reference prototype's, and the solver in the user's axes (no principal-axes
-//! rotation in S1), where the working-frame rotation sits at the CGR singularity.
+//! rotation in `frame`), where the working-frame rotation sits at the CGR singularity.
 
 use super::*;
 use nalgebra::{Matrix3, Rotation3, SMatrix, Unit, Vector3};
 
-/// `(M, G, Rw, ratio)` of S1-S2 in the working frame, or `None` on invalid input (for the tests
-/// against the reference prototype).
+/// `(M, G, Rw, ratio)` of `frame` and `moments` in the working frame, or `None` on invalid input
+/// (for the tests against the reference prototype).
 #[allow(clippy::type_complexity)]
 pub(crate) fn intermediates(
     world: &[Point3<f64>],
@@ -22,9 +22,10 @@ pub(crate) fn intermediates(
     Some((sys.m, sys.g, fr.rw, fr.ratio))
 }
 
-/// M, G, Rw and the planarity ratio of S1/S2 against the stored intermediates, after aligning
-/// the working frames (docs/algorithm.md section 8): D = Rw_port Rw_ref^T must be diagonal +-1 with
-/// det +1; compare M_port with Bd M_ref Bd^T and G_port with G_ref Bd^T, Bd = blockdiag(D, D, D).
+/// M, G, Rw and the planarity ratio of `frame`/`moments` against the stored intermediates, after
+/// aligning the working frames (docs/algorithm.md section 8): D = Rw_port Rw_ref^T must be diagonal
+/// +-1 with det +1; compare M_port with Bd M_ref Bd^T and G_port with G_ref Bd^T, Bd = blockdiag(D,
+/// D, D).
 #[test]
 fn intermediates_match_reference() {
     let mut failures = Vec::new();
@@ -58,7 +59,8 @@ fn intermediates_match_reference() {
         let g_ref = tv.g * bd.transpose();
         let em = (m - m_ref).amax() / m_ref.amax();
         let eg = (g - g_ref).amax() / g_ref.amax();
-        // Section 8: M, G within 1e-12 relative (S2 is checked against explicit K^T K to 9e-16).
+        // Section 8: M, G within 1e-12 relative (`moments` is checked against explicit K^T K to
+        // 9e-16).
         if !(em <= 1e-12 && eg <= 1e-12) {
             failures.push(format!("{}: M rel {em:e}, G rel {eg:e}", name));
         }
@@ -72,8 +74,8 @@ fn intermediates_match_reference() {
 
 /// Noise-free problems whose rotation is within 1e-3 degrees of 180 degrees (exactly 180 in
 /// one trial in twenty): with `align_world_axes = false` the working-frame rotation is the
-/// world one, so S6 starts and ends at the singularity of the global CGR chart. The moving
-/// chart of S6 and S9 must not care: rotation error < 1e-6 degrees, translation < 1e-8
+/// world one, so `newton` starts and ends at the singularity of the global CGR chart. The moving
+/// chart of `newton` and `refine` must not care: rotation error < 1e-6 degrees, translation < 1e-8
 /// relative, in every one of 10,000 trials for each N = 4, 5, 6, 10, 100, 1000 (release builds;
 /// 200 in debug builds).
 #[test]

@@ -56,7 +56,7 @@ impl TriangularFactor {
     }
 }
 
-/// The previous S1 implementation (three passes, the streamed Givens QR of the centred rows
+/// The previous `frame` implementation (three passes, the streamed Givens QR of the centred rows
 /// and [`svd3`] of its triangular factor), kept as the reference of the tests; its `sums` are
 /// those of [`crate::pipeline::moments::accumulate`] in its frame.
 ///
@@ -208,7 +208,7 @@ pub(crate) fn working_frame_qr(
         weight_sum: wsum,
         sums: crate::pipeline::moments::Accumulator::default(),
     };
-    // The sums in the weight unit, as S1's.
+    // The sums in the weight unit, as `frame`'s.
     let mut w_unit: Vec<f64> = Vec::new();
     let weights = weights.map(|w| {
         w_unit = w.iter().map(|x| x / sw).collect();
@@ -616,7 +616,7 @@ fn sym_eigen3_relative_accuracy() {
 #[test]
 fn scatter_path_matches_streamed_qr_and_forced_pass3() {
     // The fast path (frame from the scatter), the forced third pass and the previous
-    // streamed-QR implementation (with the direct S2 pass in its frame) on the same data.
+    // streamed-QR implementation (with the direct `moments` pass in its frame) on the same data.
     let mut rng = Pcg64::seed_from_u64(19);
     let mut fast = 0;
     for trial in 0..240 {
@@ -755,9 +755,9 @@ fn thin_clouds_resolved_like_the_svd() {
 
 #[test]
 fn sums_match_direct_accumulation() {
-    // The sums carried to the working frame equal the direct per-point S2 pass in that
-    // frame (the previous implementation of S2), weights in the frame's unit: 1e-13 relative to max |M| (rounding of
-    // O(N) sums, N <= 200).
+    // The sums carried to the working frame equal the direct per-point `moments` pass in that frame
+    // (the previous implementation of `moments`), weights in the frame's unit: 1e-13 relative to
+    // max |M| (rounding of O(N) sums, N <= 200).
     let mut rng = Pcg64::seed_from_u64(21);
     for trial in 0..60 {
         let n = [4usize, 7, 50, 200][trial % 4];

@@ -118,7 +118,7 @@ fn matches_explicit_k_t_k() {
             };
             let (m, g) = explicit(&pf, &pr.image, &w);
             // Cancellation in V^T V - (W^T V)^T G; measured ~1e-15 relative to max |M|
-            // (docs/algorithm.md S2 quotes 9e-16); 1e-13 leaves room for N up to 33.
+            // (docs/algorithm.md, `moments` quotes 9e-16); 1e-13 leaves room for N up to 33.
             assert!(
                 rel_diff(&sys.m, &m) < 1e-13,
                 "{trial} {flatten}: {:e}",
@@ -236,7 +236,7 @@ fn centred_pass_matches_sequential() {
         let map = CentredMap {
             inv_unit: [0.125, 1.0, 0.25][trial % 3],
             centre: Vector3::new(0.5, -0.25, 0.125),
-            // Without weights also a unit other than 1 (not from S1): exact scaling.
+            // Without weights also a unit other than 1 (not from `frame`): exact scaling.
             inv_weight: if wopt.is_some() {
                 0.5
             } else {
@@ -381,7 +381,7 @@ fn sign_check_at_noise_free_truth() {
         let (rw, tw) = frame.to_work_pose(&pr.r, &pr.t);
         let r = row_major(&rw);
         let t = sys.g * r;
-        // t = G r exactly at the truth: rounding of O(1) quantities, ~1e-16 (S2).
+        // t = G r exactly at the truth: rounding of O(1) quantities, ~1e-16 (`moments`).
         assert!((t - tw).amax() < 1e-14 * tw.norm(), "{:e}", (t - tw).amax());
         // f(R_true) = 0 to rounding relative to trace(M).
         let f = (r.transpose() * sys.m * r)[0];
@@ -490,10 +490,10 @@ fn m_upper_order() {
     assert_eq!(u[44], 88.0);
 }
 
-/// The reference of the tests: the S2 sums over the points with weight > 0, transforming each world point to
-/// the working frame on the fly ([`WorkingFrame::to_working`]). Weights must already be
-/// validated ([`crate::pipeline::frame::working_frame`]); a point with weight 0 is skipped, so it gives
-/// bit-identical sums to removing it.
+/// The reference of the tests: the `moments` sums over the points with weight > 0, transforming
+/// each world point to the working frame on the fly ([`WorkingFrame::to_working`]). Weights must
+/// already be validated ([`crate::pipeline::frame::working_frame`]); a point with weight 0 is
+/// skipped, so it gives bit-identical sums to removing it.
 pub(crate) fn accumulate(
     world: &[Point3<f64>],
     image: &[Point2<f64>],

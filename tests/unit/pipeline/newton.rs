@@ -161,7 +161,7 @@ fn noise_free_reaches_machine_precision() {
         max_it = max_it.max(out.iterations);
         assert!(!out.hit_limit);
     }
-    // docs/algorithm.md S6: the prototype reaches max 9.8e-14 deg (N = 6) and 7.3e-14 deg
+    // docs/algorithm.md, `newton`: the prototype reaches max 9.8e-14 deg (N = 6) and 7.3e-14 deg
     // (N = 10) over 300 trials; without the acceptance floor it would be ~2e-7 deg.
     // Allow 1e-12 deg (10x the measured prototype maximum).
     assert!(worst < 1e-12, "worst {worst:e} deg");
@@ -230,7 +230,7 @@ fn near_180_in_the_solver_frame() {
         ] {
             let out = refine_so3(&m45, trace, &r0, &NewtonOptions::default());
             let err = rotation_error_deg(&out.r, &r_true);
-            // Noise-free: machine precision as in the generic test (S6 max 1.6e-12 deg
+            // Noise-free: machine precision as in the generic test (`newton` max 1.6e-12 deg
             // near 180 in the prototype's re-run of test_near180.py).
             assert!(err < 1e-11, "{trial}: {err:e}");
             assert!(!out.hit_limit);
@@ -325,7 +325,7 @@ fn local_model_matches_the_generated_kernel() {
     eprintln!("local model vs kernel: worst {worst:e} of max |M|");
 }
 
-/// S6's 3 x 3 `L D L^T` (`mat3::ldl3`): the solve's residual at the level of the rounding
+/// `newton`'s 3 x 3 `L D L^T` (`mat3::ldl3`): the solve's residual at the level of the rounding
 /// over condition numbers up to 1e12, and `None` exactly where Cholesky's test fails (a
 /// pivot not positive, a NaN or infinite entry).
 #[test]

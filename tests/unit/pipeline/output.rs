@@ -69,7 +69,7 @@ fn depth_case(rng: &mut Pcg64, trial: usize) -> Option<DepthCase> {
 /// if the pass counts a point of weight 0, a lane of the partial block twice, or uses
 /// another depth.)
 #[test]
-fn reprojection_error_counts_the_points_in_front_as_s7() {
+fn reprojection_error_counts_the_points_in_front_as_select() {
     let mut rng = Pcg64::seed_from_u64(0x07_5eed);
     let (mut mixed, mut checked) = (0, 0);
     for trial in 0..400 {
@@ -113,17 +113,17 @@ fn reprojection_error_counts_the_points_in_front_as_s7() {
     );
 }
 
-/// S10's first pass counts the points in front of its start as S7 does (`count_in_front`, to
-/// the unit), with and without weights (zeros among them), through a lens with distortion, at
-/// poses that put about half of the points behind the camera: `finish_with` takes S7's depth
-/// test from it. (It fails if the pass counts a point of weight 0, a lane of the partial block
-/// twice, or uses another depth.)
+/// `refine_pixels`' first pass counts the points in front of its start as `select` does
+/// (`count_in_front`, to the unit), with and without weights (zeros among them), through a lens
+/// with distortion, at poses that put about half of the points behind the camera: `finish_with`
+/// takes `select`'s depth test from it. (It fails if the pass counts a point of weight 0, a lane of
+/// the partial block twice, or uses another depth.)
 #[test]
-fn s10_counts_the_points_in_front_as_s7() {
+fn refine_pixels_counts_the_points_in_front_as_select() {
     use crate::camera::Camera;
     use crate::pipeline::options::Loss;
-    use crate::pipeline::pixel::{refine_pixels, PixelInputs};
-    use crate::pipeline::reprojection::ReprojOptions;
+    use crate::pipeline::refine::ReprojOptions;
+    use crate::pipeline::refine_pixels::{refine_pixels, PixelInputs};
     let cam = Camera::from_colmap("SIMPLE_RADIAL", 640, 480, vec![500.0, 320.0, 240.0, -0.1])
         .expect("a valid camera");
     let mut rng = Pcg64::seed_from_u64(0x510_f407);

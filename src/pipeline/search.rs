@@ -1,15 +1,14 @@
-//! S4''' of docs/algorithm.md: the small-N starts of the default mode. At N = 4 and 5 the null
-//! space of `M` is (nearly) 4- or 2-dimensional and the algebraic search says little about
-//! where the minimum of the reprojection error lies; the poses that fit three of the points
-//! exactly (P3P, [`crate::numeric::p3p`]) usually do: with the noise of the other points
-//! small, one of the up to four poses of a triple lies in the basin of the maximum-likelihood
-//! pose.
+//! The `search` stage of docs/algorithm.md: the small-N starts of the default mode. At N = 4 and 5
+//! the null space of `M` is (nearly) 4- or 2-dimensional and the algebraic search says little about
+//! where the minimum of the reprojection error lies; the poses that fit three of the points exactly
+//! (P3P, [`crate::numeric::p3p`]) usually do: with the noise of the other points small, one of the
+//! up to four poses of a triple lies in the basin of the maximum-likelihood pose.
 //!
-//! [`starts`] solves P3P on triples of the active points (all 4 at N = 4, 3 of the 10 at
-//! N = 5), scores every pose by the number of points in front of it and its reprojection error
-//! over all points ([`SmallProblem::score`], in S1's weight unit and S9's row weights), merges
-//! the poses that lie within [`SAME_START`] of each other (keeping the better one) and returns
-//! them best first. The driver runs S9 from the best [`refined`] of them and keeps the best
+//! [`starts`] solves P3P on triples of the active points (all 4 at N = 4, 3 of the 10 at N = 5),
+//! scores every pose by the number of points in front of it and its reprojection error over all
+//! points ([`SmallProblem::score`], in `frame`'s weight unit and `refine`'s row weights), merges
+//! the poses that lie within [`SAME_START`] of each other (keeping the better one) and returns them
+//! best first. The driver runs `refine` from the best [`refined`] of them and keeps the best
 //! refined pose.
 
 use arrayvec::ArrayVec;
@@ -28,7 +27,7 @@ const TRIPLES_4: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
 /// 206,000 seeded problems per scene type the search missed the global minimum in 0 general
 /// (the best 3 starts refined) and 1 planar problem (the best 5), where with the 5 cyclically
 /// consecutive triples (the best 2 refined, 5 in planar scenes) it missed 4 and 4, for 8 %
-/// (general) and 5 % (planar) fewer instructions per solve (docs/algorithm.md S4''', larger
+/// (general) and 5 % (planar) fewer instructions per solve (docs/algorithm.md, `search`, larger
 /// sets).
 const TRIPLES_5: [[usize; 3]; 3] = [[0, 1, 2], [1, 2, 3], [2, 3, 4]];
 /// The most triples used (N = 4).
@@ -48,13 +47,13 @@ pub(crate) struct Start {
     pub t: Vector3<f64>,
     /// Active points with a positive depth.
     pub in_front: usize,
-    /// Weighted sum of squared reprojection residuals (S1's weight unit, S9's row weights);
-    /// `+inf` if a depth is zero or the sum is not finite.
+    /// Weighted sum of squared reprojection residuals (`frame`'s weight unit, `refine`'s row
+    /// weights); `+inf` if a depth is zero or the sum is not finite.
     pub cost: f64,
     /// Where the start came from: [`CandidateSource::P3p`], or the algebraic start the driver
     /// adds ([`add`]).
     pub source: CandidateSource,
-    /// S6 iterations that produced it (0 for a P3P pose).
+    /// `newton` iterations that produced it (0 for a P3P pose).
     pub iterations: u32,
 }
 
@@ -69,31 +68,31 @@ impl Start {
 
 /// Radius (Frobenius norm of the rotation difference, and translation difference relative to
 /// `|t| + 1`; 0.1 is about 4 degrees) of the neighbourhood of a refined pose taken to lie in
-/// its basin: a start or an S9 iterate that comes this close is taken to converge to it
+/// its basin: a start or a `refine` iterate that comes this close is taken to converge to it
 /// (distinct minima of the reprojection error are many degrees apart; with this radius no
 /// minimum was missed in the measurements of [`refined`]).
 const IN_REFINED_BASIN: f64 = 0.1;
 
-/// A start whose cost exceeds this multiple of the best refined pose's cost (with no more
-/// points in front) is not refined. Measured (`examples/small_n.rs`, N = 4, sigma = 2 px,
-/// 18,000 general and 18,000 planar problems): the largest ratio of a start that led to a
-/// lower minimum was about 1,400 (with a cut at 1,000, 1 general problem in 6,000 missed its
-/// minimum; with 10,000 none of the 18,000 per scene type, with 3,000 none of 12,000 of them),
-/// and the cut at 10,000 saves a third of the
-/// instructions of general N = 4 solves: most of S9's work went into long runs from poor starts
-/// that end in a known basin. In planar scenes the cut is [`MAX_COST_RATIO_PLANAR`].
+/// A start whose cost exceeds this multiple of the best refined pose's cost (with no more points in
+/// front) is not refined. Measured (`examples/small_n.rs`, N = 4, sigma = 2 px, 18,000 general and
+/// 18,000 planar problems): the largest ratio of a start that led to a lower minimum was about
+/// 1,400 (with a cut at 1,000, 1 general problem in 6,000 missed its minimum; with 10,000 none of
+/// the 18,000 per scene type, with 3,000 none of 12,000 of them), and the cut at 10,000 saves a
+/// third of the instructions of general N = 4 solves: most of `refine`'s work went into long runs
+/// from poor starts that end in a known basin. In planar scenes the cut is
+/// [`MAX_COST_RATIO_PLANAR`].
 const MAX_COST_RATIO: f64 = 1e4;
 
 /// [`MAX_COST_RATIO`] in planar scenes. Measured again (all starts refined, 12,000 problems
 /// per N and scene type in two seed sets): the largest ratio of a start that led to a lower
 /// minimum was 1,429 in general scenes, but 20,238 in one planar N = 4 problem of 12,000 (the
-/// largest in the other seed set: 319), whose global minimum only that start reaches (32 S9
+/// largest in the other seed set: 319), whose global minimum only that start reaches (32 `refine`
 /// iterations): with 10,000 it was missed (cost 2.06x LM's from the ground truth). With
 /// 100,000 it is found, for 7 % more instructions in planar N = 4 solves (in general ones the
 /// same cut costs 40 %).
 const MAX_COST_RATIO_PLANAR: f64 = 1e5;
 
-/// A later run of S9 is abandoned before a step when its cost `e` exceeds
+/// A later run of `refine` is abandoned before a step when its cost `e` exceeds
 /// [`UNREACHABLE_COST_RATIO`] times the best refined cost by more than [`UNREACHABLE_PRED_RATIO`]
 /// times the decrease the damped Gauss-Newton model predicts for the step. Near a minimum LM
 /// converges with a ratio well below 1, so the run's remaining decrease is a small multiple of
@@ -103,22 +102,22 @@ const MAX_COST_RATIO_PLANAR: f64 = 1e5;
 /// runs that ended below the best refined cost, the largest multiple of a prediction that
 /// would have stopped one was 127 (the next ones 29 and 17, all others below 8), with the cost
 /// ratio 2; with 1,000 none is stopped, and replayed on the traces the rule removes about
-/// 31 % of S9's iterations at general N = 4 (6.3 of 20.1 per solve), 30 % in planar N = 4,
-/// 12 % in general and 40 % in planar N = 5: most of S9's work went into long runs that end
+/// 31 % of `refine`'s iterations at general N = 4 (6.3 of 20.1 per solve), 30 % in planar N = 4,
+/// 12 % in general and 40 % in planar N = 5: most of `refine`'s work went into long runs that end
 /// in another, higher minimum.
 const UNREACHABLE_PRED_RATIO: f64 = 1e3;
 /// See [`UNREACHABLE_PRED_RATIO`]: two refinements of one flat minimum can end a few 1e-5
 /// apart in cost, so a run is never stopped below twice the best cost.
 const UNREACHABLE_COST_RATIO: f64 = 2.0;
 
-/// Whether a later run of S9 at cost `e`, whose next step is predicted to lower it by `pred`,
+/// Whether a later run of `refine` at cost `e`, whose next step is predicted to lower it by `pred`,
 /// cannot end below `best` (see [`UNREACHABLE_PRED_RATIO`]).
 pub(crate) fn cannot_reach(e: f64, pred: f64, best: f64) -> bool {
     e - UNREACHABLE_PRED_RATIO * pred > UNREACHABLE_COST_RATIO * best
 }
 
 impl Start {
-    /// Whether this start is worth an S9 run once `best` (a refined pose) is known: more
+    /// Whether this start is worth a `refine` run once `best` (a refined pose) is known: more
     /// points in front than `best`, or a cost at most [`MAX_COST_RATIO`] (in `planar` scenes
     /// [`MAX_COST_RATIO_PLANAR`]) times its cost.
     pub(crate) fn worth_refining(&self, best: &Start, planar: bool) -> bool {
@@ -137,11 +136,11 @@ impl Start {
     }
 }
 
-/// How many of the best starts S9 refines (measured with `examples/small_n.rs`, sigma = 2 px:
+/// How many of the best starts `refine` refines (measured with `examples/small_n.rs`, sigma = 2 px:
 /// the fewest that never missed the minimum in 6,000 seeded problems per scene type, with
 /// margin): every distinct start at N = 4 (with 4 starts, 2 of 6,000 general problems missed
 /// it; with 6, 2 of 6,000 planar ones); at N = 5, measured on larger sets with the starts of
-/// [`TRIPLES_5`] (docs/algorithm.md S4''', larger sets), 3 in non-planar scenes (with 2, 3 of
+/// [`TRIPLES_5`] (docs/algorithm.md, `search`, larger sets), 3 in non-planar scenes (with 2, 3 of
 /// 150,000 problems missed it) and 5 in planar ones (with 4, 4 of 150,000).
 pub(crate) fn refined(sp: &SmallProblem, planar: bool) -> usize {
     match (sp.p.len(), planar) {
@@ -155,7 +154,7 @@ pub(crate) fn refined(sp: &SmallProblem, planar: bool) -> usize {
 pub(crate) type Starts = ArrayVec<Start, MAX_STARTS>;
 
 /// The active points (weight > 0) in the working frame with their image points and weights in
-/// S1's unit.
+/// `frame`'s unit.
 pub(crate) struct SmallProblem {
     p: ArrayVec<Vector3<f64>, MAX_SMALL_N>,
     m: ArrayVec<Point2<f64>, MAX_SMALL_N>,
@@ -214,9 +213,9 @@ impl SmallProblem {
     }
 }
 
-/// S4''': the P3P poses of the triples of the active points ([`TRIPLES_4`], [`TRIPLES_5`]), scored, merged within
-/// [`SAME_START`] and sorted best first ([`Start::better`]) into `out`. Degenerate triples
-/// (collinear or coincident points, parallel rays) give no pose.
+/// `search`: the P3P poses of the triples of the active points ([`TRIPLES_4`], [`TRIPLES_5`]),
+/// scored, merged within [`SAME_START`] and sorted best first ([`Start::better`]) into `out`.
+/// Degenerate triples (collinear or coincident points, parallel rays) give no pose.
 pub(crate) fn starts(sp: &SmallProblem, out: &mut Starts) {
     let triples: &[[usize; 3]] = if sp.p.len() == 4 {
         &TRIPLES_4

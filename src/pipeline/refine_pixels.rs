@@ -1,41 +1,41 @@
-//! S10: Levenberg-Marquardt on the pixel residuals through the camera model.
+//! The `refine_pixels` stage: Levenberg-Marquardt on the pixel residuals through the camera model.
 //!
-//! With a camera (pixel input), S1-S7 solve on the undistorted points, with the caller's
-//! weights only: they give S10's start (the lens distortion's local scale, a first-order
-//! stand-in for the pixel error, weights them only in the algebraic mode, where their pose is
-//! the result). S10 minimises the pixel error itself,
-//! `E(R, t) = sum_i w_i rho(|u_i - K(pi(R P_i + t))|^2)`, with `u_i` the observed pixel, `K`
-//! the camera's projection (distortion included, [`Projector`]), `pi(x, y, z) = (x/z, y/z)`,
-//! `w_i` the caller's weight and `rho` the [`Loss`]: for the
-//! squared loss the maximum-likelihood pose under isotropic Gaussian pixel noise, for any
-//! camera model. With a robust loss the weights are iteratively reweighted (`rho'(r2)` per
-//! point), and a step is accepted only if `E` itself decreases.
+//! With a camera (pixel input), the stages `frame` to `select` solve on the undistorted points,
+//! with the caller's weights only: they give `refine_pixels`' start (the lens distortion's local
+//! scale, a first-order stand-in for the pixel error, weights them only in the algebraic mode,
+//! where their pose is the result). `refine_pixels` minimises the pixel error itself,
+//! `E(R, t) = sum_i w_i rho(|u_i - K(pi(R P_i + t))|^2)`, with `u_i` the observed pixel, `K` the
+//! camera's projection (distortion included, [`Projector`]), `pi(x, y, z) = (x/z, y/z)`, `w_i` the
+//! caller's weight and `rho` the [`Loss`]: for the squared loss the maximum-likelihood pose under
+//! isotropic Gaussian pixel noise, for any camera model. With a robust loss the weights are
+//! iteratively reweighted (`rho'(r2)` per point), and a step is accepted only if `E` itself
+//! decreases.
 //!
-//! It runs S9's Levenberg-Marquardt iteration ([`super::reprojection::levenberg_marquardt`]:
-//! damping, depth-sign guard, reuse of `J^T W J`, final step) and S9's vectorised pass
-//! ([`super::reprojection::pass`]) with the camera's metric ([`CameraMetric`]): at the
-//! normalised projection of a point, `C = w rho' J^T J` and `e~ = w rho' J^T e` (`J` the
-//! camera's Jacobian, `e` the pixel residual) take the place of S9's row weights and
-//! normalised residual. The lens model is fixed at compile time ([`Projector::with_projection`]).
-//! S10 starts from S7's minimum, in place of S9 (which runs only if S10 cannot: a point at
-//! depth 0, a non-finite result). Starting it from S9's minimum instead saves
-//! about one S10 pass but costs S9's two or three passes (on the bundled COLMAP model: 17 %
-//! more instructions per image, callgrind).
+//! It runs `refine`'s Levenberg-Marquardt iteration ([`super::refine::levenberg_marquardt`]:
+//! damping, depth-sign guard, reuse of `J^T W J`, final step) and `refine`'s vectorised pass
+//! ([`super::refine::pass`]) with the camera's metric ([`CameraMetric`]): at the normalised
+//! projection of a point, `C = w rho' J^T J` and `e~ = w rho' J^T e` (`J` the camera's Jacobian,
+//! `e` the pixel residual) take the place of `refine`'s row weights and normalised residual. The
+//! lens model is fixed at compile time ([`Projector::with_projection`]). `refine_pixels` starts
+//! from `select`'s minimum, in place of `refine` (which runs only if `refine_pixels` cannot: a
+//! point at depth 0, a non-finite result). Starting it from `refine`'s minimum instead saves about
+//! one `refine_pixels` pass but costs `refine`'s two or three passes (on the bundled COLMAP model:
+//! 17 % more instructions per image, callgrind).
 //!
-//! S10 does not run for a pinhole camera with the squared loss: S9 with the row weights
-//! `(fx^2, fy^2)` already minimises exactly that cost. With normalised input and a robust loss,
-//! S10 runs with the identity camera (residuals in normalised units).
+//! `refine_pixels` does not run for a pinhole camera with the squared loss: `refine` with the row
+//! weights `(fx^2, fy^2)` already minimises exactly that cost. With normalised input and a robust
+//! loss, `refine_pixels` runs with the identity camera (residuals in normalised units).
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::frame::{WorkingFrame, MIN_UNIT};
 use super::options::Loss;
-use super::reprojection::pass::{LaneMetric, Metric};
-use super::reprojection::{levenberg_marquardt, Composed, Problem, ReprojOptions, ReprojOutcome};
+use super::refine::pass::{LaneMetric, Metric};
+use super::refine::{levenberg_marquardt, Composed, Problem, ReprojOptions, ReprojOutcome};
 use crate::camera::{Project, ProjectionJob, Projector};
 use crate::numeric::mat3::pow2_scale;
 
-/// What S10 needs beyond the solve's inputs: the observations in the camera's units.
+/// What `refine_pixels` needs beyond the solve's inputs: the observations in the camera's units.
 #[derive(Clone, Copy)]
 pub(crate) struct PixelInputs<'a> {
     /// The observed pixels, parallel to the solve's world points.
@@ -46,14 +46,14 @@ pub(crate) struct PixelInputs<'a> {
     pub projector: Projector,
     /// The loss of the refinement.
     pub loss: Loss,
-    /// Whether S10 runs; `false` when S9 already minimises this cost (a pinhole camera, the
-    /// squared loss): the reported cost is then S9's, converted to pixels.
+    /// Whether `refine_pixels` runs; `false` when `refine` already minimises this cost (a pinhole
+    /// camera, the squared loss): the reported cost is then `refine`'s, converted to pixels.
     pub refine: bool,
-    /// Pixels per normalised unit of S9's residuals (`max(fx, fy)`; 1 for normalised input).
+    /// Pixels per normalised unit of `refine`'s residuals (`max(fx, fy)`; 1 for normalised input).
     pub scale: f64,
 }
 
-/// S10's result: the refinement and the sums the solution reports.
+/// `refine_pixels`' result: the refinement and the sums the solution reports.
 pub(crate) struct PixelOutcome {
     pub out: ReprojOutcome,
     /// The weight unit: `out.e * unit` is the caller's cost.
@@ -69,8 +69,8 @@ pub(crate) struct PixelOutcome {
     pub weight_sum: f64,
 }
 
-/// S10's metric ([`Metric`]): the pixel residual through the projection `P`, with the loss
-/// when `ROBUST` (the squared loss otherwise, `rho' = 1` compiled in).
+/// `refine_pixels`' metric ([`Metric`]): the pixel residual through the projection `P`, with the
+/// loss when `ROBUST` (the squared loss otherwise, `rho' = 1` compiled in).
 struct CameraMetric<P, const ROBUST: bool> {
     projection: P,
     loss: Loss,
@@ -104,8 +104,8 @@ impl<P: Project, const ROBUST: bool> Metric for CameraMetric<P, ROBUST> {
     }
 }
 
-/// S10 with the camera's model fixed at compile time: the refinement, and the plain squared
-/// error at its pose.
+/// `refine_pixels` with the camera's model fixed at compile time: the refinement, and the plain
+/// squared error at its pose.
 struct Job<'a> {
     world: &'a [Point3<f64>],
     px: &'a PixelInputs<'a>,
@@ -202,8 +202,9 @@ impl<'a> Job<'a> {
     }
 }
 
-/// S10 from the working-frame pose `(r_work, t_work)` (S9's result). `world` are the solve's
-/// world points, `px` their observations; `fr` is S1's working frame. No allocation.
+/// `refine_pixels` from the working-frame pose `(r_work, t_work)` (`refine`'s result). `world` are
+/// the solve's world points, `px` their observations; `fr` is `frame`'s working frame. No
+/// allocation.
 pub(crate) fn refine_pixels(
     world: &[Point3<f64>],
     px: &PixelInputs<'_>,

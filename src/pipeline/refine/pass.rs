@@ -1,12 +1,12 @@
-//! The O(N) pass of S9 and S10, vectorised across points: cost, gradient and (optionally)
-//! `J^T W J` at one pose, with the depth-sign test against a reference pose.
+//! The O(N) pass of `refine` and `refine_pixels`, vectorised across points: cost, gradient and
+//! (optionally) `J^T W J` at one pose, with the depth-sign test against a reference pose.
 //!
-//! Per point the residual enters through a [`Metric`]: at the normalised projection
-//! `(u, v)` of the point it gives the point's cost, a symmetric 2 x 2 matrix `C` and a vector
-//! `e~` such that, to first order in a change `d` of `(u, v)`, the cost changes by
-//! `-2 e~ . d + d^T C d`. S9's metric is `C = w diag(wx, wy)`, `e~ = C (m - (u, v))`; S10's is
-//! `C = w rho' J^T J`, `e~ = w rho' J^T (pixel - K(u, v))`, `J` the camera's Jacobian. The
-//! normal equations follow from `C` and `e~` alone (see [`lane`]).
+//! Per point the residual enters through a [`Metric`]: at the normalised projection `(u, v)` of the
+//! point it gives the point's cost, a symmetric 2 x 2 matrix `C` and a vector `e~` such that, to
+//! first order in a change `d` of `(u, v)`, the cost changes by `-2 e~ . d + d^T C d`. `refine`'s
+//! metric is `C = w diag(wx, wy)`, `e~ = C (m - (u, v))`; `refine_pixels`' is `C = w rho' J^T J`,
+//! `e~ = w rho' J^T (pixel - K(u, v))`, `J` the camera's Jacobian. The normal equations follow from
+//! `C` and `e~` alone (see [`lane`]).
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
@@ -45,7 +45,7 @@ pub(in crate::pipeline) trait Metric {
     fn at(&self, m: [f64; 2], w: f64, u: f64, v: f64) -> LaneMetric;
 }
 
-/// S9's metric: row weights `(wx, wy)` on the normalised residual.
+/// `refine`'s metric: row weights `(wx, wy)` on the normalised residual.
 pub(super) struct RowWeights {
     pub wx: f64,
     pub wy: f64,
@@ -270,7 +270,7 @@ fn lane<const CHECK: bool, const HESS: bool, M: Metric>(
         let q2 = qx * qx + qy * qy + qz * qz;
         let mq = acc.max_q2[l];
         acc.max_q2[l] = if q2 > mq { q2 } else { mq };
-        // S7's depth test at this pose, `a . (X - c) + t_z > 0` (`select::in_front`: the
+        // `select`'s depth test at this pose, `a . (X - c) + t_z > 0` (`select::in_front`: the
         // same operations in the same order, so the same count).
         acc.front[l] += u64::from(pz > 0.0);
     }

@@ -1,13 +1,14 @@
-//! S9 of docs/algorithm.md: Levenberg-Marquardt refinement of the reprojection error.
+//! The `refine` stage of docs/algorithm.md: Levenberg-Marquardt refinement of the reprojection
+//! error.
 //!
 //! Minimises `E(R, t) = sum_i w_i (wx e_ix^2 + wy e_iy^2)`, `e_i = m_i - pi(R P_i + t)`,
 //! `pi(x, y, z) = (x / z, y / z)`, over the working-frame pose `(R, t)` with the update
 //! `R := Exp(w) R`, `t := t + tau`. Nielsen's damping rule; a step is accepted only if it lowers
 //! `E` and keeps the sign of every depth, so `E` never increases and no point crosses `z = 0`
 //! (a tiny final step is accepted on proof of both instead of evaluation, see below).
-//! Reference: the `refine` function of the numpy reference prototype (docs/algorithm.md, S9).
+//! Reference: the `refine` function of the numpy reference prototype (docs/algorithm.md, `refine`).
 //!
-//! The working-frame points `P_i = Rw (X_i - c) / d` (S1) are never materialised: every pass
+//! The working-frame points `P_i = Rw (X_i - c) / d` (`frame`) are never materialised: every pass
 //! composes the frame into the pose, `p_i = A (X_i - c) + t` with `A = R Rw / d`, and
 //! `q_i = R P_i = A (X_i - c)` is the lever arm of the rotation Jacobian. Each pass is O(N)
 //! and allocation-free; the 6 x 6 normal equations keep their 21 unique entries.
@@ -50,7 +51,7 @@
 //!   most `xtol (|t| + 1)`, as the distance to the minimum; this one leaves the predicted next
 //!   step, bounded alike.
 //!
-//! From an exact fit ([`ReprojOptions::exact_start`]: S6 was skipped because the start's
+//! From an exact fit ([`ReprojOptions::exact_start`]: `newton` was skipped because the start's
 //! algebraic cost is at the rounding level, docs/algorithm.md, the driver) the `xtol` stop
 //! applies its step instead of dropping it, when it cannot flip a depth sign (the third
 //! condition above). The residuals are at the rounding level, where Gauss-Newton converges
@@ -68,12 +69,12 @@ use super::frame::WorkingFrame;
 use crate::numeric::linalg::solve_damped6;
 use crate::numeric::rotation::exp_so3;
 
-/// Options of the reprojection refinement (S9). The defaults are docs/algorithm.md's values.
+/// Options of the reprojection refinement (`refine`). The defaults are docs/algorithm.md's values.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ReprojOptions {
     /// Hard cap on LM iterations (rejected steps and failed factorisations count). Default 200,
     /// the bound of the tests' reference LM: with 50, runs in the flat valleys of some N = 4
-    /// problems stopped above the minimum (docs/algorithm.md S4''').
+    /// problems stopped above the minimum (docs/algorithm.md, `search`).
     pub max_iterations: u32,
     /// Initial damping relative to the largest diagonal entry of `J^T J`. Default `1e-6`.
     pub tau: f64,
@@ -84,8 +85,8 @@ pub(crate) struct ReprojOptions {
     /// Weights of the x and y residual rows, e.g. `(fx^2, fy^2)` to minimise the pixel error
     /// for anisotropic intrinsics. Default `(1, 1)`.
     pub row_weights: (f64, f64),
-    /// The start is an exact fit (f at the rounding level, S6 skipped): the step of the `xtol`
-    /// stop, Gauss-Newton on residuals at the rounding level, is applied (module docs).
+    /// The start is an exact fit (f at the rounding level, `newton` skipped): the step of the
+    /// `xtol` stop, Gauss-Newton on residuals at the rounding level, is applied (module docs).
     /// Default `false`.
     pub exact_start: bool,
 }
@@ -207,9 +208,9 @@ pub(super) struct Normal {
     pub(super) in_front: Option<usize>,
 }
 
-/// The residuals one Levenberg-Marquardt run minimises ([`levenberg_marquardt`]): S9's
-/// normalised residuals ([`Problem`]) or S10's pixel residuals through the camera
-/// ([`super::pixel`]).
+/// The residuals one Levenberg-Marquardt run minimises ([`levenberg_marquardt`]): `refine`'s
+/// normalised residuals ([`Problem`]) or `refine_pixels`' pixel residuals through the camera
+/// ([`super::refine_pixels`]).
 pub(super) trait Residuals {
     /// One O(N) pass at `pose`: cost, `J^T W J` (into `h`), gradient and depth range (and,
     /// without `reference`, `max_abs_q`). With `reference`, `None` as soon as a depth differs
@@ -234,11 +235,11 @@ fn trace(h: &Hessian) -> f64 {
     (0..6).map(|k| h[k][k]).sum()
 }
 
-/// The inputs of one refinement, borrowed from the caller: S9's (normalised points, row
-/// weights) or S10's (pixels, the camera's metric, [`super::pixel`]).
+/// The inputs of one refinement, borrowed from the caller: `refine`'s (normalised points, row
+/// weights) or `refine_pixels`' (pixels, the camera's metric, [`super::refine_pixels`]).
 pub(super) struct Problem<'a, M> {
     pub(super) world: &'a [Point3<f64>],
-    /// The observations: normalised image points (S9) or pixels (S10).
+    /// The observations: normalised image points (`refine`) or pixels (`refine_pixels`).
     pub(super) image: &'a [Point2<f64>],
     pub(super) weights: Option<&'a [f64]>,
     /// `1 / w_unit` (a power-of-two weight unit): the passes use the weights in that unit,
@@ -292,16 +293,17 @@ impl<M: Metric> Residuals for Problem<'_, M> {
     }
 }
 
-/// S9: refines the working-frame pose `(r_work, t_work)` by Levenberg-Marquardt on the
+/// `refine`: refines the working-frame pose `(r_work, t_work)` by Levenberg-Marquardt on the
 /// (weighted) reprojection error of the caller's world points.
 ///
-/// `world`, `image` (normalised coordinates) and `weights` (optional, one per point, >= 0) are
-/// the caller's inputs as validated by S1; `fr` is S1's working frame
-/// (`P_i = rw (X_i - c) / d`). Costs (`e0`, `e`) are in S1's weight unit: the caller's cost is
-/// `e * fr.weight_unit` (exact: a power of two). The pose is the working-frame pose in and out (S8 maps it to the
-/// world frame). A point of weight 0 contributes nothing and gives bit-identical results to
-/// dropping it. If some starting depth is (relatively) zero the pose is returned unchanged with
-/// [`ReprojStop::SkippedZeroDepth`]. At most `opts.max_iterations` iterations; no allocation.
+/// `world`, `image` (normalised coordinates) and `weights` (optional, one per point, >= 0) are the
+/// caller's inputs as validated by `frame`; `fr` is `frame`'s working frame
+/// (`P_i = rw (X_i - c) / d`). Costs (`e0`, `e`) are in `frame`'s weight unit: the caller's cost is
+/// `e * fr.weight_unit` (exact: a power of two). The pose is the working-frame pose in and out
+/// (`output` maps it to the world frame). A point of weight 0 contributes nothing and gives
+/// bit-identical results to dropping it. If some starting depth is (relatively) zero the pose is
+/// returned unchanged with [`ReprojStop::SkippedZeroDepth`]. At most `opts.max_iterations`
+/// iterations; no allocation.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine_reprojection(
     world: &[Point3<f64>],
@@ -317,7 +319,7 @@ pub(crate) fn refine_reprojection(
     })
 }
 
-/// Where a run of S9 asks its caller whether to go on ([`refine_reprojection_until`]).
+/// Where a run of `refine` asks its caller whether to go on ([`refine_reprojection_until`]).
 pub(crate) enum Checkpoint<'a> {
     /// An accepted iterate `(r, t)` (working frame).
     Accepted(&'a Matrix3<f64>, &'a Vector3<f64>),
@@ -359,9 +361,9 @@ pub(crate) fn refine_reprojection_until(
     levenberg_marquardt_until(&prob, fr, r_work, t_work, opts, abandon)
 }
 
-/// The Levenberg-Marquardt iteration of S9 (and S10) on the residuals of `prob`, from the
-/// working-frame pose `(r_work, t_work)`: the damping rule, the depth-sign guard, the reuse of
-/// `J^T W J` and the unverified final step of the module docs.
+/// The Levenberg-Marquardt iteration of `refine` (and `refine_pixels`) on the residuals of `prob`,
+/// from the working-frame pose `(r_work, t_work)`: the damping rule, the depth-sign guard, the
+/// reuse of `J^T W J` and the unverified final step of the module docs.
 pub(super) fn levenberg_marquardt<P: Residuals>(
     prob: &P,
     fr: &WorkingFrame,
@@ -537,5 +539,5 @@ fn levenberg_marquardt_until<P: Residuals>(
 }
 
 #[cfg(test)]
-#[path = "../../tests/unit/pipeline/reprojection.rs"]
+#[path = "../../tests/unit/pipeline/refine.rs"]
 mod tests;

@@ -73,7 +73,7 @@ fn random_rotation(rng: &mut Pcg64) -> Matrix3<f64> {
 }
 
 /// A world-frame problem with an arbitrary world similarity (offset, scale) so that the
-/// working frame is far from the identity, plus its S1 frame (c, d, Rw).
+/// working frame is far from the identity, plus that frame (c, d, Rw; the `frame` stage's).
 struct Setup {
     world: Vec<Point3<f64>>,
     image: Vec<Point2<f64>>,
@@ -129,7 +129,7 @@ impl Setup {
         }
     }
 
-    /// World pose -> working-frame pose (inverse of S8).
+    /// World pose -> working-frame pose (inverse of `output`).
     fn to_work(&self, r: &Matrix3<f64>, t: &Vector3<f64>) -> (Matrix3<f64>, Vector3<f64>) {
         (r * self.rw.transpose(), (t + r * self.c) / self.d)
     }
@@ -141,7 +141,7 @@ impl Setup {
         (r, t)
     }
 
-    /// S9 from the working-frame pose `(rk, tk)` in this setup's frame.
+    /// `refine` from the working-frame pose `(rk, tk)` in this setup's frame.
     fn refine(
         &self,
         world: &[Point3<f64>],
@@ -155,20 +155,20 @@ impl Setup {
         refine_reprojection(world, image, weights, &fr, rk, tk, opts)
     }
 
-    /// S9 with the default options, unweighted, from `(rk, tk)`.
+    /// `refine` with the default options, unweighted, from `(rk, tk)`.
     fn refine_default(&self, rk: &Matrix3<f64>, tk: &Vector3<f64>) -> ReprojOutcome {
         let opts = ReprojOptions::default();
         self.refine(&self.world, &self.image, None, rk, tk, &opts)
     }
 
-    /// S8: working-frame pose -> world pose.
+    /// `output`: working-frame pose -> world pose.
     fn to_world(&self, r: &Matrix3<f64>, t: &Vector3<f64>) -> (Matrix3<f64>, Vector3<f64>) {
         let rr = r * self.rw;
         (rr, t * self.d - rr * self.c)
     }
 }
 
-/// S1's frame via the scatter matrix (adequate for these well-spread test scenes).
+/// The working frame (`frame`) via the scatter matrix (adequate for these well-spread test scenes).
 fn working_frame(world: &[Point3<f64>]) -> (Vector3<f64>, f64, Matrix3<f64>) {
     let n = world.len() as f64;
     let c = world.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n;
@@ -443,11 +443,13 @@ fn agrees_with_independent_lm() {
         );
         assert!(out.e <= out.e0);
     }
-    // E is flat to rounding at the minimum: two correct LMs agree to ~1e-7 deg
-    // (docs/algorithm.md S9); 1e-6 deg is the spec's comparison tolerance. Neither may end at
-    // a cost noticeably above the other's (1e-10 relative: E is quadratic near the minimum
-    // and both converge to ~1e-13 relative).
-    eprintln!("S9 vs independent LM: {worst_deg:e} deg, t rel {worst_t:e}, E rel {worst_e:e}");
+    // E is flat to rounding at the minimum: two correct LMs agree to ~1e-7 deg (docs/algorithm.md,
+    // `refine`); 1e-6 deg is the spec's comparison tolerance. Neither may end at a cost noticeably
+    // above the other's (1e-10 relative: E is quadratic near the minimum and both converge to
+    // ~1e-13 relative).
+    eprintln!(
+        "`refine` vs independent LM: {worst_deg:e} deg, t rel {worst_t:e}, E rel {worst_e:e}"
+    );
     assert!(worst_deg < 1e-6, "{worst_deg:e} deg");
     assert!(worst_t < 1e-7, "{worst_t:e}");
     assert!(worst_e < 1e-10, "{worst_e:e}");
@@ -558,7 +560,7 @@ fn weights_scale_points() {
     let opts = ReprojOptions::default();
     let a = s.refine(&s.world, &s.image, Some(&w), &rk, &tk, &opts);
     let b = s.refine(&world, &image, None, &rk, &tk, &opts);
-    // Same minimum of the same cost: 1e-6 deg as in the spec's S9 comparisons.
+    // Same minimum of the same cost: 1e-6 deg as in the spec's `refine` comparisons.
     assert!(rot_err_deg(&a.r, &b.r) < 1e-6);
     assert!((a.e - b.e).abs() <= 1e-10 * b.e);
 }
@@ -603,7 +605,7 @@ fn depth_signs_are_preserved() {
     }
 }
 
-/// A working frame with the fields S9 reads (weight unit 1: the weights as given).
+/// A working frame with the fields `refine` reads (weight unit 1: the weights as given).
 fn frame_of(c: &Vector3<f64>, d: f64, rw: &Matrix3<f64>) -> WorkingFrame {
     WorkingFrame {
         c: *c,
@@ -645,7 +647,7 @@ fn far_offset_millimetre_world() {
     let r1 = out.r * rw;
     let t1 = out.t * d - r1 * c;
     // Noise-free: the minimum is the truth; conditioning of the mm scene as for the
-    // unit scene (S1 normalises it), so near machine precision: 1e-9 deg.
+    // unit scene (`frame` normalises it), so near machine precision: 1e-9 deg.
     assert!(
         rot_err_deg(&r1, &s0.r_gt) < 1e-9,
         "{:e}",
