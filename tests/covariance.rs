@@ -83,7 +83,10 @@ fn run(camera: &Camera, sigma_px: f64, noise: NoiseModel) -> (f64, f64, f64, f64
                 .covariance(Some(NoiseModel::Sigma(2.0 * s)))
                 .solve_pixels(&p.world, &px, camera)
                 .unwrap();
-            assert_eq!(double.rotation, sol.rotation, "the noise level changes the pose");
+            assert_eq!(
+                double.rotation, sol.rotation,
+                "the noise level changes the pose"
+            );
             assert_eq!(
                 double.covariance.unwrap().matrix,
                 cov.matrix * 4.0,

@@ -189,7 +189,10 @@ fn report(t: &Tally) {
     row("panics", "0".into());
     row("Ok with a non-finite pose", "0".into());
     row(
-        &format!("typed errors, near-degenerate inputs (of {})", thousands(t.degenerate_inputs)),
+        &format!(
+            "typed errors, near-degenerate inputs (of {})",
+            thousands(t.degenerate_inputs)
+        ),
         thousands(t.errors - t.errors_nondegenerate),
     );
     row(

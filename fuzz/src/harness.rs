@@ -1018,7 +1018,11 @@ pub fn cli_input(data: &[u8]) {
                     .any(char::is_control),
                 "raw control character in the error of a {} input{}: {:?}",
                 ext.unwrap_or("extensionless"),
-                if camera.is_some() { " with --camera" } else { "" },
+                if camera.is_some() {
+                    " with --camera"
+                } else {
+                    ""
+                },
                 f.message
             );
         }
