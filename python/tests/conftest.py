@@ -83,9 +83,26 @@ def cli():
     return path
 
 
-def assert_releases_gil(call):
-    """Runs `call()` while another Python thread ticks every millisecond, and asserts that the
-    ticker ran throughout the call (it would not while the call held the GIL)."""
+def assert_releases_gil(make_call, seconds=0.2):
+    """Asserts that a call releases the GIL while it works, on a machine of any speed.
+
+    `make_call(k)` returns a call whose work grows with k (e.g. a batch of k copies of some
+    problems). k is doubled until one call takes at least `seconds` (timed alone); that call
+    then runs while a Python thread ticks (appends a timestamp, sleeps 1 ms) and the ticks
+    stamped during the call are counted. With the GIL released the ticker runs throughout:
+    about one tick per millisecond, 200 in 0.2 s (at least 10 are asserted: the ticker may get
+    a core only now and then on a loaded machine). With the GIL held it cannot run at all
+    during the call: at most the tick in progress when the call started, whatever its length.
+    """
+    k = 1
+    while True:
+        call = make_call(k)
+        start = time.perf_counter()
+        call()
+        if time.perf_counter() - start >= seconds:
+            break
+        assert k < 1 << 16, "the call does not grow with k"
+        k *= 2
     ticks = []
     stop = threading.Event()
 
@@ -97,11 +114,16 @@ def assert_releases_gil(call):
     th = threading.Thread(target=tick)
     th.start()
     try:
+        time.sleep(0.01)  # the ticker is running
         start = time.perf_counter()
         call()
         end = time.perf_counter()
     finally:
         stop.set()
         th.join()
-    during = [t for t in ticks if start < t < end]
-    assert len(during) >= 0.2 * (end - start) / 0.001 or end - start < 0.02
+    during = sum(start < t < end for t in ticks)
+    assert end - start >= seconds / 4, f"the call took {end - start:.3f} s: too short to tell"
+    assert during >= 10, (
+        f"{during} ticks of the Python thread during the {end - start:.3f} s call (k = {k}): "
+        "the GIL was held"
+    )
