@@ -1,5 +1,6 @@
 """Shared helpers of the eopnp Python tests: synthetic problems, rotation metrics, paths."""
 
+import importlib
 import math
 import os
 import pathlib
@@ -71,12 +72,29 @@ def rng():
     return np.random.default_rng(12345)
 
 
+def peers_required():
+    """Whether the comparisons with other packages and with the CLI must run: scripts/test.sh
+    (CI) sets EOPNP_REQUIRE_PEERS=1, under which a missing peer is an error, not a skip."""
+    return os.environ.get("EOPNP_REQUIRE_PEERS") == "1"
+
+
+def require(module):
+    """`import module` for a comparison test: skipped where it is not installed, an
+    ImportError (a test error) when peers_required()."""
+    if peers_required():
+        return importlib.import_module(module)
+    return pytest.importorskip(module)
+
+
 @pytest.fixture(scope="session")
 def cli():
     """The eopnp CLI built by `cargo test --workspace --release` (path in $EOPNP_CLI, as
-    scripts/test.sh sets it): skipped when unset, an error when set but missing."""
+    scripts/test.sh sets it): skipped when unset (an error under EOPNP_REQUIRE_PEERS=1), an
+    error when set but missing."""
     path = os.environ.get("EOPNP_CLI")
     if not path:
+        if peers_required():
+            raise RuntimeError("EOPNP_CLI not set and EOPNP_REQUIRE_PEERS=1")
         pytest.skip("EOPNP_CLI not set (scripts/test.sh sets it to the release CLI)")
     if not os.path.isfile(path):
         raise FileNotFoundError(f"EOPNP_CLI={path} does not exist")
