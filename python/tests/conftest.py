@@ -34,6 +34,14 @@ def rotation_error_deg(r, r_ref):
     return worst
 
 
+def log_so3(r):
+    """Rotation vector of a rotation matrix (small and moderate angles)."""
+    c = np.clip((np.trace(r) - 1) / 2, -1.0, 1.0)
+    th = np.arccos(c)
+    w = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+    return w / 2 if th < 1e-12 else w * th / (2 * np.sin(th))
+
+
 def random_rotation(rng):
     q = rng.normal(size=4)
     q /= np.linalg.norm(q)

@@ -9,17 +9,9 @@ import numpy as np
 import pytest
 
 import eopnp
-from conftest import problem, require
+from conftest import log_so3, problem, require
 
 CAM = eopnp.Camera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.1], 640, 480)
-
-
-def log_so3(r):
-    """Rotation vector of a rotation matrix (small and moderate angles)."""
-    c = np.clip((np.trace(r) - 1) / 2, -1.0, 1.0)
-    th = np.arccos(c)
-    w = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
-    return w / 2 if th < 1e-12 else w * th / (2 * np.sin(th))
 
 
 def delta(sol, r_true, t_true):
