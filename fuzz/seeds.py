@@ -229,6 +229,19 @@ def cli_seeds(rng):
     write("cli_input", "bad-quoted-newline", bytes([1 | 4]) + cam + "\n".join([head, first] + rest).encode())
     write("cli_input", "bad-control", bytes([1 | 4]) + cam + dialect("\t").replace(".", "\x01", 1).encode())
     write("cli_input", "bad-header-mixed", bytes([1 | 4]) + cam + b"x,y;X\tY,Z\n1,2;3\t4,5\n")
+    # Control characters echoed by the other input modes' errors (escaped, not raw): a JSON
+    # unknown key, camera model and string value with escaped control characters, a raw one
+    # in a JSON string, and a `--camera` argument with them in the model and a parameter.
+    write("cli_input", "bad-json-key-control",
+          bytes([0]) + js.replace('"points2d"', '"points\\u00012d"', 1).encode())
+    write("cli_input", "bad-json-model-control",
+          bytes([0]) + js.replace('"PINHOLE"', '"PIN\\u001bHOLE"', 1).encode())
+    write("cli_input", "bad-json-raw-control",
+          bytes([3]) + js.replace('"PINHOLE"', '"PIN\x07HOLE"', 1).encode())
+    write("cli_input", "bad-json-value-control",
+          bytes([2]) + js.replace("[800, 800", '["8\\u000700", 800', 1).encode())
+    write("cli_input", "bad-camera-model-control", bytes([1 | 4]) + b"PIN\x1bHOLE 800 800 320 240\n" + csv.encode())
+    write("cli_input", "bad-camera-param-control", bytes([0 | 4]) + b"PINHOLE 800 8\x0700 320 240\n" + js.encode())
 
 
 def main():

@@ -30,17 +30,15 @@ fn contaminated(n: usize, n_in: usize, seed: u64) -> Problem {
     p
 }
 
-fn outcome(p: &Problem, seed: u64) -> Result<(usize, f64), PnpError> {
+/// RANSAC's inlier mask and rotation on a problem.
+fn outcome(p: &Problem, seed: u64) -> Result<(Vec<bool>, nalgebra::Matrix3<f64>), PnpError> {
     Ransac::default()
         .seed(seed)
         .estimate(
             &Solver::default(),
             &eopnp::Problem::normalised(&p.world, &p.image).focal(800.0, 800.0),
         )
-        .map(|s| {
-            let err = eopnp::internals::metrics::rotation_error_deg(&s.solution.rotation, &p.r_gt);
-            (s.num_inliers, err)
-        })
+        .map(|s| (s.inliers, s.solution.rotation))
 }
 
 /// Pure noise and 99 % outliers (10 or 30 true points among 1,000 or 3,000; RANSAC's default
@@ -78,16 +76,38 @@ fn no_consensus_without_signal() {
     }
 }
 
-/// Clean and contaminated problems whose true points RANSAC can find keep the true pose.
+/// Clean and contaminated problems whose true points RANSAC can find keep the true pose: every
+/// true point is an inlier, and the pose is the maximum-likelihood pose of the true points (LM
+/// from the ground truth on them, the noise-limited answer): to 1e-6 degrees (two minimisers
+/// of the same cost, as tests/invariance.rs compares them; measured at most 2.7e-8) when the
+/// inliers are exactly the true points, and within 0.15 degrees when chance inliers (outliers
+/// that fall within the threshold) join the fit (measured: 0.006-0.108 degrees in the 7 such of
+/// the 60 cases, 0.108 with one chance inlier among 11 at N = 50; 0.15 is 1.4 times that). The
+/// error from the ground truth is the true points' ML error (here up to 0.80 degrees, six true
+/// points at 1 px) plus that difference.
 #[test]
 fn true_consensus_is_accepted() {
     for &(n, n_in) in &[(1000, 100), (200, 20), (50, 10), (20, 8), (10, 6), (6, 6)] {
         for seed in 0..10 {
+            let what = format!("N {n} ({n_in} true), seed {seed}");
             let p = contaminated(n, n_in, common::trial_seed("consensus_true", seed));
-            let (k, err) = outcome(&p, seed)
-                .unwrap_or_else(|e| panic!("N {n} ({n_in} true), seed {seed}: {e}"));
-            assert!(k >= n_in, "N {n} ({n_in} true), seed {seed}: {k} inliers");
-            assert!(err < 2.0, "N {n} ({n_in} true), seed {seed}: {err} deg");
+            let (inliers, r) = outcome(&p, seed).unwrap_or_else(|e| panic!("{what}: {e}"));
+            assert!(
+                inliers[..n_in].iter().all(|&b| b),
+                "{what}: a true point is not an inlier"
+            );
+            let chance = inliers[n_in..].iter().filter(|&&b| b).count();
+            let mut truth = p.clone();
+            truth.world.truncate(n_in);
+            truth.pixels.truncate(n_in);
+            let ml = truth.lm_from_gt();
+            let from_ml = eopnp::internals::metrics::rotation_error_deg(&r, &ml.r);
+            let bound = if chance == 0 { 1e-6 } else { 0.15 };
+            assert!(
+                from_ml <= bound,
+                "{what}: {from_ml:e} deg from the ML pose of the true points ({chance} chance \
+                 inliers)"
+            );
         }
     }
 }

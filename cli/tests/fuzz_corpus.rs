@@ -218,7 +218,9 @@ fn seeds_reach_the_parsers_and_registration() {
         assert_eq!(v["n"], 8, "{name}");
         assert!(v["translation"].is_array(), "{name}");
     }
-    // The malformed CSV seeds fail where they are meant to: line and reason.
+    // The malformed seeds fail where they are meant to: line and reason. (The control
+    // characters of the JSON and `--camera` ones exercise the harness's check that messages
+    // echo them escaped, in every input mode.)
     for (name, expected) in [
         ("bad-header-only", "bad-header-only:1: no correspondences"),
         (
@@ -232,6 +234,30 @@ fn seeds_reach_the_parsers_and_registration() {
         (
             "bad-header-mixed",
             "bad-header-mixed:1: expected the header",
+        ),
+        (
+            "bad-json-key-control",
+            "bad-json-key-control:2:18: unknown field `points",
+        ),
+        (
+            "bad-json-model-control",
+            "bad-json-model-control:1:70: camera: unsupported camera model \"PIN",
+        ),
+        (
+            "bad-json-raw-control",
+            "bad-json-raw-control:1:26: control character (\\u0000-\\u001F) found while parsing",
+        ),
+        (
+            "bad-json-value-control",
+            "bad-json-value-control:1:54: invalid type: string \"8\\u{7}00\", expected f64",
+        ),
+        (
+            "bad-camera-model-control",
+            "--camera: unsupported camera model \"PIN",
+        ),
+        (
+            "bad-camera-param-control",
+            "--camera: bad parameter \"8\\u{7}00\"",
         ),
     ] {
         match cli_input(name) {

@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release -p eopnp-compare -- [--trials 500] [--passes 5] [--seed S]
-//!     [--out DIR] [--kornia-timeout-ms 200] [--no-json]
+//!     [--out DIR] [--kornia-timeout-ms 200] [--no-json] [--runs K]
 //! ```
 //!
 //! Rows: general scene, N sweep (4, 5, 6, 8, 10, 15, 20, 50, 100, 1000) at sigma = 2 px; sigma
@@ -23,6 +23,13 @@
 //!
 //! Writes `DIR/results.md` (also printed), `DIR/plot.svg` and `DIR/problems.json` (every problem,
 //! read by `scripts/compare_opencv.py`); `DIR` defaults to `target/compare` in the workspace.
+//!
+//! `--runs K`: the whole measurement (every row and method, on the same problems) K times, one
+//! after the other in this process; the report and the plot are those of the last run, and the
+//! report ends with the speed summary over the K runs (the README's speed table): per row, the
+//! median over the runs of the time per solve of eopnp default, eopnp algebraic and sqpnp, the
+//! medians of the per-run ratios sqpnp / default and sqpnp / algebraic, and the range (min-max)
+//! of sqpnp / default. Without `--runs` the output is that of one run, without the summary.
 
 use eopnp_testkit as common;
 mod peers;
@@ -55,6 +62,8 @@ struct Args {
     out: PathBuf,
     kornia_timeout: Duration,
     json: bool,
+    /// `--runs K`: repeat the measurement K times and print the speed summary.
+    runs: Option<usize>,
     /// Child mode: run the guarded kornia-pnp pass of this row and print the outcomes.
     kornia_row: Option<usize>,
 }
@@ -67,6 +76,7 @@ fn parse_args() -> Result<Args, String> {
         out: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/compare"),
         kornia_timeout: Duration::from_millis(200),
         json: true,
+        runs: None,
         kornia_row: None,
     };
     let mut it = std::env::args().skip(1);
@@ -92,21 +102,22 @@ fn parse_args() -> Result<Args, String> {
                 )
             }
             "--no-json" => a.json = false,
+            "--runs" => a.runs = Some(value()?.parse().map_err(|e| format!("--runs: {e}"))?),
             "--kornia-row" => {
                 a.kornia_row = Some(value()?.parse().map_err(|e| format!("--kornia-row: {e}"))?)
             }
             "-h" | "--help" => {
                 println!(
                     "eopnp-compare [--trials N=500] [--passes P=5] [--seed S] [--out DIR] \
-                     [--kornia-timeout-ms MS=200] [--no-json]"
+                     [--kornia-timeout-ms MS=200] [--no-json] [--runs K]"
                 );
                 std::process::exit(0);
             }
             other => return Err(format!("unknown argument {other}")),
         }
     }
-    if a.trials == 0 || a.passes == 0 {
-        return Err("--trials and --passes must be positive".into());
+    if a.trials == 0 || a.passes == 0 || a.runs == Some(0) {
+        return Err("--trials, --passes and --runs must be positive".into());
     }
     Ok(a)
 }
@@ -549,27 +560,15 @@ fn main() {
         }
     }
 
-    // Kornia last: a hung kornia call leaves a busy detached thread behind, which must not
-    // disturb the timings of the other methods.
-    let mut results: Vec<Vec<Stats>> = vec![Vec::new(); all.len()];
-    let mut kornia_hangs = 0usize;
-    for phase_kornia in [false, true] {
-        for (i, (row, probs)) in all.iter().enumerate() {
-            for m in METHODS {
-                if (m == Method::Kornia) != phase_kornia {
-                    continue;
-                }
-                if let Some(s) = run_method(m, i, row, probs, &args, &mut kornia_hangs) {
-                    results[i].push(s);
-                }
-            }
-            eprint!(".");
+    let runs = args.runs.unwrap_or(1);
+    let mut every_run = Vec::with_capacity(runs);
+    for run in 0..runs {
+        if runs > 1 {
+            eprint!("run {} of {runs}: ", run + 1);
         }
+        every_run.push(measure(&all, &args));
     }
-    eprintln!();
-    for r in &mut results {
-        r.sort_by_key(|s| METHODS.iter().position(|&m| m == s.method));
-    }
+    let (results, kornia_hangs) = every_run.last().cloned().expect("at least one run");
 
     // Markdown.
     let mut md = String::new();
@@ -648,6 +647,9 @@ fn main() {
              on a detached watchdog thread in a child process that exited after the row).\n"
         );
     }
+    if args.runs.is_some() {
+        let _ = write!(md, "{}", speed_summary(&all, &every_run));
+    }
     let _ = writeln!(
         md,
         "Total wall time: {:.1} s.",
@@ -723,6 +725,99 @@ fn main() {
             String::new()
         }
     );
+}
+
+/// One run of the measurement: every method on every row (kornia-pnp last: a hung kornia call
+/// leaves a busy detached thread behind, which must not disturb the timings of the other
+/// methods). Per row, the methods' statistics in table order; and the number of hung kornia
+/// calls.
+fn measure(all: &[(Row, Vec<Problem>)], args: &Args) -> (Vec<Vec<Stats>>, usize) {
+    let mut results: Vec<Vec<Stats>> = vec![Vec::new(); all.len()];
+    let mut kornia_hangs = 0usize;
+    for phase_kornia in [false, true] {
+        for (i, (row, probs)) in all.iter().enumerate() {
+            for m in METHODS {
+                if (m == Method::Kornia) != phase_kornia {
+                    continue;
+                }
+                if let Some(s) = run_method(m, i, row, probs, args, &mut kornia_hangs) {
+                    results[i].push(s);
+                }
+            }
+            eprint!(".");
+        }
+    }
+    eprintln!();
+    for r in &mut results {
+        r.sort_by_key(|s| METHODS.iter().position(|&m| m == s.method));
+    }
+    (results, kornia_hangs)
+}
+
+/// The speed summary over the runs (`--runs`): per row, the median over the runs of eopnp
+/// default's, eopnp algebraic's and sqpnp's time per solve, the medians of the per-run ratios
+/// sqpnp / default and sqpnp / algebraic, and the range of sqpnp / default.
+fn speed_summary(all: &[(Row, Vec<Problem>)], runs: &[(Vec<Vec<Stats>>, usize)]) -> String {
+    let time = |run: &(Vec<Vec<Stats>>, usize), i: usize, m: Method| {
+        run.0[i].iter().find(|s| s.method == m).and_then(|s| s.us)
+    };
+    let cell = |v: &[f64], f: fn(f64) -> String| {
+        if v.is_empty() {
+            "–".to_string()
+        } else {
+            f(common::median(v))
+        }
+    };
+    let ratio = |x: f64| format!("{x:.2}");
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "## Speed over {} runs\n\nMicroseconds per solve: the median over the runs of each \
+         run's time (itself the median of its timed passes); ratios: the median over the runs \
+         of each run's ratio, and the range (min-max) of sqpnp / default over the runs.\n",
+        runs.len()
+    );
+    let _ = writeln!(
+        md,
+        "| row | eopnp default | eopnp algebraic | sqpnp | sqpnp / default | sqpnp / algebraic \
+         | sqpnp / default, range |"
+    );
+    let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---|");
+    let short = ["general", "general", "planar", "quasi-singular"];
+    for (i, (row, _)) in all.iter().enumerate() {
+        let per_run =
+            |m: Method| -> Vec<f64> { runs.iter().filter_map(|r| time(r, i, m)).collect() };
+        let ratios = |m: Method| -> Vec<f64> {
+            runs.iter()
+                .filter_map(|r| match (time(r, i, Method::Sqpnp), time(r, i, m)) {
+                    (Some(a), Some(b)) if b > 0.0 => Some(a / b),
+                    _ => None,
+                })
+                .collect()
+        };
+        let to_default = ratios(Method::EopnpDefault);
+        let range = if to_default.is_empty() {
+            "–".to_string()
+        } else {
+            let lo = to_default.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = to_default.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            format!("{lo:.2}-{hi:.2}")
+        };
+        let _ = writeln!(
+            md,
+            "| {} {} | {} | {} | {} | {} | {} | {} |",
+            short[row.group],
+            row.label,
+            cell(&per_run(Method::EopnpDefault), |u| time_str(Some(u))),
+            cell(&per_run(Method::EopnpAlgebraic), |u| time_str(Some(u))),
+            cell(&per_run(Method::Sqpnp), |u| time_str(Some(u))),
+            cell(&to_default, ratio),
+            cell(&ratios(Method::EopnpAlgebraic), ratio),
+            range
+        );
+    }
+    let _ = writeln!(md);
+    md
 }
 
 /// Outcome of one guarded kornia-pnp call.

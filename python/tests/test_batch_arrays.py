@@ -191,5 +191,10 @@ def test_pickle(rng):
 
 
 def test_releases_gil(rng):
-    world, image = stacked(rng, 4000, n=50)
-    assert_releases_gil(lambda: eopnp.solve_batch_arrays(world, image, threads=1))
+    world, image = stacked(rng, 500, n=50)
+
+    def make(k):
+        w, i = np.tile(world, (k, 1, 1)), np.tile(image, (k, 1, 1))
+        return lambda: eopnp.solve_batch_arrays(w, i, threads=1)
+
+    assert_releases_gil(make)

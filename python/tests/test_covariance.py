@@ -1,6 +1,7 @@
 """covariance=: the pose covariance against Monte Carlo (whitened chi-square), its options and
 pickling, and against pycolmap's refine_absolute_pose(return_covariance=True) when pycolmap is
-installed (a comparison-only package: skipped otherwise)."""
+installed (a comparison-only package: skipped otherwise, except under EOPNP_REQUIRE_PEERS=1, as
+scripts/test.sh runs the tests, where its absence is an error)."""
 
 import pickle
 
@@ -8,17 +9,9 @@ import numpy as np
 import pytest
 
 import eopnp
-from conftest import problem
+from conftest import log_so3, problem, require
 
 CAM = eopnp.Camera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.1], 640, 480)
-
-
-def log_so3(r):
-    """Rotation vector of a rotation matrix (small and moderate angles)."""
-    c = np.clip((np.trace(r) - 1) / 2, -1.0, 1.0)
-    th = np.arccos(c)
-    w = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
-    return w / 2 if th < 1e-12 else w * th / (2 * np.sin(th))
 
 
 def delta(sol, r_true, t_true):
@@ -141,7 +134,7 @@ def test_ransac_covariance_is_that_of_its_inliers(rng):
 
 
 def test_against_pycolmap(rng):
-    pycolmap = pytest.importorskip("pycolmap")
+    pycolmap = require("pycolmap")
     world, image, _, _ = problem(rng, 40)
     pixels = CAM.project(image) + rng.normal(0, 1.0, (40, 2))
     sol = eopnp.solve(world, pixels, camera=CAM, covariance=1.0)  # pycolmap assumes 1 px

@@ -255,9 +255,9 @@ def test_unknown_image():
 
 def test_exceptions_pickle(rng):
     world, image, _, _ = problem(rng, 3)
-    try:
+    with pytest.raises(eopnp.InvalidInputError) as info:
         eopnp.solve(world, image)
-    except eopnp.PnpError as e:
-        back = pickle.loads(pickle.dumps(e))
-        assert type(back) is type(e) and str(back) == str(e)
-        assert (back.kind, back.got, back.need) == ("TooFewPoints", 3, 4)
+    e = info.value
+    back = pickle.loads(pickle.dumps(e))
+    assert type(back) is type(e) and str(back) == str(e)
+    assert (back.kind, back.got, back.need) == ("TooFewPoints", 3, 4)

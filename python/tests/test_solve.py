@@ -17,12 +17,14 @@ def test_exact_general(rng, n):
     for _ in range(5):
         world, image, r, t = problem(rng, n)
         sol = eopnp.solve(world, image)
-        if n <= 5:  # several poses can fit 4-5 points exactly; the true one is a minimum
+        if n <= 5:
+            # Special configurations of 4-5 points have several exact poses; the true one is
+            # among the minima. Here (general random points) it is the only exact one, so solve,
+            # which returns the best minimum, returns it: within 3e-14 when this was written.
             assert any(
                 np.abs(s.R - r).max() < 1e-7 and np.abs(s.t - t).max() < 1e-6
                 for s in eopnp.solve_all(world, image)
             )
-            continue
         assert np.abs(sol.R - r).max() < 1e-9
         assert np.abs(sol.t - t).max() < 1e-8
         assert sol.cheirality_ok and not sol.degenerate

@@ -84,6 +84,8 @@ fn cost_kernels_finite_at_extremes() {
 }
 
 proptest! {
+    #![proptest_config(st::proptest_config())]
+
     /// The same check as `cost_coefficients_vs_quadratic_form`, over proptest strategies
     /// (shrinkable inputs), same norm and 1e-12 bound.
     #[test]

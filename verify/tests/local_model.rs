@@ -68,6 +68,8 @@ fn exact_half_turns() {
 }
 
 proptest! {
+    #![proptest_config(st::proptest_config())]
+
     /// `f`, `g`, `H_C` vs the explicit formulas over proptest strategies (1e-12 of the scales).
     #[test]
     fn prop_explicit(m in st::psd_matrix_strategy(), r in st::rotation_strategy()) {
