@@ -273,9 +273,11 @@ impl fmt::Display for CameraError {
         match self {
             CameraError::UnsupportedModel(name) => {
                 let list: Vec<&str> = SUPPORTED_MODELS.iter().map(|m| m.name()).collect();
+                // The name as read, with control and other invisible characters escaped.
                 write!(
                     f,
-                    "unsupported camera model \"{name}\" (supported: {})",
+                    "unsupported camera model \"{}\" (supported: {})",
+                    name.escape_debug(),
                     list.join(", ")
                 )
             }

@@ -344,7 +344,8 @@ pub(super) fn read_json<R: BufRead>(
 /// The failure of a JSON syntax or data error, at its line and column in the input.
 fn json_failure(name: &str, e: &serde_json::Error, start: &Start) -> Failure {
     let (line, column) = (e.line(), e.column());
-    let message = e.to_string();
+    // serde_json quotes what it read (an unknown key) as it is: escaped for the terminal.
+    let message = crate::escaped(&e.to_string());
     let message = message
         .strip_suffix(&format!(" at line {line} column {column}"))
         .unwrap_or(&message);
