@@ -1,4 +1,4 @@
-//! Pixel input through a camera model: `Solver::solve_pixels` (undistortion + solve) against
+//! Pixel input through a camera model: `Solver::solve` of a `Problem::pixels` (undistortion + solve) against
 //! `Solver::solve` on the same points already undistorted (the normalised points computed once,
 //! outside the timed closure), N = 100, 1,000, 10,000, general scenes, sigma = 1 px, seeded.
 //!

@@ -14,10 +14,10 @@
 //! `eopnp register --outliers L --seed S` (noise 0.5 model units, seed mixed with the image
 //! id), the camera and COLMAP's pose. Then, per image:
 //!
-//! - `eopnp::ransac`: [`Ransac::estimate_pixels`] (threshold 4 px, seed `S`);
+//! - `eopnp::ransac`: [`Ransac::estimate`] of the pixels (threshold 4 px, seed `S`);
 //! - `arrsac + P3pEstimator`: the pixels are undistorted, ARRSAC ([`Arrsac::new`] with its
 //!   default options, threshold 4 px on `PoseModel`'s pixel residual, a PCG generator seeded
-//!   with `S`) finds the inliers, and EOPnP ([`Solver::solve_pixels`]) refits on them;
+//!   with `S`) finds the inliers, and EOPnP ([`Solver::solve`] of the pixels) refits on them;
 //! - `arrsac + lambda-twist`: the same with `lambda_twist::LambdaTwist` (0.7) as the minimal
 //!   solver. Its model's residual is cv-core's angular `1 - cos(angle)` between bearings, so
 //!   the threshold is `1 - cos(4 px / f)` (`f` the geometric mean focal length): the same
@@ -166,7 +166,7 @@ fn read_problems(path: &str) -> Result<(f64, u64, Vec<Problem>), String> {
 }
 
 /// Pose `(R, t)` of one image by `method` (`None` if it failed) and the time in
-/// milliseconds: `Ransac::estimate_pixels`'s own (undistortion included) for `eopnp::ransac`,
+/// milliseconds: `Ransac::estimate`'s own (undistortion included) for `eopnp::ransac`,
 /// undistortion + ARRSAC + refit otherwise.
 fn run(method: Method, problem: &Problem, seed: u64) -> (Option<Pose>, f64) {
     let solver = Solver::default();
@@ -192,7 +192,7 @@ fn run(method: Method, problem: &Problem, seed: u64) -> (Option<Pose>, f64) {
 fn run_arrsac(method: Method, problem: &Problem, seed: u64, solver: &Solver) -> Option<Pose> {
     let cam = &problem.camera;
     let (fx, fy) = cam.focal_lengths();
-    // Undistort; a pixel that cannot be undistorted is dropped (as `Ransac::estimate_pixels`).
+    // Undistort; a pixel that cannot be undistorted is dropped (as `Ransac::estimate` does).
     let mut world: Vec<Point3<f64>> = Vec::new();
     let mut pixels: Vec<Point2<f64>> = Vec::new();
     let mut data: Vec<Correspondence> = Vec::new();

@@ -8,7 +8,7 @@
 //!
 //! - `solve`: [`Solver::solve`] on the image's correspondences already undistorted (computed
 //!   once, outside the timing): "the solve on normalised points", the reference.
-//! - `solve_pixels`: [`Solver::solve_pixels`] on their pixels through the image's camera
+//! - `solve_pixels`: [`Solver::solve`] of their pixels through the image's camera
 //!   (undistortion, the search on the undistorted points, the pixel-error refinement
 //!   `refine_pixels`).
 //! - `gather`: [`Registrar::correspondences`], the gathering of a registration alone.
@@ -125,7 +125,7 @@ fn main() {
                 .image_and_camera(id)
                 .unwrap_or_else(|e| fail(&e.to_string()));
             let (world, pixels) = model.correspondences(id);
-            // The solve's points: those whose pixel undistorts (solve_pixels leaves the
+            // The solve's points: those whose pixel undistorts (a solve of pixels leaves the
             // others out too).
             let (solve_world, normalised) = world
                 .iter()

@@ -108,7 +108,7 @@ fn main() {
     }
     let sol = eopnp::solve(&world, &image).expect("eopnp::solve");
     let r_err = (sol.rotation - rotation.matrix()).norm();
-    let t_err = (sol.pose.translation.vector - translation).norm();
+    let t_err = (sol.translation - translation).norm();
     assert!(r_err < 1e-8 && t_err < 1e-8, "pose error: rotation {r_err:e}, translation {t_err:e}");
     println!("eopnp::solve recovered the pose (rotation error {r_err:.1e}, translation error {t_err:.1e})");
 }

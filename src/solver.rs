@@ -466,13 +466,13 @@ impl Solver {
         }
     }
 
-    /// The pixel-input path of `solve_pixels` and `refine_pixels`: the loss checked, then the
+    /// The pixel-input path of a solve and a refinement of pixels: the loss checked, then the
     /// correspondences undistorted ([`undistort_all`]), with the first-order weights
     /// ([`Undistorted::weights`]) unless `refine_pixels` ends the solve (the default mode, through
     /// a camera with distortion or with a robust loss): `refine_pixels` minimises the pixel error
     /// itself, and the solve on the undistorted points before it only gives its start, from the
     /// caller's weights alone (none: the unweighted passes). Measured on the bundled COLMAP model:
-    /// the same `refine_pixels` passes, `solve_pixels` 0.898M -> 0.771M instructions per image
+    /// the same `refine_pixels` passes, a solve of pixels 0.898M -> 0.771M instructions per image
     /// (with the weights no longer formed by the undistortion).
     fn undistort<'a>(
         &self,

@@ -1,5 +1,5 @@
 //! Real-data checks on the bundled COLMAP reconstruction (`data/colmap-boxes`, text format, and
-//! its binary copy `data/colmap-boxes-bin` written by `write_model_binary`), and malformed-file
+//! its binary copy `data/colmap-boxes-bin` written by `write_model`), and malformed-file
 //! handling of the model readers.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! The public error metrics (`eopnp::metrics`). (Formerly in `src/numeric/rotation/tests.rs`.)
+//! The public error metrics (`eopnp::internals::metrics`). (Formerly in `src/numeric/rotation/tests.rs`.)
 
 use eopnp::internals::metrics::{rotation_error_deg, translation_error_pct};
 use nalgebra::{Matrix3, Rotation3, Vector3};

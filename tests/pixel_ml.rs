@@ -504,7 +504,7 @@ fn unusable_loss_scale_is_invalid_option() {
 }
 
 /// The weighted refinement from a prior pose: from the ground truth a little perturbed, the
-/// pose of `solve_pixels_weighted` (and of `solve_weighted` on normalised points), and a point
+/// pose of a weighted solve of pixels (and of normalised points), and a point
 /// of weight 0 changes nothing.
 #[test]
 fn weighted_refine_is_the_weighted_solve_pose() {
@@ -547,7 +547,7 @@ fn weighted_refine_is_the_weighted_solve_pose() {
                 )
                 .unwrap();
             assert!(rot_err_deg(&dropped.rotation, &refined.rotation) < 1e-7);
-            // Normalised input: solve_weighted's pose.
+            // Normalised input: the weighted solve's pose.
             let image: Vec<Point2<f64>> = p
                 .pixels
                 .iter()

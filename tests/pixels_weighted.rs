@@ -1,4 +1,4 @@
-//! `Solver::solve_pixels_weighted`: all weights 1 is exactly `solve_pixels`, a weight of 0 is
+//! Weighted solves of pixels: all weights 1 is exactly the unweighted solve, a weight of 0 is
 //! the same as dropping the point, and bad weights are reported with the correspondence's own
 //! index, also when a pixel before it cannot be undistorted. A pixel that cannot be undistorted
 //! is the same as the correspondence removed, for the solve and for RANSAC's inlier mask.
@@ -112,7 +112,7 @@ fn bad_weights_keep_their_index() {
             image: 11
         })
     );
-    // Weight 1 everywhere: the NaN pixel is skipped, as in `solve_pixels`.
+    // Weight 1 everywhere: the NaN pixel is skipped, as in the unweighted solve.
     weights[5] = 1.0;
     let sol = solver
         .solve(&Problem::pixels(&world, &pixels, &cam).weights(&weights))

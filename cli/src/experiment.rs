@@ -113,7 +113,7 @@ pub(crate) fn image_problem(
     }
 }
 
-/// RANSAC ([`Ransac::estimate_pixels`]) on the image's correspondences, optionally with
+/// RANSAC ([`Ransac::estimate`] of the pixels) on the image's correspondences, optionally with
 /// injected outliers ([`image_problem`]).
 /// `estimate.inliers` is the RANSAC inlier count; the pixel RMSEs are over the true
 /// correspondences.
@@ -207,7 +207,7 @@ fn index(rng: &mut Pcg64, n: usize) -> usize {
     ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
 }
 
-/// The floor of an image problem: EOPnP ([`Solver::solve_pixels`] with `solver`) on the
+/// The floor of an image problem: EOPnP ([`Solver::solve`] of the pixels with `solver`) on the
 /// true correspondences only, as an [`Estimate`].
 ///
 /// # Errors

@@ -522,7 +522,7 @@ pub struct SolveReport {
     pub exact_derived: bool,
 }
 
-/// `solve`, `solve_weighted` and `solve_all` on an arbitrary problem.
+/// `Solver::solve` (weighted or not) and `solve_all` on an arbitrary problem.
 pub fn solve(data: &[u8]) {
     solve_report(data);
 }

@@ -435,7 +435,7 @@ pub(super) fn radial_undistortion<L: Lens, const FISHEYE: bool>(
 
 /// Points iterated in lockstep by [`radial_undistortion`]: several packed registers, so that
 /// the serial Newton iterations (a division each) of different points overlap. Measured on
-/// the bundled model (`solve_pixels` per image, best of 3 interleaved runs): sixteen points
+/// the bundled model (a solve of the pixels per image, best of 3 interleaved runs): sixteen points
 /// 2-5 % faster than eight, eight 1-6 % faster than four.
 pub(super) const GROUP: usize = 4 * LANES;
 

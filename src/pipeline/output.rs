@@ -236,7 +236,7 @@ impl Output<'_> {
         // `select`'s depth test at `m`, when it is still to be made (`front_check`): counted by
         // the first pass of `refine` or `refine_pixels`, which start from `m`, in the default
         // mode, by the pass of the reported error in the algebraic mode. `refine_pixels`' count
-        // is `select`'s when its weights are `select`'s (`solve_pixels`: the caller's, or
+        // is `select`'s when its weights are `select`'s (pixels: the caller's, or
         // none); otherwise (RANSAC's fits: the first-order weights for `frame` to `select`,
         // whose zeros may differ where a product underflows) `select` counts before
         // `refine_pixels`.

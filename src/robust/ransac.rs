@@ -540,7 +540,7 @@ impl Ransac {
             Some(px),
         )?;
         // The covariance from the inliers with the caller's weights, not the first-order
-        // distortion weights of the fits (as `Solver::solve_pixels`).
+        // distortion weights of the fits (as a solve of pixels).
         let weight = |k: usize| inlier_weight(&sol.inliers, u.user_weights.as_deref(), k);
         sol.solution = solver.with_covariance(
             sol.solution,

@@ -294,7 +294,7 @@ fn non_invertible_region_is_an_error() {
     assert!(cam.undistort(Point2::new(1500.0, 1000.0)).is_ok());
 }
 
-/// The radial models' lockstep undistortion (`radial_chunk`, used by `solve_pixels` through
+/// The radial models' lockstep undistortion (`radial_chunk`, used by a solve of pixels through
 /// `undistort_into`) against the one-pixel iteration (`Camera::undistort_weighted`):
 /// every pixel gets the same outcome (no point, or the same point and weight to rounding),
 /// over strong distortion with folds (pixels beyond them have no preimage), the image centre,

@@ -1,6 +1,6 @@
 //! One test per bound: each routine reaches its bound (lowered where converging inputs never
 //! reach the real one) and returns a defined result; then the public entry point on top of it
-//! (`Solver::solve` in default and exhaustive mode, `Solver::solve_pixels` for the
+//! (`Solver::solve` in default and exhaustive mode, `Solver::solve` of pixels for the
 //! undistortion, `Ransac::estimate` for P3P) runs under the same lowered bound on seeded
 //! noise-free problems, and the test asserts what it returns: the true pose (rotation error
 //! < 1e-6 degrees) or the one expected typed error, never a panic or a wrong `Ok`.
@@ -395,7 +395,7 @@ fn undistortion_steps() {
         matches!(res, Err(CameraError::NoConvergence { .. })),
         "{res:?}"
     );
-    // The solver on top (`solve_pixels`, which leaves out the pixels it cannot undistort):
+    // The solver on top (a solve of pixels, which leaves out the pixels it cannot undistort):
     // exactly the pixels `Camera::undistort` refuses at the same bound are left out; the pose
     // is the true one, or TooFewPoints when fewer than 4 remain. One step: (almost) every
     // pixel of an ordinary view fails to converge, TooFewPoints. Two steps: every pixel
