@@ -1,4 +1,5 @@
-//! Accuracy tables for the README: `cargo run --release --example accuracy [-- TRIALS]`.
+//! Accuracy tables: `cargo run --release --example accuracy [-- TRIALS [--summary]]`
+//! (docs/accuracy.md; `--summary`: the README's one table, rows of the full tables).
 //!
 //! The paper's synthetic protocol (docs/algorithm.md section 7; f = 800 px, 640x480, points in
 //! [-2,2]x[-2,2]x[4,8] in the camera frame, Haar-uniform rotations, Gaussian pixel noise), the
@@ -110,11 +111,49 @@ fn print_table(title: &str, rows: &[Row]) {
     }
 }
 
+/// The README's summary: a few rows of the full tables (the same seeds, so the same numbers),
+/// the median rotation errors and the failures.
+fn print_summary(trials: u64) {
+    let (mut wins, mut wx) = (BTreeMap::new(), BTreeMap::new());
+    println!(
+        "| scene, sigma = 2 px, {trials} trials | median rotation error (deg): eopnp default | \
+         eopnp algebraic | ML floor (LM from the truth) | failures: default / floor |"
+    );
+    println!("|---|---|---|---|---|");
+    for (name, scene, n) in [
+        ("general", Scene::General, 6),
+        ("general", Scene::General, 10),
+        ("planar", Scene::Planar, 10),
+        ("quasi-singular", Scene::QuasiSingular, 10),
+        ("quasi-singular", Scene::QuasiSingular, 50),
+    ] {
+        let r = run(
+            &format!("N = {n}"),
+            n,
+            2.0,
+            scene,
+            trials,
+            &mut wins,
+            &mut wx,
+        );
+        println!(
+            "| {name}, N = {n} | {:.4} | {:.4} | {:.4} | {} / {} |",
+            median(&r.rot[0]),
+            median(&r.rot[1]),
+            median(&r.rot[2]),
+            r.fails[0],
+            r.fails[2]
+        );
+    }
+}
+
 fn main() {
-    let trials: u64 = std::env::args()
-        .nth(1)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(1000);
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let trials: u64 = args.iter().find_map(|a| a.parse().ok()).unwrap_or(1000);
+    if args.iter().any(|a| a == "--summary") {
+        print_summary(trials);
+        return;
+    }
     println!("eopnp accuracy, {trials} trials per row (seeded; `cargo run --release --example accuracy -- {trials}`)");
     let mut wins: BTreeMap<String, usize> = BTreeMap::new();
     let mut wx: BTreeMap<String, usize> = BTreeMap::new();

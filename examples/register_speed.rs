@@ -1,5 +1,5 @@
-//! Probe for the speed of a registration against the solve, per image of a COLMAP model (by
-//! default the bundled `data/colmap-boxes`): issue 15's speed targets.
+//! The speed of a registration against the solve, per image of a COLMAP model (by default the
+//! bundled `data/colmap-boxes`).
 //!
 //! `cargo run --release --example register_speed -- [MODEL_DIR] [--calls K] [--runs R]`
 //!
@@ -11,7 +11,6 @@
 //! - `solve_pixels`: [`Solver::solve`] of their pixels through the image's camera
 //!   (undistortion, the search on the undistorted points, the pixel-error refinement
 //!   `refine_pixels`).
-//! - `gather`: [`Registrar::correspondences`], the gathering of a registration alone.
 //! - `registrar`: [`Registrar::register`] by one registrar for the whole run (as
 //!   `eopnp register` and `eopnp.register_images`): the gathering, `solve_pixels`, and the
 //!   comparison with the model's pose (its pixel RMSE).
@@ -44,13 +43,7 @@ struct Image<'m> {
     camera: &'m Camera,
 }
 
-const ROWS: [&str; 5] = [
-    "solve",
-    "solve_pixels",
-    "gather",
-    "registrar",
-    "register_image",
-];
+const ROWS: [&str; 4] = ["solve", "solve_pixels", "registrar", "register_image"];
 
 /// Row `row` on image `im` once (what is timed and what callgrind collects).
 #[inline(never)]
@@ -72,9 +65,6 @@ fn part(row: usize, im: &Image, model: &Model, registrar: &mut Registrar, solver
             .ok();
         }
         2 => {
-            black_box(registrar.correspondences(black_box(im.id))).ok();
-        }
-        3 => {
             black_box(registrar.register(black_box(im.id), solver, None)).ok();
         }
         _ => {

@@ -80,6 +80,25 @@ def walk(doc: dict) -> list:
                 word = {"function": "fn", "assoc_const": "const", "assoc_type": "type"}.get(kind, kind)
                 add(word, f"{owner_path}::{it['name']}", it, hidden)
 
+    def members(item_ids, path, hidden, public_only=True):
+        """The items of a module (its `pub use` re-exports and globs expanded) under `path`."""
+        for sub in item_ids:
+            it = index.get(str(sub))
+            if it is None or (public_only and it["visibility"] != "public"):
+                continue
+            sk, si = next(iter(it["inner"].items()))
+            if sk != "use":
+                visit(sub, f"{path}::{it['name']}", hidden)
+            elif not si.get("is_glob"):
+                visit(si.get("id"), f"{path}::{si['name']}", hidden or is_hidden(it))
+            else:
+                target = index.get(str(si.get("id")))
+                if target is None or "module" not in target["inner"]:
+                    add("pub use", f"{path}::* = {si.get('source')}::*", it, hidden)
+                else:
+                    # A glob re-exports the public items of its module, private or not.
+                    members(target["inner"]["module"]["items"], path, hidden or is_hidden(it))
+
     def visit(item_id, path, hidden=False):
         key = (str(item_id), path)
         if key in seen:
@@ -96,25 +115,7 @@ def walk(doc: dict) -> list:
         if kind == "module":
             if not inner.get("is_crate"):
                 add("mod", path, item, hidden)
-            for sub in inner["items"]:
-                it = index.get(str(sub))
-                if it is None:
-                    continue
-                if it["visibility"] != "public":
-                    continue
-                sk, si = next(iter(it["inner"].items()))
-                if sk == "use":
-                    if si.get("is_glob"):
-                        target = index.get(str(si.get("id")))
-                        if target is not None and "module" in target["inner"]:
-                            for g in target["inner"]["module"]["items"]:
-                                gi = index.get(str(g))
-                                if gi is not None and gi["visibility"] == "public":
-                                    visit(g, f"{path}::{gi['name']}", hidden or is_hidden(it))
-                        continue
-                    visit(si.get("id"), f"{path}::{si['name']}", hidden or is_hidden(it))
-                else:
-                    visit(sub, f"{path}::{it['name']}", hidden)
+            members(inner["items"], path, hidden)
         elif kind == "struct":
             add("struct", path, item, hidden)
             k = inner["kind"]

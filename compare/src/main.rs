@@ -26,7 +26,8 @@
 //!
 //! `--runs K`: the whole measurement (every row and method, on the same problems) K times, one
 //! after the other in this process; the report and the plot are those of the last run, and the
-//! report ends with the speed summary over the K runs (the README's speed table): per row, the
+//! report ends with the speed summary over the K runs (the README's speed table; also written
+//! alone to `summary.md` in the output directory): per row, the
 //! median over the runs of the time per solve of eopnp default, eopnp algebraic and sqpnp, the
 //! medians of the per-run ratios sqpnp / default and sqpnp / algebraic, and the range (min-max)
 //! of sqpnp / default. Without `--runs` the output is that of one run, without the summary.
@@ -648,7 +649,13 @@ fn main() {
         );
     }
     if args.runs.is_some() {
-        let _ = write!(md, "{}", speed_summary(&all, &every_run));
+        let summary = speed_summary(&all, &every_run);
+        let _ = write!(md, "{summary}");
+        // Also on its own, for the documents that quote it (scripts/refresh_docs.py).
+        let path = args.out.join("summary.md");
+        if let Err(e) = std::fs::write(&path, &summary) {
+            eprintln!("warning: cannot write {}: {e}", path.display());
+        }
     }
     let _ = writeln!(
         md,

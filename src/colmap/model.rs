@@ -86,8 +86,8 @@ impl Model {
 
     /// The 2D-3D correspondences of an image: world points and their observed (distorted)
     /// pixels, in the order of the image's observations. Empty for an unknown image id.
-    /// (Every referenced 3D point exists: [`super::read_model`] checks this.) For several
-    /// images of one model, [`super::Registrar::correspondences`] looks the points up in a
+    /// (Every referenced 3D point exists: [`super::read_model`] checks this.) A
+    /// [`super::Registrar`] registering several images of one model looks the points up in a
     /// table built once.
     #[must_use]
     pub fn correspondences(&self, image_id: u32) -> (Vec<Point3<f64>>, Vec<Point2<f64>>) {

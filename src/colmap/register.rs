@@ -183,27 +183,6 @@ impl<'m> Registrar<'m> {
         }
     }
 
-    /// The 2D-3D correspondences of an image, as [`Model::correspondences`] gives them (world
-    /// points and their observed pixels, in the order of the image's observations), valid
-    /// until the next call.
-    ///
-    /// # Errors
-    /// [`RegisterError::UnknownImage`] if the model has no image `image_id`.
-    // The pair of slices mirrors `Model::correspondences`'s pair of vectors.
-    #[allow(clippy::type_complexity)]
-    pub fn correspondences(
-        &mut self,
-        image_id: u32,
-    ) -> Result<(&[Point3<f64>], &[Point2<f64>]), RegisterError> {
-        let img = self
-            .model
-            .images
-            .get(&image_id)
-            .ok_or(RegisterError::UnknownImage(image_id))?;
-        self.gather(img);
-        Ok((&self.world, &self.pixels))
-    }
-
     /// The correspondences of `img` into the buffers: their capacity, kept from image to image,
     /// made room for every observation (the pages of what is not written are not touched), so
     /// that they do not grow point by point.
