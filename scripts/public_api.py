@@ -52,6 +52,20 @@ def is_hidden(item: dict) -> bool:
     return False
 
 
+def summary(docs: str) -> str:
+    """The first sentence of an item's documentation, links reduced to their text."""
+    para = docs.strip().split("\n\n")[0].replace("\n", " ")
+    para = re.sub(r"\[`([^`]*)`\]\([^)]*\)", r"`\1`", para)
+    para = re.sub(r"\[`([^`]*)`\]", r"`\1`", para)
+    para = re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1", para)
+    m = re.match(r"(.*?\.)(\s|$)", para)
+    first = m.group(1) if m else para
+    return first.strip()
+
+
+docs = {}
+
+
 def walk(doc: dict) -> list:
     index = doc["index"]
     paths = doc.get("paths", {})
@@ -61,6 +75,7 @@ def walk(doc: dict) -> list:
     def add(kind, path, item=None, hidden=False):
         mark = " (hidden)" if hidden or (item is not None and is_hidden(item)) else ""
         out.append(f"{kind} {path}{mark}")
+        docs[f"{kind} {path}{mark}"] = summary((item or {}).get("docs") or "")
 
     def impls_of(item_id, owner_path, hidden):
         item = index[str(item_id)]
@@ -179,6 +194,8 @@ def main() -> None:
     ap.add_argument("-p", "--package", default="eopnp")
     ap.add_argument("--features", default="all", help="'all' (default), or a list for --features")
     ap.add_argument("--count", action="store_true", help="print the counts by kind only")
+    ap.add_argument("--markdown", action="store_true",
+                    help="a Markdown list: each item with the first sentence of its documentation")
     ap.add_argument("--check", type=Path, help="compare with the list in this Markdown file")
     args = ap.parse_args()
     items = walk(rustdoc_json(args.package, args.features))
@@ -206,6 +223,11 @@ def main() -> None:
         for k in sorted(counts):
             print(f"{k}: {counts[k]}")
         print(f"total: {len(items)}")
+        return
+    if args.markdown:
+        for i in items:
+            d = docs.get(i, "")
+            print(f"- `{i}`" + (f": {d}" if d else ""))
         return
     print("\n".join(items))
 

@@ -4,6 +4,7 @@
     python3 scripts/refresh_docs.py                 # run every block's command, paste its output
     python3 scripts/refresh_docs.py --only accuracy # only the blocks whose command contains this
     python3 scripts/refresh_docs.py --check         # run the deterministic blocks, fail if stale
+    python3 scripts/refresh_docs.py --deterministic # refresh the deterministic blocks only
     python3 scripts/refresh_docs.py --list          # the blocks and their commands
 
 A block of a document (README.md, CONTRIBUTING.md, python/README.md, docs/*.md; not
@@ -65,6 +66,7 @@ def main():
     ap.add_argument("--only", help="only the blocks whose command contains this text")
     ap.add_argument("--check", action="store_true", help="compare the `check` blocks, write nothing")
     ap.add_argument("--list", action="store_true", help="list the blocks")
+    ap.add_argument("--deterministic", action="store_true", help="refresh the `check` blocks only")
     args = ap.parse_args()
     cache = {}
     stale = []
@@ -82,7 +84,7 @@ def main():
                 return m.group(0)
             if args.only and args.only not in cmd:
                 return m.group(0)
-            if args.check and "check" not in opts:
+            if (args.check or args.deterministic) and "check" not in opts:
                 return m.group(0)
             count += 1
             body = render(run(cmd, cache), opts)

@@ -120,3 +120,16 @@ pub mod internals {
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
+
+/// The user guides' Rust code, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../docs/solver.md")]
+struct SolverGuideDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/cameras.md")]
+struct CamerasGuideDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../docs/robust.md")]
+struct RobustGuideDoctests;

@@ -390,3 +390,70 @@ fn stages_are_called_only_by_the_driver() {
         }
     }
 }
+
+/// The layers of the library, top to bottom, as the contributor guide's table lists them (the
+/// rows between `<!-- layers:begin -->` and `<!-- layers:end -->` in CONTRIBUTING.md: the first
+/// column names the layer, the second its files, `src/x.rs` or `src/x/`). Each layer may use the
+/// layers above it (and `src/error.rs`, used by all), never one below: the test fails with the
+/// edge that breaks the table, and with a top-level module the table does not place.
+#[test]
+fn each_layer_uses_only_the_layers_above_it() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let guide = std::fs::read_to_string(root.join("CONTRIBUTING.md")).unwrap();
+    let table = guide
+        .split("<!-- layers:begin -->")
+        .nth(1)
+        .and_then(|t| t.split("<!-- layers:end -->").next())
+        .expect("CONTRIBUTING.md: no <!-- layers:begin --> ... <!-- layers:end --> table");
+    // Layer index of each top-level module, from the rows' second column.
+    let mut layer_of: BTreeMap<String, (usize, String)> = BTreeMap::new();
+    let rows = table
+        .lines()
+        .filter(|l| l.starts_with('|') && !l.starts_with("|---"))
+        .skip(1);
+    for (k, row) in rows.enumerate() {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let (name, files) = (cells[1], cells[2]);
+        for f in files.split(',') {
+            let f = f.trim().trim_matches('`');
+            let module = f
+                .strip_prefix("src/")
+                .unwrap_or_else(|| panic!("layer {name}: {f} is not under src/"))
+                .trim_end_matches('/')
+                .trim_end_matches(".rs");
+            assert!(root.join(f).exists(), "layer {name}: {f} does not exist");
+            layer_of.insert(module.to_string(), (k, name.to_string()));
+        }
+    }
+    assert!(
+        layer_of.len() >= 8,
+        "the layers table lists {} modules",
+        layer_of.len()
+    );
+    let g = graph(&root.join("src"));
+    let top = |m: &Vec<String>| m.first().cloned();
+    for (from, tos) in &g {
+        let Some(f) = top(from) else { continue }; // the crate root
+        if f == "error" {
+            continue;
+        }
+        let (lf, nf) = layer_of
+            .get(&f)
+            .unwrap_or_else(|| panic!("src/{f}: not placed in CONTRIBUTING.md's layers table"));
+        for to in tos {
+            let Some(t) = top(to) else { continue };
+            if t == f || t == "error" {
+                continue;
+            }
+            let (lt, nt) = layer_of
+                .get(&t)
+                .unwrap_or_else(|| panic!("src/{t}: not placed in CONTRIBUTING.md's layers table"));
+            assert!(
+                lt <= lf,
+                "{} ({nf}) uses {} ({nt}), a layer below it in CONTRIBUTING.md's table",
+                from.join("::"),
+                to.join("::")
+            );
+        }
+    }
+}
