@@ -1,0 +1,109 @@
+//! The checks: each samples seeded random inputs, compares one generated kernel with an
+//! independent numeric evaluation, and returns a [`Measurement`] (worst error in a stated norm,
+//! worst error / bound). The tests assert `passed()`; the report prints the same numbers.
+//!
+//! Norms and tolerances (see `reference` for the absolute-value scales):
+//!
+//! - `TOL_POLY = 1e-12` relative to the absolute-value scale of the compared quantity. Both sides
+//!   are straight-line polynomial evaluations of depth <= ~40, whose forward error is at most
+//!   `gamma_40 ~ 4.4e-15` times that scale (Higham 3.1); 1e-12 leaves a factor ~200 over this
+//!   worst-case first-order bound. It is the right scale, not `|C|`, because `C = |K rbar|^2`
+//!   can cancel to ~0 while the rounding of any evaluation stays at `u` times the scale; and it
+//!   is tighter than `|M|_F (1 + |s|^2)^2` (e.g. at `s = 0` only the 6 entries `M_ab`,
+//!   a, b in {0, 4, 8}, enter it). A wrong term shows up at its own size relative to the scale.
+//! - Finite differences: the bound is derived per sample (truncation from a bound on the next
+//!   derivative, rounding from the absolute-value scale, see `crate::fd`); the check asserts
+//!   `error <= bound` and reports the worst `error / bound`.
+//! - Determinants: `error <= kernel rounding + reference rounding`, derived per sample from the
+//!   permanent of the absolute-value Bezout / entry matrix and nalgebra's LU a-posteriori bound
+//!   (`reference::det_with_bound`); the error is reported relative to Hadamard's bound of the
+//!   absolute-value matrix.
+//!
+//! One file per kernel family: `cost.rs` (the cost's coefficients, value, gradient and Hessian),
+//! `local_model.rs` (`newton`'s local model), `nullspace.rs` (the cases' cubics, resultants and
+//! determinants); [`all`] lists every check in report order.
+
+use crate::reference::gamma;
+use crate::report::Measurement;
+use nalgebra::Matrix3;
+
+mod cost;
+mod local_model;
+mod nullspace;
+
+pub use cost::{cost_coefficients, cost_value, gradient, hessian, Against, Variant};
+pub use local_model::{hessian_directions, local_model, LocalAgainst};
+pub use nullspace::{
+    case2_cubics, case2_known_root, case2_resultant, case3_cubics, case3_known_root, case3_quartic,
+    case3_resultant, case4_determinant, case4_known_root, case4_known_system, case4_matrix,
+};
+
+/// 1e-12 relative to the absolute-value scale (module doc).
+pub const TOL_POLY: f64 = 1e-12;
+
+/// Rounding allowance for one generated kernel output in units of its absolute-value scale:
+/// `gamma_64` (depth <= 64 covers every kernel's straight-line code plus the evaluation of its
+/// coefficients at a point).
+#[must_use]
+pub fn g64() -> f64 {
+    gamma(64)
+}
+
+/// Symmetric 3 x 3 from `[H00, H01, H02, H11, H12, H22]`.
+#[must_use]
+pub fn sym3(h: &[f64; 6]) -> Matrix3<f64> {
+    Matrix3::new(h[0], h[1], h[2], h[1], h[3], h[4], h[2], h[4], h[5])
+}
+
+/// Number of samples for the cost / gradient / Hessian / local-model checks.
+pub const N_COST: usize = 10_000;
+/// Number of samples for the resultant checks.
+pub const N_RESULTANT: usize = 5_000;
+
+/// Every check, in report order.
+#[must_use]
+pub fn all() -> Vec<Measurement> {
+    let mut out = Vec::new();
+    for v in [Variant::Full, Variant::Planar] {
+        out.push(cost_coefficients(v, N_COST));
+    }
+    out.push(cost_value(Variant::Full, N_COST));
+    out.push(cost_value(Variant::Planar, N_COST));
+    for v in [Variant::Full, Variant::Planar] {
+        for a in [
+            Against::Direct,
+            Against::FiniteDifference,
+            Against::ComplexStep,
+        ] {
+            out.push(gradient(v, a, N_COST));
+        }
+        for a in [
+            Against::Direct,
+            Against::FiniteDifference,
+            Against::ComplexStep,
+        ] {
+            out.push(hessian(v, a, N_COST));
+        }
+    }
+    for a in [
+        LocalAgainst::Value,
+        LocalAgainst::Explicit,
+        LocalAgainst::FdGradient,
+        LocalAgainst::FdHessian,
+        LocalAgainst::CsGradient,
+        LocalAgainst::CsHessian,
+    ] {
+        out.push(local_model(a, N_COST));
+    }
+    out.push(case2_resultant(N_RESULTANT));
+    out.extend(case2_known_root(N_RESULTANT));
+    out.push(case2_cubics(N_RESULTANT));
+    out.push(case3_quartic(N_RESULTANT));
+    out.push(case3_resultant(N_RESULTANT));
+    out.extend(case3_known_root(N_RESULTANT));
+    out.push(case3_cubics(N_RESULTANT));
+    out.push(case4_matrix(N_RESULTANT));
+    out.push(case4_determinant(N_RESULTANT));
+    out.extend(case4_known_root(N_RESULTANT));
+    out
+}

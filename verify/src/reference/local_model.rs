@@ -1,0 +1,115 @@
+//! `newton`: the local model on SO(3) at a rotation `R`, the chart `F(s) = f(R(s) R)` and the
+//! amplitude that bounds its derivatives.
+
+use nalgebra::{ComplexField, Matrix3, Vector3};
+
+use super::cost::{hr, jac, rbar_g};
+use super::{c, skew, M9, V9};
+
+/// `D = blockdiag(R^T, R^T, R^T)` (docs/algorithm.md, `newton`), so that `vec(A R) = D vec(A)`.
+#[must_use]
+pub fn blockdiag_rt(r: &Matrix3<f64>) -> M9 {
+    let mut d = M9::zeros();
+    for b in 0..3 {
+        d.fixed_view_mut::<3, 3>(3 * b, 3 * b)
+            .copy_from(&r.transpose());
+    }
+    d
+}
+
+/// Row-major `vec(R)`.
+#[must_use]
+pub fn vec_r(r: &Matrix3<f64>) -> V9 {
+    V9::from_fn(|a, _| r[(a / 3, a % 3)])
+}
+
+/// The explicit `newton` model at `R`: `M_k = D^T M D`, `f = e^T M_k e`, `g = 2 J0^T M_k e`,
+/// `H_C = 2 J0^T M_k J0 + 2 sum_j (M_k e)_j HR_j`, with their absolute-value scales
+/// (`|D|`, `|J0|`, `|HR_j|` in place of `D`, `J0`, `HR_j`; `D e = vec(R)`).
+#[must_use]
+pub fn local_model(m: &M9, r: &Matrix3<f64>) -> LocalModel {
+    let d = blockdiag_rt(r);
+    let mk = d.transpose() * m * d;
+    let e = vec_r(&Matrix3::identity());
+    let j0 = jac(&[0.0; 3]);
+    let mke = mk * e;
+    let hrs = hr();
+    let mut hc = 2.0 * j0.transpose() * mk * j0;
+    for a in 0..9 {
+        hc += 2.0 * mke[a] * hrs[a];
+    }
+    let (da, ma, j0a) = (d.abs(), m.abs(), j0.abs());
+    let ra = vec_r(r).abs();
+    let mkea = da.transpose() * ma * ra;
+    let mut sh = 2.0 * j0a.transpose() * da.transpose() * ma * da * j0a;
+    for a in 0..9 {
+        sh += 2.0 * mkea[a] * hrs[a].abs();
+    }
+    LocalModel {
+        f: e.dot(&mke),
+        g: 2.0 * j0.transpose() * mke,
+        hc,
+        sf: ra.dot(&(ma * ra)),
+        sg: 2.0 * j0a.transpose() * mkea,
+        sh,
+    }
+}
+
+/// Output of [`local_model`].
+#[derive(Clone, Copy, Debug)]
+pub struct LocalModel {
+    /// `f = vec(R)^T M vec(R)`.
+    pub f: f64,
+    /// Gradient in the chart.
+    pub g: Vector3<f64>,
+    /// `H_C` (Hessian of `C_k` at 0).
+    pub hc: Matrix3<f64>,
+    /// Absolute-value scale of `f`.
+    pub sf: f64,
+    /// Absolute-value scale of `g`.
+    pub sg: Vector3<f64>,
+    /// Absolute-value scale of `H_C`.
+    pub sh: Matrix3<f64>,
+}
+
+/// `F(s) = f(R(s) R)`, `R(s) = Rbar(s) / (1 + s^T s)` (docs/algorithm.md, `newton`), generic.
+#[must_use]
+pub fn chart_f<T: ComplexField<RealField = f64> + Copy>(m: &M9, r: &Matrix3<f64>, s: &[T; 3]) -> T {
+    let rb = rbar_g(s);
+    let den = c::<T>(1.0) + s[0] * s[0] + s[1] * s[1] + s[2] * s[2];
+    let mut v = [c::<T>(0.0); 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            let mut acc = c::<T>(0.0);
+            for k in 0..3 {
+                acc += rb[3 * i + k] * c::<T>(r[(k, j)]);
+            }
+            v[3 * i + j] = acc / den;
+        }
+    }
+    let mut f = c::<T>(0.0);
+    for a in 0..9 {
+        let mut row = c::<T>(0.0);
+        for b in 0..9 {
+            row += c::<T>(m[(a, b)]) * v[b];
+        }
+        f += v[a] * row;
+    }
+    f
+}
+
+/// The amplitude `A_u = (|a| + |b| + |c|)^T |M| (|a| + |b| + |c|)` of `phi -> f(Rot_u(phi) R)`
+/// for a unit direction `u`, with `Rot_u(phi) = u u^T + cos(phi) (I - u u^T) + sin(phi) [u]x`,
+/// `a = vec(u u^T R)`, `b = vec((I - u u^T) R)`, `c = vec([u]x R)`. Along the line `s = t u`
+/// the chart rotation is `R(t u) = Rot_u(2 atan t)`, and `|d^n f / d phi^n| <= 2^n A_u`
+/// (f is a trigonometric polynomial of degree 2 in phi whose coefficients are bounded by
+/// the products in `A_u`); `crate::fd` turns this into bounds on the derivatives of `F(t u)`.
+#[must_use]
+pub fn chart_amplitude(m: &M9, r: &Matrix3<f64>, u: &Vector3<f64>) -> f64 {
+    let p = u * u.transpose();
+    let q = Matrix3::identity() - p;
+    let sk = skew(&[u[0], u[1], u[2]]);
+    let s = Matrix3::from_fn(|i, j| sk[i][j]);
+    let w = vec_r(&(p * r)).abs() + vec_r(&(q * r)).abs() + vec_r(&(s * r)).abs();
+    w.dot(&(m.abs() * w))
+}
