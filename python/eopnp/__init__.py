@@ -18,29 +18,28 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
 read as float64; results are new float64 arrays. Errors raise the exceptions of
-``eopnp.PnpError``'s hierarchy (see ``eopnp._errors``). Every solve releases the GIL; the batch functions run on several threads.
+``eopnp.PnpError``'s hierarchy. Every solve releases the GIL; the batch functions run on
+several threads.
 """
 
 from ._batch import BatchResult
-from ._errors import (
+from ._eopnp import (
+    Camera,
     CameraError,
     DegenerateError,
+    Image,
     InputTypeError,
     InvalidInputError,
     InvalidOptionError,
+    Model,
     ModelError,
     NoConsensusError,
     NoSolutionError,
     PnpError,
-    UnknownIdError,
-)
-from ._eopnp import (
-    Camera,
-    Image,
-    Model,
     RansacOptions,
     Registration,
     Solution,
+    UnknownIdError,
     __version__,
     problem_seed,
     read_colmap_model,

@@ -1,5 +1,4 @@
-"""Type stubs of the eopnp package (the extension module eopnp._eopnp, eopnp._errors and
-eopnp._batch).
+"""Type stubs of the eopnp package (the extension module eopnp._eopnp and eopnp._batch).
 
 Conventions: world points are (N, 3), image points (N, 2), normalised (x/z, y/z) unless a
 ``camera`` is given (then pixels). Any array-like of real numbers is accepted (float or integer
@@ -14,18 +13,6 @@ import numpy as np
 import numpy.typing as npt
 
 from ._batch import BatchResult as BatchResult
-from ._errors import (
-    CameraError as CameraError,
-    DegenerateError as DegenerateError,
-    InputTypeError as InputTypeError,
-    InvalidInputError as InvalidInputError,
-    InvalidOptionError as InvalidOptionError,
-    ModelError as ModelError,
-    NoConsensusError as NoConsensusError,
-    NoSolutionError as NoSolutionError,
-    PnpError as PnpError,
-    UnknownIdError as UnknownIdError,
-)
 
 __version__: str
 
@@ -49,6 +36,23 @@ _Loss = Union[
 ]
 """``loss=``: None or "squared" (default), ``("huber", s)`` or ``("cauchy", s)``, the scale
 ``s`` in pixels with a camera, in normalised units otherwise (finite, > 0)."""
+
+class PnpError(Exception):
+    """Base class of every exception raised by eopnp: the library's message (``str(e)``), the
+    error's name (``kind``) and its fields (attributes, and the dict ``details``)."""
+
+    kind: str
+    details: dict[str, Any]
+
+class InvalidInputError(PnpError, ValueError): ...
+class InputTypeError(InvalidInputError, TypeError): ...
+class DegenerateError(PnpError, ValueError): ...
+class NoSolutionError(PnpError, RuntimeError): ...
+class InvalidOptionError(PnpError, ValueError): ...
+class NoConsensusError(PnpError, RuntimeError): ...
+class CameraError(PnpError, ValueError): ...
+class ModelError(PnpError): ...
+class UnknownIdError(PnpError, LookupError): ...
 
 @final
 class Solution:

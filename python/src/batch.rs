@@ -37,20 +37,14 @@ use rayon::ThreadPool;
 
 use crate::camera::PyCamera;
 use crate::convert::{contiguous_array, rows, shape_str, vector};
-use crate::errors::{error, option_error, pnp_error, shape_error};
+use crate::errors::{error, option_error, pnp_error, shape_error, InvalidInputError};
 use crate::options::SolverOptions;
 use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
 use crate::solution::PySolution;
 use crate::solve::check_finite;
 
 fn problems_error(py: Python<'_>, message: String) -> PyErr {
-    error(
-        py,
-        "InvalidInputError",
-        "Shape",
-        message,
-        vec![("argument", "problems".into())],
-    )
+    error::<InvalidInputError>(py, "Shape", message, vec![("argument", "problems".into())])
 }
 
 /// The batch's cameras, and each problem's index into them.
@@ -489,13 +483,7 @@ fn stacked<'py>(
         ));
     }
     a.try_readonly().map_err(|e| {
-        error(
-            obj.py(),
-            "InvalidInputError",
-            "Borrow",
-            format!("{name}: {e}"),
-            vec![],
-        )
+        error::<InvalidInputError>(obj.py(), "Borrow", format!("{name}: {e}"), vec![])
     })
 }
 

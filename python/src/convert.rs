@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::PyModule;
 
-use crate::errors::{dtype_error, error, shape_error};
+use crate::errors::{dtype_error, error, shape_error, InvalidInputError};
 
 static NUMPY: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
 
@@ -30,13 +30,7 @@ pub(crate) fn readonly<'py, D: numpy::ndarray::Dimension>(
     name: &str,
 ) -> PyResult<numpy::PyReadonlyArray<'py, f64, D>> {
     arr.try_readonly().map_err(|e| {
-        error(
-            arr.py(),
-            "InvalidInputError",
-            "Borrow",
-            format!("{name}: {e}"),
-            vec![],
-        )
+        error::<InvalidInputError>(arr.py(), "Borrow", format!("{name}: {e}"), vec![])
     })
 }
 

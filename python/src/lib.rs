@@ -1,6 +1,6 @@
 //! The extension module `eopnp._eopnp` of the `eopnp` Python package (PyO3, abi3): the Rust
-//! crate's solver, cameras, RANSAC and COLMAP reader for numpy arrays. `eopnp/__init__.py`
-//! re-exports it with the exceptions of `eopnp/_errors.py`; `eopnp/__init__.pyi` has the
+//! crate's solver, cameras, RANSAC and COLMAP reader for numpy arrays, and the package's
+//! exceptions (`errors`). `eopnp/__init__.py` re-exports it; `eopnp/__init__.pyi` has the
 //! types and the documentation.
 //!
 //! Every one-problem entry point converts its arrays to `f64` points (copies: the arrays may
@@ -29,6 +29,7 @@ mod solve;
 #[pymodule]
 fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    errors::add_to_module(m)?;
     m.add_function(wrap_pyfunction!(solve::solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve::solve_all, m)?)?;
     m.add_function(wrap_pyfunction!(solve::refine, m)?)?;
