@@ -54,6 +54,52 @@ class CameraError(PnpError, ValueError): ...
 class ModelError(PnpError): ...
 class UnknownIdError(PnpError, LookupError): ...
 
+_Covariance = Union[Literal["estimated"], float, None]
+
+@final
+class SolverOptions:
+    """The solver's options, for ``options=`` of every function that solves (which also take
+    them as keyword arguments, not together with ``options=``). Checked at construction
+    (``InvalidOptionError``); immutable (``replace`` returns a changed copy), hashable,
+    picklable."""
+
+    def __new__(
+        cls,
+        *,
+        refinement: _Refinement = "ml",
+        planar: _Planar = "auto",
+        newton_iterations: int | None = None,
+        newton_step_tolerance: float | None = None,
+        reprojection_iterations: int | None = None,
+        exhaustive: bool = False,
+        loss: _Loss = None,
+        covariance: _Covariance = None,
+    ) -> "SolverOptions": ...
+    @property
+    def refinement(self) -> Literal["ml", "algebraic"]: ...
+    @property
+    def planar(self) -> _Planar: ...
+    @property
+    def newton_iterations(self) -> int | None: ...
+    @property
+    def newton_step_tolerance(self) -> float | None: ...
+    @property
+    def reprojection_iterations(self) -> int | None: ...
+    @property
+    def exhaustive(self) -> bool: ...
+    @property
+    def loss(self) -> Literal["squared"] | tuple[Literal["huber", "cauchy"], float]: ...
+    @property
+    def covariance(self) -> Literal["estimated"] | float | None: ...
+    def as_dict(self) -> dict[str, Any]: ...
+    def replace(self, **changes: Any) -> "SolverOptions": ...
+    def __eq__(self, value: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
+
+_Options = Union[SolverOptions, Mapping[str, Any], None]
+"""``options=``: a ``SolverOptions``, a dict of its fields, or None (the defaults)."""
+
 @final
 class Solution:
     """A camera pose (world to camera, ``x_cam = R @ X + t``) and how it was found.
@@ -217,7 +263,6 @@ class RansacOptions:
     def as_dict(self) -> dict[str, Any]: ...
 
 _RansacArg = Union[RansacOptions, Mapping[str, Any], None]
-_Covariance = Union[Literal["estimated"], float, None]
 _Problem = Union[
     tuple[_ArrayLike, _ArrayLike], tuple[_ArrayLike, _ArrayLike, _ArrayLike | None]
 ]
@@ -322,14 +367,15 @@ def solve(
     weights: _ArrayLike | None = None,
     *,
     camera: Camera | None = None,
+    options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-    covariance: _Covariance = None,
     loss: _Loss = None,
+    covariance: _Covariance = None,
 ) -> Solution:
     """The camera pose from N >= 4 correspondences: world (N, 3), image (N, 2) normalised, or
     pixels with ``camera``; optional weights (N,) >= 0. Default: EOPnP + maximum-likelihood
@@ -351,14 +397,15 @@ def solve_all(
     world: _ArrayLike,
     image: _ArrayLike,
     *,
+    options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-    covariance: _Covariance = None,
     loss: _Loss = None,
+    covariance: _Covariance = None,
 ) -> list[Solution]:
     """Every distinct local minimum, best first (normalised image points)."""
 
@@ -376,11 +423,12 @@ def refine(
     *,
     weights: _ArrayLike | None = None,
     camera: Camera | None = None,
-    loss: _Loss = None,
-    covariance: _Covariance = None,
+    options: _Options = None,
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
 ) -> Solution:
     """Refines a prior pose (tracking: the previous frame's) to the maximum-likelihood pose of
     the basin it starts in, without the global search (OpenCV's ``solvePnPRefineLM``,
@@ -397,15 +445,16 @@ def solve_batch(
     problems: Sequence[_Problem],
     *,
     camera: Camera | Sequence[Camera] | None = None,
+    options: _Options = None,
+    threads: int | None = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-    covariance: _Covariance = None,
     loss: _Loss = None,
-    threads: int | None = None,
+    covariance: _Covariance = None,
 ) -> list[Solution | PnpError]:
     """``solve`` on many problems, ``(world, image)`` or ``(world, image, weights)`` tuples,
     in parallel (``threads``: None for rayon's default, or a count), the GIL released.
@@ -424,15 +473,16 @@ def solve_batch_arrays(
     weights: _ArrayLike | None = None,
     *,
     camera: Camera | Sequence[Camera] | None = None,
+    options: _Options = None,
+    threads: int | None = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-    covariance: _Covariance = None,
     loss: _Loss = None,
-    threads: int | None = None,
+    covariance: _Covariance = None,
 ) -> BatchResult:
     """``solve`` on B problems given as stacked arrays, world (B, N, 3) and image (B, N, 2)
     (normalised, or pixels with ``camera``: one for all or one per problem), optional weights
@@ -454,6 +504,8 @@ def solve_ransac_batch(
     camera: Camera | Sequence[Camera] | None = None,
     focal: float | tuple[float, float] | None = None,
     ransac: _RansacArg = None,
+    options: _Options = None,
+    threads: int | None = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
@@ -462,7 +514,6 @@ def solve_ransac_batch(
     exhaustive: bool = False,
     loss: _Loss = None,
     covariance: _Covariance = None,
-    threads: int | None = None,
 ) -> list[tuple[Solution, _RansacInfo] | PnpError]:
     """``solve_ransac`` on many problems in parallel: entry ``i`` is what ``solve_ransac``
     returns with seed ``problem_seed(ransac.seed, i)`` (or the exception instance it would
@@ -479,6 +530,7 @@ def solve_ransac(
     camera: Camera | None = None,
     focal: float | tuple[float, float] | None = None,
     ransac: _RansacArg = None,
+    options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
@@ -502,6 +554,7 @@ def register_image(
     image_id: int,
     *,
     ransac: _RansacArg | bool = None,
+    options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
@@ -520,6 +573,8 @@ def register_images(
     image_ids: Iterable[int] | None = None,
     *,
     ransac: _RansacArg | bool = None,
+    options: _Options = None,
+    threads: int | None = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
@@ -528,7 +583,6 @@ def register_images(
     exhaustive: bool = False,
     loss: _Loss = None,
     covariance: _Covariance = None,
-    threads: int | None = None,
 ) -> list[Registration | PnpError]:
     """``register_image`` on many images (None: every image, in id order), in parallel
     (``threads`` as ``solve_batch``), the GIL released; each thread builds the table of the
@@ -553,6 +607,7 @@ __all__ = [
     "RansacOptions",
     "Registration",
     "Solution",
+    "SolverOptions",
     "UnknownIdError",
     "__version__",
     "problem_seed",

@@ -38,7 +38,7 @@ use rayon::ThreadPool;
 use crate::camera::PyCamera;
 use crate::convert::{contiguous_array, rows, shape_str, vector};
 use crate::errors::{error, option_error, pnp_error, shape_error, InvalidInputError};
-use crate::options::SolverOptions;
+use crate::options::{options_arg, solver_arg, KEYWORDS};
 use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
 use crate::solution::PySolution;
 use crate::solve::check_finite;
@@ -378,10 +378,12 @@ pub(crate) fn in_pool<T: Send>(
 ///         ``solve``'s arguments (weights may be None).
 ///     camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
 ///         of one ``Camera`` per problem (image points in pixels).
-///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, covariance, loss: as ``solve``, for every problem.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
+///         problem.
 ///     threads: None (rayon's global pool: one thread per core, or ``RAYON_NUM_THREADS``) or
 ///         the number of threads (a pool per count, built once and kept).
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
 ///
 /// Returns:
 ///     list: one entry per problem, in order: its ``Solution``, or the exception instance
@@ -394,36 +396,18 @@ pub(crate) fn in_pool<T: Send>(
 ///         wrong shape; the message names the problem's index), before anything is solved.
 ///     InputTypeError: an array that is not real numbers.
 ///     InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (problems, *, camera = None, refinement = "ml", planar = "auto",
-    newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false, covariance = None, loss = None, threads = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (problems, *, camera = None, options = None, threads = None, **keywords))]
 pub(crate) fn solve_batch<'py>(
     py: Python<'py>,
     problems: &Bound<'py, PyAny>,
     camera: Option<&Bound<'py, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    covariance: Option<&Bound<'py, PyAny>>,
-    loss: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
+    let solver = solver_arg(py, "solve_batch", options, keywords, KEYWORDS)?;
     let batch = gather(py, problems, camera)?;
     let cams: Vec<&Camera> = batch.cameras.iter().map(|c| &c.get().inner).collect();
     let inputs = batch.inputs(&cams);
@@ -553,15 +537,17 @@ fn write_row(
 ///         exactly as if the points were dropped; or use ``solve_batch``.
 ///     camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
 ///         of B ``Camera`` (pixels).
-///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, covariance, loss: as ``solve``, for every problem.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
+///         problem.
 ///     threads: as ``solve_batch``.
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
 ///
 /// Returns:
 ///     BatchResult: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost`` (B,), ``reprojection_rmse``
-///     (B,), ``ok`` (B,) bool, ``covariance`` (B, 6, 6) and ``sigma`` (B,) with
-///     ``covariance=`` (else None), and ``errors``: {index: the exception ``solve`` would
-///     raise for that problem} (its rows are NaN and ``ok`` False). Row ``i`` equals
+///     (B,), ``ok`` (B,) bool, ``covariance`` (B, 6, 6) and ``sigma`` (B,) with a
+///     ``covariance`` option (else None), and ``errors``: {index: the exception ``solve``
+///     would raise for that problem} (its rows are NaN and ``ok`` False). Row ``i`` equals
 ///     ``solve(world[i], image[i], weights[i], ...)`` exactly, whatever the thread count.
 ///
 /// Raises:
@@ -569,39 +555,22 @@ fn write_row(
 ///         (B, N, 2) or weights not (B, N) with world's B and N), before anything is solved.
 ///     InputTypeError: an array that is not real numbers.
 ///     InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (world, image, weights = None, *, camera = None, refinement = "ml",
-    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, covariance = None, loss = None,
-    threads = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (world, image, weights = None, *, camera = None, options = None,
+    threads = None, **keywords))]
 pub(crate) fn solve_batch_arrays<'py>(
-    py: Python<'py>,
     world: &Bound<'py, PyAny>,
     image: &Bound<'py, PyAny>,
     weights: Option<&Bound<'py, PyAny>>,
     camera: Option<&Bound<'py, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    covariance: Option<&Bound<'py, PyAny>>,
-    loss: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
+    let py = world.py();
+    let options = options_arg(py, "solve_batch_arrays", options, keywords, KEYWORDS)?;
+    let solver = options.solver();
     let w = stacked(world, "world", &[None, None, Some(3)], "(B, N, 3)")?;
     let (b, n) = (w.shape()[0], w.shape()[1]);
     let bn = format!("(B, N, 2) = ({b}, {n}, 2)");
@@ -618,7 +587,7 @@ pub(crate) fn solve_batch_arrays<'py>(
     let (cams, which) = cameras(py, camera, b)?;
     let cams: Vec<&Camera> = cams.iter().map(|c| &c.get().inner).collect();
 
-    let want_cov = covariance.is_some_and(|c| !c.is_none());
+    let want_cov = options.wants_covariance();
     let r_out = output(py, &[b, 3, 3]);
     let t_out = output(py, &[b, 3]);
     let cost_out = output(py, &[b]);
@@ -700,9 +669,11 @@ pub(crate) fn solve_batch_arrays<'py>(
 ///     focal: ``(fx, fy)`` (or one ``f``) in pixels for every problem, for normalised image
 ///         points (exactly one of ``camera`` and ``focal``).
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
-///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, loss, covariance: as ``solve_ransac``.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve_ransac``, for every
+///         problem.
 ///     threads: as ``solve_batch``.
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
 ///
 /// Returns:
 ///     list: one entry per problem, in order: ``(Solution, info)`` as ``solve_ransac``
@@ -712,38 +683,19 @@ pub(crate) fn solve_batch_arrays<'py>(
 /// Raises:
 ///     As ``solve_batch``; InvalidOptionError also for neither or both of camera and focal.
 #[pyfunction]
-#[pyo3(signature = (problems, *, camera = None, focal = None, ransac = None, refinement = "ml",
-    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, loss = None, covariance = None,
-    threads = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (problems, *, camera = None, focal = None, ransac = None, options = None,
+    threads = None, **keywords))]
 pub(crate) fn solve_ransac_batch<'py>(
-    py: Python<'py>,
     problems: &Bound<'py, PyAny>,
     camera: Option<&Bound<'py, PyAny>>,
     focal: Option<&Bound<'py, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    loss: Option<&Bound<'py, PyAny>>,
-    covariance: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
+    let py = problems.py();
+    let solver = solver_arg(py, "solve_ransac_batch", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
     let has_camera = camera.is_some_and(|c| !c.is_none());

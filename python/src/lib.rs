@@ -3,6 +3,9 @@
 //! exceptions (`errors`). `eopnp/__init__.py` re-exports it; `eopnp/__init__.pyi` has the
 //! types and the documentation.
 //!
+//! Every function that solves takes `options=` (an `eopnp.SolverOptions`) or the same options
+//! as keyword arguments; `options::solver_arg` turns either into the `eopnp::Solver`.
+//!
 //! Every one-problem entry point converts its arrays to `f64` points (copies: the arrays may
 //! be mutated while the GIL is released), runs the library with the GIL released, and maps each error
 //! to the exception class of its `PnpError` family.
@@ -46,6 +49,7 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<solution::PySolution>()?;
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<ransac::PyRansacOptions>()?;
+    m.add_class::<options::PySolverOptions>()?;
     m.add_class::<colmap::PyModel>()?;
     m.add_class::<colmap::PyImage>()?;
     m.add_class::<colmap::PyRegistration>()?;
