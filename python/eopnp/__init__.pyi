@@ -459,8 +459,8 @@ def solve_batch(
     """``solve`` on many problems, ``(world, image)`` or ``(world, image, weights)`` tuples,
     in parallel (``threads``: None for rayon's default, or a count), the GIL released.
     ``camera``: one for all problems or one per problem (pixels), or None (normalised).
-    C-contiguous float64 arrays are read in place with the GIL released: do not modify them
-    from another thread during the call.
+    The arrays are copied first, with the GIL held: another thread may modify them during
+    the call without changing its results.
 
     Returns one entry per problem: its ``Solution``, or the exception ``solve`` would raise
     for it (an instance, not raised). Equal to ``solve`` one by one, whatever ``threads``.
@@ -493,9 +493,8 @@ def solve_batch_arrays(
     Returns a ``BatchResult``: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost``, ``reprojection_rmse``,
     ``ok`` (B,), ``covariance`` (B, 6, 6) and ``sigma`` with ``covariance=``, and ``errors``
     {index: exception}. Row ``i`` equals ``solve(world[i], image[i], weights[i], ...)``
-    exactly, whatever ``threads``. C-contiguous float64 arrays are read in place with the GIL
-    released (do not modify them from another thread during the call); others are converted
-    once. Raises InvalidInputError (InputTypeError) for arrays of
+    exactly, whatever ``threads``. The arrays are copied first, with the GIL held: another
+    thread may modify them during the call without changing its results. Raises InvalidInputError (InputTypeError) for arrays of
     the wrong shape (dtype) before solving anything, InvalidOptionError for bad options."""
 
 def solve_ransac_batch(

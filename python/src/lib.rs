@@ -6,15 +6,14 @@
 //! Every function that solves takes `options=` (an `eopnp.SolverOptions`) or the same options
 //! as keyword arguments; `options::solver_arg` turns either into the `eopnp::Solver`.
 //!
-//! Every one-problem entry point converts its arrays to `f64` points (copies: the arrays may
-//! be mutated while the GIL is released), runs the library with the GIL released, and maps each error
-//! to the exception class of its `PnpError` family.
+//! Every entry point converts its arrays to `f64` points (copies, made with the GIL held:
+//! another Python thread may modify the arrays while the GIL is released), runs the library
+//! with the GIL released, and maps each error to the exception class of its `PnpError`
+//! family.
 //!
-//! `solve_batch`, `solve_ransac_batch` and `solve_batch_arrays` (`batch`) solve one problem
-//! per rayon task (feature `rayon`) with the GIL released for the whole batch, each task
-//! reading its own problem's arrays (held, not copied); `solve_batch_arrays` writes the
-//! poses into stacked arrays from the tasks. `covariance=` fills `Solution.covariance`
-//! through `Solver::covariance`.
+//! `solve_batch`, `solve_ransac_batch` and `solve_batch_arrays` (`batch`) copy every problem
+//! first, then solve one problem per rayon task (feature `rayon`) with the GIL released for the
+//! whole batch; `solve_batch_arrays` writes the poses into stacked arrays from the tasks.
 
 use pyo3::prelude::*;
 
