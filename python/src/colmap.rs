@@ -256,28 +256,42 @@ pub(crate) fn read_colmap_model(py: Python<'_>, path: PathBuf) -> PyResult<PyMod
 ///     micros: wall time of undistortion plus solve, microseconds.
 #[pyclass(frozen, module = "eopnp", name = "Registration")]
 pub(crate) struct PyRegistration {
+    /// The image's id.
     #[pyo3(get)]
     image_id: u32,
+    /// The image's name.
     #[pyo3(get)]
     name: String,
+    /// The image's 2D-3D correspondences.
     #[pyo3(get)]
     n: usize,
+    /// Correspondences the pose was fitted to (all that could be undistorted, or RANSAC's
+    /// inliers).
     #[pyo3(get)]
     inliers: usize,
+    /// Observations whose pixel could not be undistorted.
     #[pyo3(get)]
     skipped: usize,
+    /// The estimated pose.
     #[pyo3(get)]
     solution: Py<PySolution>,
+    /// RANSAC's statistics (iterations, hypotheses, local_fits, final_fits, inliers,
+    /// inlier_ratio, micros), or None without RANSAC.
     #[pyo3(get)]
     ransac: Option<Py<PyDict>>,
+    /// Rotation difference to the model's pose, degrees.
     #[pyo3(get)]
     rotation_error_deg: f64,
+    /// Translation difference, percent of the model's ``|t|``.
     #[pyo3(get)]
     translation_error_pct: f64,
+    /// RMS pixel reprojection error of the estimated pose over the fitted points.
     #[pyo3(get)]
     rmse_px: f64,
+    /// The same for the model's own pose.
     #[pyo3(get)]
     model_rmse_px: f64,
+    /// Wall time of undistortion plus solve, microseconds.
     #[pyo3(get)]
     micros: f64,
 }

@@ -1,7 +1,7 @@
 //! The extension module `eopnp._eopnp` of the `eopnp` Python package (PyO3, abi3): the Rust
 //! crate's solver, cameras, RANSAC and COLMAP reader for numpy arrays, and the package's
 //! exceptions (`errors`). `eopnp/__init__.py` re-exports it; `eopnp/__init__.pyi` has the
-//! types and the documentation.
+//! types, its docstrings generated from the ones here (`python/gen_stub_docs.py`).
 //!
 //! Every function that solves takes `options=` (an `eopnp.SolverOptions`) or the same options
 //! as keyword arguments; `options::solver_arg` turns either into the `eopnp::Solver`.
