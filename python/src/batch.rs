@@ -312,11 +312,7 @@ impl<'py> ListBatch<'py> {
     fn copy<'b>(
         &self,
         range: Range<usize>,
-        rest: &mut (
-            Rest<'b, Point3<f64>>,
-            Rest<'b, Point2<f64>>,
-            Rest<'b, f64>,
-        ),
+        rest: &mut (Rest<'b, Point3<f64>>, Rest<'b, Point2<f64>>, Rest<'b, f64>),
     ) -> PyResult<Chunk<'b>> {
         let [nw, ni, nk] = self.totals(range.clone());
         let (world, image, weights) = (rest.0.take(nw), rest.1.take(ni), rest.2.take(nk));
@@ -341,9 +337,12 @@ impl<'py> ListBatch<'py> {
             let kr = match &e.weights {
                 Some(s) => {
                     let kr = k..k + s.len();
-                    put(s, &mut weights[kr.clone()], |r: &[f64; 1]| r[0], || {
-                        format!("problems[{i}] weights")
-                    })?;
+                    put(
+                        s,
+                        &mut weights[kr.clone()],
+                        |r: &[f64; 1]| r[0],
+                        || format!("problems[{i}] weights"),
+                    )?;
                     Some(kr)
                 }
                 None => None,
@@ -443,11 +442,7 @@ impl Buffers {
     fn rest(
         &mut self,
         sizes: [usize; 3],
-    ) -> (
-        Rest<'_, Point3<f64>>,
-        Rest<'_, Point2<f64>>,
-        Rest<'_, f64>,
-    ) {
+    ) -> (Rest<'_, Point3<f64>>, Rest<'_, Point2<f64>>, Rest<'_, f64>) {
         (
             Rest(&mut self.world.spare_capacity_mut()[..sizes[0]]),
             Rest(&mut self.image.spare_capacity_mut()[..sizes[1]]),
@@ -550,9 +545,7 @@ fn pool(py: Python<'_>, threads: Option<i64>) -> PyResult<Option<Arc<ThreadPool>
                 format!("threads must be None or an integer in [1, 1024], got {n}"),
             )
         })?;
-    let mut pools = POOLS
-        .lock()
-        .unwrap_or_else(PoisonError::into_inner);
+    let mut pools = POOLS.lock().unwrap_or_else(PoisonError::into_inner);
     let pools = pools.get_or_insert_with(HashMap::new);
     if let Some(p) = pools.get(&n) {
         return Ok(Some(Arc::clone(p)));
@@ -596,10 +589,7 @@ struct Latch {
 
 impl Latch {
     fn wait(&self, n: usize) {
-        let mut done = self
-            .done
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner);
+        let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
         while *done < n {
             done = self
                 .changed
@@ -614,11 +604,7 @@ struct Done<'a>(&'a Latch);
 
 impl Drop for Done<'_> {
     fn drop(&mut self) {
-        *self
-            .0
-            .done
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner) += 1;
+        *self.0.done.lock().unwrap_or_else(PoisonError::into_inner) += 1;
         self.0.changed.notify_all();
     }
 }

@@ -350,7 +350,10 @@ pub(crate) fn register_image(
 
 /// The RANSAC options of ``register_image``'s ``ransac``: None or False (plain), True
 /// (defaults), a ``RansacOptions`` or a dict.
-fn registration_ransac(py: Python<'_>, ransac: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Ransac>> {
+fn registration_ransac(
+    py: Python<'_>,
+    ransac: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<Ransac>> {
     Ok(match ransac {
         None => None,
         Some(r) if r.is_instance_of::<pyo3::types::PyBool>() => {

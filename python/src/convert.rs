@@ -30,9 +30,8 @@ pub(crate) fn readonly<'py, D: numpy::ndarray::Dimension>(
     arr: &Bound<'py, numpy::PyArray<f64, D>>,
     name: &str,
 ) -> PyResult<numpy::PyReadonlyArray<'py, f64, D>> {
-    arr.try_readonly().map_err(|e| {
-        error::<InvalidInputError>(arr.py(), "Borrow", format!("{name}: {e}"), vec![])
-    })
+    arr.try_readonly()
+        .map_err(|e| error::<InvalidInputError>(arr.py(), "Borrow", format!("{name}: {e}"), vec![]))
 }
 
 /// `obj` as a `float64` array: as is if it is one, otherwise through `numpy.asarray` when its

@@ -258,7 +258,12 @@ pub(crate) fn dtype_error(py: Python<'_>, argument: &str, message: String) -> Py
 
 /// `InvalidOptionError` for an option of the bindings out of its range.
 pub(crate) fn option_error(py: Python<'_>, option: &str, message: String) -> PyErr {
-    error::<InvalidOptionError>(py, "InvalidOption", message, vec![("option", option.into())])
+    error::<InvalidOptionError>(
+        py,
+        "InvalidOption",
+        message,
+        vec![("option", option.into())],
+    )
 }
 
 fn input_name(input: InputKind) -> &'static str {

@@ -262,7 +262,10 @@ impl<'py> Keywords<'py> {
 
 /// `loss=`: None or "squared" (None here), ("huber", s) or ("cauchy", s). A scale the library
 /// cannot use raises the library's `InvalidOption` ("loss") error.
-fn loss_arg(py: Python<'_>, arg: Option<&Bound<'_, PyAny>>) -> PyResult<Option<(&'static str, f64)>> {
+fn loss_arg(
+    py: Python<'_>,
+    arg: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<(&'static str, f64)>> {
     let Some(a) = arg.filter(|a| !a.is_none()) else {
         return Ok(None);
     };
@@ -394,9 +397,16 @@ pub(crate) fn options_arg(
     let options = options.filter(|o| !o.is_none());
     let keywords = match kwargs.filter(|k| !k.is_empty()) {
         None => None,
-        Some(k) => Some(Keywords::from_dict(k, allowed, &format!("{func}()"), |key| {
-            PyTypeError::new_err(format!("{func}() got an unexpected keyword argument '{key}'"))
-        })?),
+        Some(k) => Some(Keywords::from_dict(
+            k,
+            allowed,
+            &format!("{func}()"),
+            |key| {
+                PyTypeError::new_err(format!(
+                    "{func}() got an unexpected keyword argument '{key}'"
+                ))
+            },
+        )?),
     };
     match (options, keywords) {
         (None, None) => Ok(PySolverOptions::default()),
