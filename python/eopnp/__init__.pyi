@@ -724,8 +724,9 @@ def solve_batch(
     """Solves many independent problems in parallel (``solve`` on each), the GIL released while
     they are solved.
 
-    The arrays are checked and copied first, with the GIL held (as ``solve`` copies its own):
-    other threads may modify them during the call without changing its results.
+    Each array is copied once, with the GIL held, and the solves read the copy (as ``solve``
+    does): what other threads write to the arrays after the call copied them does not change
+    its results.
 
     Args:
         problems: a sequence of ``(world, image)`` or ``(world, image, weights)`` tuples, as
@@ -774,9 +775,9 @@ def solve_batch_arrays(
     GIL released, and returns the poses as stacked arrays: the form for throughput (no Python
     object per problem).
 
-    The arrays are checked and copied first, with the GIL held (as ``solve`` copies its own):
-    other threads may modify them during the call without changing its results. Any
-    array-like of real numbers is accepted.
+    Each array is copied once, with the GIL held, and the solves read the copy (as ``solve``
+    does): what other threads write to the arrays after the call copied them does not change
+    its results. Any array-like of real numbers is accepted.
 
     Args:
         world: world points of every problem, shape (B, N, 3).

@@ -5,9 +5,12 @@
 //! No caller's buffer is read with the GIL released. With the GIL held, the calling thread
 //! first checks every problem (type, dtype, shape: a malformed batch raises, naming the
 //! problem, before anything is solved), then copies every problem's points into memory of the
-//! call's own, as the one-problem functions copy theirs, and only then releases the GIL: the
-//! results are those of the arrays as they were when the call began, whatever other Python
-//! threads write to them during the call.
+//! call's own, each array read once, as the one-problem functions copy theirs; the solves read
+//! only the copies, and the GIL is released for good once everything is copied. What other
+//! Python threads write to the arrays during the call therefore never reaches a solve: each
+//! problem's result is that of its arrays as the call copied them. (As for any function that
+//! reads numpy arrays with the GIL held, a numpy operation of another thread that itself
+//! releases the GIL while it writes to the same array is not excluded.)
 //!
 //! The copy is pipelined with the solves (`pipelined`): the problems are copied chunk by chunk,
 //! and each chunk is handed to the pool's threads as soon as it is copied, so that they solve
@@ -676,8 +679,9 @@ fn threads_of(pool: Option<&ThreadPool>) -> usize {
 /// Solves many independent problems in parallel (``solve`` on each), the GIL released while
 /// they are solved.
 ///
-/// The arrays are checked and copied first, with the GIL held (as ``solve`` copies its own):
-/// other threads may modify them during the call without changing its results.
+/// Each array is copied once, with the GIL held, and the solves read the copy (as ``solve``
+/// does): what other threads write to the arrays after the call copied them does not change
+/// its results.
 ///
 /// Args:
 ///     problems: a sequence of ``(world, image)`` or ``(world, image, weights)`` tuples, as
@@ -863,9 +867,9 @@ struct Rows<'a> {
 /// GIL released, and returns the poses as stacked arrays: the form for throughput (no Python
 /// object per problem).
 ///
-/// The arrays are checked and copied first, with the GIL held (as ``solve`` copies its own):
-/// other threads may modify them during the call without changing its results. Any
-/// array-like of real numbers is accepted.
+/// Each array is copied once, with the GIL held, and the solves read the copy (as ``solve``
+/// does): what other threads write to the arrays after the call copied them does not change
+/// its results. Any array-like of real numbers is accepted.
 ///
 /// Args:
 ///     world: world points of every problem, shape (B, N, 3).
