@@ -398,8 +398,8 @@ const SPARE_BYTES: usize = 64 << 20;
 impl Buffers {
     /// Buffers for `[world, image, weights]` points (the spare ones, grown if needed), their
     /// memory touched (with the GIL released) when it is new: the page faults of fresh memory
-    /// (several microseconds per 4 KiB page on the 2-core VM) are then not paid while the copy
-    /// holds the GIL.
+    /// (about 2 us per 4 KiB page on the 2-core VM: docs/python-log.md) are then not paid while
+    /// the copy holds the GIL.
     fn take(py: Python<'_>, sizes: [usize; 3]) -> Self {
         let mut b = SPARE
             .lock()
