@@ -10,6 +10,8 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> sol = eopnp.solve(world, pixels, camera=cam)
 >>> sol, info = eopnp.solve_ransac(world, pixels, camera=cam)   # info["inliers"]: bool mask
 >>> sol = eopnp.solve(world, pixels, camera=cam, covariance=1.0)  # sol.covariance: 6x6
+>>> opts = eopnp.SolverOptions(loss=("huber", 2.0), covariance="estimated")
+>>> sol = eopnp.solve(world, pixels, camera=cam, options=opts)  # or the options as keywords
 >>> results = eopnp.solve_batch([(world, pixels), ...], camera=cam, threads=2)
 >>> res = eopnp.solve_batch_arrays(worlds, images, threads=2)  # (B, N, 3), (B, N, 2)
 >>> res.R, res.t, res.ok, res.errors            # (B, 3, 3), (B, 3), (B,) bool, {i: exc}
@@ -17,30 +19,30 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> sol = eopnp.refine(world, pixels, prev_sol, camera=cam)     # tracking: from a prior pose
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
-read as float64; results are new float64 arrays. Errors raise the exceptions of
-``eopnp.PnpError``'s hierarchy (see ``eopnp._errors``). Every solve releases the GIL; the batch functions run on several threads.
+read as float64 (copied, with the GIL held); results are new float64 arrays. Errors raise the
+exceptions of ``eopnp.PnpError``'s hierarchy. Every solve releases the GIL; the batch
+functions run on several threads.
 """
 
 from ._batch import BatchResult
-from ._errors import (
+from ._eopnp import (
+    Camera,
     CameraError,
     DegenerateError,
+    Image,
     InputTypeError,
     InvalidInputError,
     InvalidOptionError,
+    Model,
     ModelError,
     NoConsensusError,
     NoSolutionError,
     PnpError,
-    UnknownIdError,
-)
-from ._eopnp import (
-    Camera,
-    Image,
-    Model,
     RansacOptions,
     Registration,
     Solution,
+    SolverOptions,
+    UnknownIdError,
     __version__,
     problem_seed,
     read_colmap_model,
@@ -72,6 +74,7 @@ __all__ = [
     "RansacOptions",
     "Registration",
     "Solution",
+    "SolverOptions",
     "UnknownIdError",
     "__version__",
     "problem_seed",

@@ -1,11 +1,33 @@
-"""Type stubs of the eopnp package (the extension module eopnp._eopnp, eopnp._errors and
-eopnp._batch).
+"""eopnp: camera pose from 2D-3D point correspondences (the Perspective-n-Point problem).
 
-Conventions: world points are (N, 3), image points (N, 2), normalised (x/z, y/z) unless a
-``camera`` is given (then pixels). Any array-like of real numbers is accepted (float or integer
-dtype, any layout) and read as float64; arrays returned are new float64 arrays (bool for
-inlier masks). Poses map world to camera: ``x_cam = R @ X + t``.
+EOPnP (Zhou and Kaess, IROS 2019) followed by default by a Levenberg-Marquardt refinement of
+the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopnp``.
+
+>>> import numpy as np, eopnp
+>>> sol = eopnp.solve(world, image)            # world (N, 3), image (N, 2) normalised
+>>> sol.R, sol.t, sol.rvec, sol.cost           # x_cam = R @ X + t
+>>> cam = eopnp.Camera("SIMPLE_RADIAL", [1245.6, 600, 800, 0.06], 1200, 1600)
+>>> sol = eopnp.solve(world, pixels, camera=cam)
+>>> sol, info = eopnp.solve_ransac(world, pixels, camera=cam)   # info["inliers"]: bool mask
+>>> sol = eopnp.solve(world, pixels, camera=cam, covariance=1.0)  # sol.covariance: 6x6
+>>> opts = eopnp.SolverOptions(loss=("huber", 2.0), covariance="estimated")
+>>> sol = eopnp.solve(world, pixels, camera=cam, options=opts)  # or the options as keywords
+>>> results = eopnp.solve_batch([(world, pixels), ...], camera=cam, threads=2)
+>>> res = eopnp.solve_batch_arrays(worlds, images, threads=2)  # (B, N, 3), (B, N, 2)
+>>> res.R, res.t, res.ok, res.errors            # (B, 3, 3), (B, 3), (B,) bool, {i: exc}
+>>> sol = eopnp.solve(world, pixels, camera=cam, loss=("cauchy", 2.0))  # robust, 2 px scale
+>>> sol = eopnp.refine(world, pixels, prev_sol, camera=cam)     # tracking: from a prior pose
+
+Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
+read as float64 (copied, with the GIL held); results are new float64 arrays. Errors raise the
+exceptions of ``eopnp.PnpError``'s hierarchy. Every solve releases the GIL; the batch
+functions run on several threads.
 """
+
+# The type stubs of the eopnp package (the extension module eopnp._eopnp and eopnp._batch).
+# Every docstring here is generated from the runtime object's __doc__ (the Rust doc comments of
+# python/src, the docstring of eopnp/__init__.py) by `python python/gen_stub_docs.py`;
+# python/tests/test_stub_docs.py fails when they differ. Edit the Rust side, then regenerate.
 
 import os
 from typing import Any, Iterable, Literal, Mapping, Sequence, TypedDict, Union, final
@@ -14,18 +36,6 @@ import numpy as np
 import numpy.typing as npt
 
 from ._batch import BatchResult as BatchResult
-from ._errors import (
-    CameraError as CameraError,
-    DegenerateError as DegenerateError,
-    InputTypeError as InputTypeError,
-    InvalidInputError as InvalidInputError,
-    InvalidOptionError as InvalidOptionError,
-    ModelError as ModelError,
-    NoConsensusError as NoConsensusError,
-    NoSolutionError as NoSolutionError,
-    PnpError as PnpError,
-    UnknownIdError as UnknownIdError,
-)
 
 __version__: str
 
@@ -44,69 +54,251 @@ _Source = Literal[
     "initial",
     "other",
 ]
+# loss=: None or "squared" (default), ("huber", s) or ("cauchy", s), the scale s in pixels
+# with a camera, in normalised units otherwise (finite, > 0).
 _Loss = Union[
     Literal["squared"], tuple[Literal["huber", "cauchy"], float], None
 ]
-"""``loss=``: None or "squared" (default), ``("huber", s)`` or ``("cauchy", s)``, the scale
-``s`` in pixels with a camera, in normalised units otherwise (finite, > 0)."""
+_Covariance = Union[Literal["estimated"], float, None]
+
+class PnpError(Exception):
+    """Base class of every exception raised by eopnp.
+
+    Attributes:
+        kind: the name of the Rust ``PnpError`` variant (``"TooFewPoints"``,
+            ``"NonFinite"``, ...) or of the package's check (``"Shape"``, ``"DType"``, ...).
+        details: the variant's fields as a dict; each is also an attribute of the exception
+            (e.g. ``e.index`` and ``e.input`` of a non-finite value).
+
+    Exceptions raised by the package pickle with their ``kind`` and fields.
+    """
+    kind: str
+    details: dict[str, Any]
+
+class InvalidInputError(PnpError, ValueError):
+    """Bad input (also a ``ValueError``): too few points (``got``, ``need``), mismatched lengths
+    (``world``, ``image``; ``weights``, ``points``), a NaN or infinite value (``index``,
+    ``input``: ``"world"``, ``"image"`` or ``"weights"``), a negative weight (``index``),
+    or an array of the wrong shape (kind ``"Shape"``, ``argument``).
+    """
+class InputTypeError(InvalidInputError, TypeError):
+    """An input that is not an array of real numbers (also a ``TypeError``; kind ``"DType"``,
+    ``argument``): complex, boolean, object or string data.
+    """
+class DegenerateError(PnpError, ValueError):
+    """A degenerate configuration (also a ``ValueError``; kind ``"Degenerate"``);
+    ``degeneracy`` is one of ``"coincident_world_points"``, ``"collinear_world_points"``,
+    ``"coincident_image_points"``, ``"scale_out_of_range"``.
+    """
+class NoSolutionError(PnpError, RuntimeError):
+    """No candidate pose survived (also a ``RuntimeError``): numerical failure on extremely
+    ill-conditioned input.
+    """
+class InvalidOptionError(PnpError, ValueError):
+    """An option out of its range or of the wrong form (also a ``ValueError``; ``option``: its
+    name).
+    """
+class NoConsensusError(PnpError, RuntimeError):
+    """RANSAC found no consensus (also a ``RuntimeError``): no pose had enough inliers for a fit,
+    or the best pose's ``inliers`` are no more than a wrong pose reaches by chance
+    (``needed``: the least accepted; ``iterations``: samples drawn).
+    """
+class CameraError(PnpError, ValueError):
+    """An invalid camera (also a ``ValueError``): unsupported model, wrong number of parameters,
+    non-finite or non-positive focal lengths, a malformed ``K`` or distortion vector.
+    """
+class ModelError(PnpError):
+    """A COLMAP model that cannot be read: ``file``, ``line`` or ``offset`` (or None), and
+    ``reason``.
+    """
+class UnknownIdError(PnpError, LookupError):
+    """No image (kind ``"UnknownImage"``) or camera (``"UnknownCamera"``) with this ``id`` in
+    the model (also a ``LookupError``).
+    """
+
+@final
+class SolverOptions:
+    """The options of the solver (the Rust ``eopnp::Solver``), for ``options=`` of every function
+    that solves (``solve``, ``solve_all``, ``refine``, ``solve_ransac``, ``solve_batch``,
+    ``solve_ransac_batch``, ``solve_batch_arrays``, ``register_image``, ``register_images``).
+    Those functions also take each option as a keyword argument (not together with
+    ``options=``).
+
+    Every option is checked here: a value out of its range raises ``InvalidOptionError``
+    (``option``: its name) at construction, before anything is solved. Immutable (``replace``
+    returns a changed copy), hashable, picklable; ``==`` compares every attribute.
+
+    Args:
+        refinement: "ml" (default; alias "reprojection"): EOPnP then Levenberg-Marquardt on
+            the reprojection error, the maximum-likelihood pose; "algebraic": EOPnP alone.
+        planar: planar branch selection: "auto" (default), "planar" or "nonplanar".
+        newton_iterations: maximum damped-Newton iterations per candidate (None: the
+            library's default, 50).
+        newton_step_tolerance: Newton stops when the step falls to this (None: the library's
+            default, 1e-12); finite and >= 0.
+        reprojection_iterations: maximum Levenberg-Marquardt iterations (None: the library's
+            default, 200).
+        exhaustive: refine every start of every generator (default False: a start certified
+            globally optimal ends the search).
+        loss: the loss of the final refinement: None or "squared" (default; the
+            maximum-likelihood pose for Gaussian noise), ``("huber", s)`` (quadratic up to a
+            residual of ``s``, linear beyond: a few moderate outliers; ``s`` about 1-3 times
+            the noise) or ``("cauchy", s)`` (the influence of a residual decays beyond ``s``:
+            gross outliers hardly move the pose, when RANSAC is not run). ``s`` is in pixels
+            for pixel input (with a ``camera``), in normalised units otherwise; it must be
+            finite and > 0 (about 1e-154 < s < 1e154). ``Solution.cost`` is then the loss's
+            cost.
+        covariance: None (default: no covariance), "estimated" (the noise estimated from the
+            residuals, ``sigma^2 = sum of squared residuals / (2 n - 6)``) or the noise standard
+            deviation of each image coordinate (pixels for pixel input, normalised units
+            otherwise; pycolmap assumes 1 px): fills ``Solution.covariance``, the 6x6
+            covariance of ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``,
+            ``t = t_hat + delta_t`` (pycolmap's convention), and ``Solution.sigma``.
+
+    Attributes:
+        The arguments, as given (``refinement`` "reprojection" reads "ml", ``loss`` None
+        reads "squared", a ``loss`` list reads as a tuple).
+    """
+    def __new__(
+        cls,
+        *,
+        refinement: _Refinement = "ml",
+        planar: _Planar = "auto",
+        newton_iterations: int | None = None,
+        newton_step_tolerance: float | None = None,
+        reprojection_iterations: int | None = None,
+        exhaustive: bool = False,
+        loss: _Loss = None,
+        covariance: _Covariance = None,
+    ) -> "SolverOptions": ...
+    @property
+    def refinement(self) -> Literal["ml", "algebraic"]:
+        """"ml" or "algebraic"."""
+    @property
+    def planar(self) -> _Planar:
+        """"auto", "planar" or "nonplanar"."""
+    @property
+    def newton_iterations(self) -> int | None:
+        """Maximum damped-Newton iterations per candidate, or None (the library's default, 50)."""
+    @property
+    def newton_step_tolerance(self) -> float | None:
+        """Newton's step tolerance, or None (the library's default, 1e-12)."""
+    @property
+    def reprojection_iterations(self) -> int | None:
+        """Maximum Levenberg-Marquardt iterations, or None (the library's default, 200)."""
+    @property
+    def exhaustive(self) -> bool:
+        """Refine every start of every generator."""
+    @property
+    def loss(self) -> Literal["squared"] | tuple[Literal["huber", "cauchy"], float]:
+        """"squared", ``("huber", s)`` or ``("cauchy", s)``."""
+    @property
+    def covariance(self) -> Literal["estimated"] | float | None:
+        """None, "estimated" or the noise standard deviation."""
+    def as_dict(self) -> dict[str, Any]:
+        """The options as a dict (``SolverOptions(**d)`` gives them back)."""
+    def replace(self, **changes: Any) -> "SolverOptions":
+        """A copy with the given options changed: ``options.replace(loss=("huber", 2.0))``."""
+    def __eq__(self, value: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
+
+# options=: a SolverOptions, a dict of its fields, or None (the defaults).
+_Options = Union[SolverOptions, Mapping[str, Any], None]
 
 @final
 class Solution:
-    """A camera pose (world to camera, ``x_cam = R @ X + t``) and how it was found.
+    """A camera pose and how it was found (``x_cam = R @ X + t``, world to camera).
 
-    Picklable; ``==`` compares every field exactly.
+    Attributes:
+        R: rotation matrix, shape (3, 3).
+        t: translation, shape (3,).
+        rvec: OpenCV's rotation vector (axis times angle, radians), shape (3,).
+        q: unit quaternion (w, x, y, z), COLMAP's order, shape (4,).
+        Rt: the 3x4 matrix [R | t].
+        cost: the minimised cost (refinement "ml"): the (weighted) sum of the loss of the
+            squared reprojection residuals, in pixels^2 for pixel input (through the camera),
+            in normalised units otherwise (the sum of squared residuals with the default
+            loss); or the algebraic cost (refinement "algebraic").
+        algebraic_cost: the paper's algebraic cost of the rotation.
+        reprojection_rmse: RMS normalised reprojection residual (multiply by the focal length
+            for pixels); inf if a point lies in the focal plane (algebraic mode only).
+        cheirality_ok: more than half of the points are in front of the camera.
+        degenerate: the configuration is close to degenerate; the pose may be ambiguous.
+        planar: the planar branch produced the starting candidate.
+        source: the candidate generator of the winning start ("case1", ..., "planar1",
+            "planar2", "extra_start"; "initial" for ``refine``).
+        newton_iterations: damped-Newton iterations of the winning candidate (0 when skipped:
+            an exact fit, whose start is already the minimum of the algebraic cost).
+        reprojection_iterations: Levenberg-Marquardt iterations of the refinement.
+        converged: the refinement stopped at a minimum (False when it ran out of iterations or
+            could not start; True in algebraic mode).
+        used: correspondences that entered the solve (weight > 0, undistorted).
+        skipped: correspondences left out because their pixel could not be undistorted.
+        covariance: the pose's 6x6 covariance (``covariance=`` of ``solve``), or None: of
+            ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``, ``t = t_hat + delta_t``
+            (pycolmap's ``return_covariance=True`` convention).
+        sigma: the image noise standard deviation the covariance assumes (given or estimated;
+            pixels for pixel input, normalised units otherwise), or None.
     """
 
     @property
     def R(self) -> _F64Array:
-        """Rotation matrix, shape (3, 3)."""
+        """Rotation matrix, shape (3, 3) (a new array on each access)."""
     @property
     def t(self) -> _F64Array:
         """Translation, shape (3,)."""
     @property
     def rvec(self) -> _F64Array:
-        """OpenCV's rotation vector (axis times angle in radians, ``cv2.Rodrigues``), (3,)."""
+        """OpenCV's rotation vector (``cv2.Rodrigues``), shape (3,)."""
     @property
     def q(self) -> _F64Array:
-        """Unit quaternion (w, x, y, z), COLMAP's order, shape (4,)."""
+        """Unit quaternion (w, x, y, z), shape (4,)."""
     @property
     def Rt(self) -> _F64Array:
         """The 3x4 matrix [R | t]."""
     @property
     def cost(self) -> float:
         """The minimised cost (refinement "ml"): the (weighted) sum of the loss of the squared
-        reprojection residuals, in pixels^2 for pixel input (through the camera), normalised
-        units otherwise (the sum of squares with the default loss); or the algebraic cost
-        (refinement "algebraic")."""
+        reprojection residuals, in pixels^2 for pixel input (through the camera), in normalised
+        units otherwise (the sum of squared residuals with the default loss); or the algebraic
+        cost (refinement "algebraic").
+        """
     @property
     def algebraic_cost(self) -> float:
         """The paper's algebraic cost of the rotation."""
     @property
     def reprojection_rmse(self) -> float:
-        """RMS normalised reprojection residual (times the focal length: pixels); inf if a
-        point lies in the focal plane (algebraic mode only)."""
+        """RMS normalised reprojection residual (multiply by the focal length for pixels); inf if
+        a point lies in the focal plane (algebraic mode only).
+        """
     @property
     def cheirality_ok(self) -> bool:
         """More than half of the points are in front of the camera."""
     @property
     def degenerate(self) -> bool:
-        """The configuration is close to degenerate: the pose may be ambiguous."""
+        """The configuration is close to degenerate; the pose may be ambiguous."""
     @property
     def planar(self) -> bool:
-        """The planar branch produced the winning start."""
+        """The planar branch produced the starting candidate."""
     @property
     def source(self) -> _Source:
-        """The candidate generator of the winning start."""
+        """The candidate generator of the winning start ("case1", ..., "planar1", "planar2",
+        "extra_start"; "initial" for ``refine``).
+        """
     @property
     def newton_iterations(self) -> int:
-        """Damped-Newton iterations of the winning candidate (0 when skipped: an exact fit)."""
+        """Damped-Newton iterations of the winning candidate (0 when skipped: an exact fit, whose
+        start is already the minimum of the algebraic cost).
+        """
     @property
     def reprojection_iterations(self) -> int:
         """Levenberg-Marquardt iterations of the refinement (0 in algebraic mode)."""
     @property
     def converged(self) -> bool:
-        """The refinement stopped at a minimum (False when it ran out of iterations or could
-        not start; True in algebraic mode)."""
+        """The refinement stopped at a minimum (False when it ran out of iterations or could not
+        start; True in algebraic mode).
+        """
     @property
     def used(self) -> int:
         """Correspondences that entered the solve (weight > 0, undistorted)."""
@@ -115,32 +307,36 @@ class Solution:
         """Correspondences left out because their pixel could not be undistorted."""
     @property
     def covariance(self) -> _F64Array | None:
-        """The pose's 6x6 covariance (``covariance=`` of ``solve``), or None: of
-        ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``, ``t = t_hat + delta_t``
-        (pycolmap's ``return_covariance=True`` convention; ``delta_q`` is half the rotation
-        vector, so the covariance of ``[rotation vector, t]`` has the rotation block times 4
-        and the cross blocks times 2)."""
+        """The pose's 6x6 covariance of ``[delta_q, delta_t]`` (pycolmap's convention), or None
+        when not asked for (``covariance=``) or not defined (degenerate normal equations).
+        """
     @property
     def sigma(self) -> float | None:
-        """The noise standard deviation the covariance assumes (given or estimated), or
-        None."""
+        """The image noise standard deviation the covariance assumes, or None."""
     def as_dict(self) -> dict[str, Any]:
         """Every field as a dict (arrays for R, t, rvec, q, covariance)."""
 
 @final
 class Camera:
-    """A camera model: COLMAP's model name and parameters (COLMAP's order), image size.
+    """A camera: a model, its parameters in COLMAP's order, and the image size.
 
-    Models: SIMPLE_PINHOLE (f, cx, cy), PINHOLE (fx, fy, cx, cy), SIMPLE_RADIAL (f, cx, cy, k),
-    RADIAL (f, cx, cy, k1, k2), OPENCV (fx, fy, cx, cy, k1, k2, p1, p2), OPENCV_FISHEYE
-    (fx, fy, cx, cy, k1, k2, k3, k4), FULL_OPENCV (fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5,
-    k6), SIMPLE_RADIAL_FISHEYE (f, cx, cy, k), RADIAL_FISHEYE (f, cx, cy, k1, k2), and
-    OPENCV_THIN_PRISM_TILTED (FULL_OPENCV's 12, s1, s2, s3, s4, tau_x, tau_y; OpenCV's, not
-    COLMAP's). Picklable.
+    ``Camera(model, params, width=0, height=0)`` takes COLMAP's model name and parameters, e.g.
+    ``Camera("SIMPLE_RADIAL", [f, cx, cy, k], 1200, 1600)``. Models: SIMPLE_PINHOLE (f, cx, cy),
+    PINHOLE (fx, fy, cx, cy), SIMPLE_RADIAL (f, cx, cy, k), RADIAL (f, cx, cy, k1, k2), OPENCV
+    (fx, fy, cx, cy, k1, k2, p1, p2), OPENCV_FISHEYE (fx, fy, cx, cy, k1, k2, k3, k4),
+    FULL_OPENCV (fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6), SIMPLE_RADIAL_FISHEYE
+    (f, cx, cy, k), RADIAL_FISHEYE (f, cx, cy, k1, k2), and OpenCV's full model
+    OPENCV_THIN_PRISM_TILTED (the 12 of FULL_OPENCV, s1, s2, s3, s4, tau_x, tau_y; not a COLMAP
+    model). The size is recorded only (no computation uses it).
+
+    Pixels follow COLMAP's convention (the upper-left image corner is (0, 0)) for cameras built
+    from COLMAP parameters, and OpenCV's (the centre of the upper-left pixel is (0, 0)) for
+    cameras built by ``from_opencv``: the mapping is the one the parameters define, with no
+    half-pixel shift.
 
     Raises:
-        CameraError: unknown model, wrong parameter count, non-finite parameters,
-            non-positive focal lengths.
+        CameraError: an unknown model, the wrong number of parameters, a non-finite parameter
+            or a non-positive focal length.
     """
 
     def __new__(
@@ -148,47 +344,72 @@ class Camera:
     ) -> "Camera": ...
     @staticmethod
     def from_opencv(K: _ArrayLike, dist: _ArrayLike | None = None) -> "Camera":
-        """From OpenCV's camera matrix (zero skew) and distortion vector (0, 4, 5, 8, 12 or 14
-        coefficients in OpenCV's order; shape (n,), (1, n) or (n, 1)): ``project`` equals
-        ``cv2.projectPoints`` with rvec = tvec = 0 (OpenCV's pixel convention)."""
+        """A camera from OpenCV's camera matrix ``K`` (3x3, zero skew) and distortion vector
+        ``dist`` in OpenCV's order (k1, k2, p1, p2[, k3[, k4, k5, k6[, s1, s2, s3, s4[, tauX,
+        tauY]]]]): 0, 4, 5, 8, 12 or 14 coefficients (None: no distortion), shape (n,), (1, n)
+        or (n, 1). ``project`` then equals ``cv2.projectPoints`` with rvec = tvec = 0; pixels
+        are in OpenCV's convention. The model follows from the length: PINHOLE (0), OPENCV (4),
+        FULL_OPENCV (5, 8), OPENCV_THIN_PRISM_TILTED (12, 14).
+        """
     @staticmethod
     def from_opencv_fisheye(K: _ArrayLike, dist: _ArrayLike) -> "Camera":
-        """From ``cv2.fisheye``'s K (zero skew) and its 4 coefficients: OPENCV_FISHEYE."""
+        """A camera from ``cv2.fisheye``'s ``K`` (zero skew) and its 4 coefficients (k1, k2, k3,
+        k4): the OPENCV_FISHEYE model.
+        """
     @staticmethod
     def pinhole(fx: float, fy: float, cx: float, cy: float) -> "Camera":
-        """PINHOLE without distortion, image size 0."""
+        """A pinhole camera without distortion (COLMAP's PINHOLE, image size 0)."""
     @property
     def model(self) -> str:
         """The model's name, e.g. "SIMPLE_RADIAL"."""
     @property
-    def width(self) -> int: ...
+    def width(self) -> int:
+        """Image width (0: unknown)."""
     @property
-    def height(self) -> int: ...
+    def height(self) -> int:
+        """Image height (0: unknown)."""
     @property
     def params(self) -> _F64Array:
         """The parameters in COLMAP's order, shape (n,)."""
     @property
     def focal(self) -> tuple[float, float]:
-        """(fx, fy) in pixels."""
+        """The focal lengths (fx, fy) in pixels."""
     @property
     def principal_point(self) -> tuple[float, float]:
-        """(cx, cy) in pixels."""
+        """The principal point (cx, cy) in pixels."""
     @property
-    def has_distortion(self) -> bool: ...
+    def has_distortion(self) -> bool:
+        """Whether the model has (non-zero) distortion terms."""
     def to_opencv(self) -> tuple[_F64Array, _F64Array] | None:
-        """OpenCV's (K, dist), or None for the fisheye models."""
+        """OpenCV's ``(K, dist)`` of this camera for ``cv2.projectPoints`` / ``cv2.solvePnP``, or
+        None for the fisheye models (see ``to_opencv_fisheye``).
+        """
     def to_opencv_fisheye(self) -> tuple[_F64Array, _F64Array] | None:
-        """cv2.fisheye's (K, dist) of an OPENCV_FISHEYE camera, else None."""
+        """``cv2.fisheye``'s ``(K, dist)`` of an OPENCV_FISHEYE camera, else None."""
     def project(self, normalised: _ArrayLike) -> _F64Array:
-        """Pixels of normalised points (x/z, y/z): (N, 2) -> (N, 2)."""
+        """Pixels of normalised image points (x/z, y/z), shape (N, 2) -> (N, 2)."""
     def undistort(self, pixels: _ArrayLike) -> _F64Array:
-        """Normalised points of pixels: (N, 2) -> (N, 2); NaN rows for pixels that cannot be
-        undistorted."""
+        """Normalised image points (x/z, y/z) of pixels, shape (N, 2) -> (N, 2), by iterative
+        undistortion. A pixel that cannot be undistorted (NaN, outside the region where the
+        lens model is invertible, beyond 90 degrees of a fisheye) gives a row of NaN.
+        """
 
 @final
 class RansacOptions:
-    """RANSAC options; each is a settable attribute. Out-of-range values raise
-    ``InvalidOptionError`` when used. Picklable."""
+    """RANSAC options (the Rust ``eopnp::ransac::Ransac``); every argument is also a settable
+    attribute. Out-of-range values raise ``InvalidOptionError`` when used.
+
+    Args:
+        threshold_px: inlier threshold on the pixel reprojection error (default 4.0).
+        confidence: probability of drawing at least one all-inlier sample, for the adaptive
+            iteration count (default 0.999).
+        max_iterations: hard bound on the samples drawn (default 10000).
+        min_iterations: samples always drawn (default 20).
+        seed: seed of the sampling generator (default 0): results are reproducible.
+        local_optimisation: refit every new best hypothesis by EOPnP (default True).
+        final_threshold_factor: the final inlier classification uses threshold_px times this
+            (default 2.0; 1.0 keeps the scoring threshold).
+    """
 
     threshold_px: float
     confidence: float
@@ -208,12 +429,11 @@ class RansacOptions:
         local_optimisation: bool | None = None,
         final_threshold_factor: float | None = None,
     ) -> "RansacOptions":
-        """Defaults: threshold_px 4.0, confidence 0.999, max_iterations 10000,
-        min_iterations 20, seed 0, local_optimisation True, final_threshold_factor 2.0."""
-    def as_dict(self) -> dict[str, Any]: ...
+        ...
+    def as_dict(self) -> dict[str, Any]:
+        """The options as a dict (``RansacOptions(**d)`` gives them back)."""
 
 _RansacArg = Union[RansacOptions, Mapping[str, Any], None]
-_Covariance = Union[Literal["estimated"], float, None]
 _Problem = Union[
     tuple[_ArrayLike, _ArrayLike], tuple[_ArrayLike, _ArrayLike, _ArrayLike | None]
 ]
@@ -233,84 +453,128 @@ class _RansacInfo(TypedDict):
 
 @final
 class Image:
-    """An image of a COLMAP model."""
+    """An image of a COLMAP model: its pose, camera and 2D observations."""
 
     @property
-    def id(self) -> int: ...
+    def id(self) -> int:
+        """Image id."""
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """Image name."""
     @property
-    def camera_id(self) -> int: ...
+    def camera_id(self) -> int:
+        """Id of the image's camera."""
     @property
     def q(self) -> _F64Array:
-        """Pose quaternion (w, x, y, z) as stored."""
+        """The pose's quaternion (w, x, y, z) as stored, shape (4,)."""
     @property
     def t(self) -> _F64Array:
-        """Pose translation (3,)."""
+        """The pose's translation, shape (3,)."""
     @property
     def R(self) -> _F64Array:
-        """Pose rotation (3, 3)."""
+        """The pose's rotation matrix (from the normalised quaternion), shape (3, 3)."""
     @property
     def points2D(self) -> _F64Array:
-        """Observations' pixels (K, 2)."""
+        """The observations' pixels, shape (K, 2)."""
     @property
     def point3D_ids(self) -> npt.NDArray[np.int64]:
-        """Observations' 3D point ids (K,), -1 if untriangulated."""
+        """The observations' 3D point ids, -1 for an untriangulated observation, shape (K,)."""
 
 @final
 class Model:
-    """A COLMAP sparse reconstruction (read-only)."""
+    """A COLMAP sparse reconstruction, as read by ``read_colmap_model`` (read-only).
+
+    Poses are COLMAP's: world to camera, ``x_cam = R(q) X + t``.
+    """
 
     @property
-    def cameras(self) -> dict[int, Camera]: ...
+    def cameras(self) -> dict[int, Camera]:
+        """Cameras by id (a new dict of new ``Camera`` objects on each access)."""
     @property
-    def images(self) -> dict[int, Image]: ...
+    def images(self) -> dict[int, Image]:
+        """Images by id (a new dict of new ``Image`` objects on each access)."""
     @property
-    def image_ids(self) -> list[int]: ...
+    def image_ids(self) -> list[int]:
+        """The image ids, ascending."""
     @property
-    def num_points3D(self) -> int: ...
+    def num_points3D(self) -> int:
+        """Number of 3D points."""
     @property
-    def point3D_ids(self) -> npt.NDArray[np.uint64]: ...
+    def point3D_ids(self) -> npt.NDArray[np.uint64]:
+        """The 3D points' ids (ascending), shape (M,)."""
     @property
     def points3D(self) -> _F64Array:
-        """3D points (M, 3) in the order of point3D_ids."""
-    def image(self, image_id: int) -> Image: ...
-    def camera_of(self, image_id: int) -> Camera: ...
+        """The 3D points' coordinates in the order of ``point3D_ids``, shape (M, 3)."""
+    def image(self, image_id: int) -> Image:
+        """The image with this id. Raises ``UnknownIdError`` if there is none."""
+    def camera_of(self, image_id: int) -> Camera:
+        """The camera of an image. Raises ``UnknownIdError``."""
     def correspondences(self, image_id: int) -> tuple[_F64Array, _F64Array]:
-        """(world (N, 3), pixels (N, 2)) of the image's triangulated observations."""
+        """The 2D-3D correspondences of an image: ``(world (N, 3), pixels (N, 2))``, the
+        observations that have a 3D point, in the image's order. Raises ``UnknownIdError``.
+        """
     def __len__(self) -> int: ...
 
 @final
 class Registration:
-    """The result of ``register_image``."""
+    """The result of ``register_image``.
+
+    Attributes:
+        image_id, name: the image.
+        n: its 2D-3D correspondences.
+        inliers: correspondences the pose was fitted to (all that could be undistorted, or
+            RANSAC's inliers).
+        skipped: observations whose pixel could not be undistorted.
+        solution: the estimated pose (``Solution``).
+        ransac: RANSAC's statistics (dict: iterations, hypotheses, local_fits, final_fits,
+            inliers, inlier_ratio, micros), or None without RANSAC.
+        rotation_error_deg: rotation difference to the model's pose, degrees.
+        translation_error_pct: translation difference, percent of the model's ``|t|``.
+        rmse_px: RMS pixel reprojection error of the estimated pose over the fitted points.
+        model_rmse_px: the same for the model's own pose.
+        micros: wall time of undistortion plus solve, microseconds.
+    """
 
     @property
-    def image_id(self) -> int: ...
+    def image_id(self) -> int:
+        """The image's id."""
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """The image's name."""
     @property
     def n(self) -> int:
         """The image's 2D-3D correspondences."""
     @property
     def inliers(self) -> int:
-        """Correspondences the pose was fitted to."""
+        """Correspondences the pose was fitted to (all that could be undistorted, or RANSAC's
+        inliers).
+        """
     @property
-    def skipped(self) -> int: ...
+    def skipped(self) -> int:
+        """Observations whose pixel could not be undistorted."""
     @property
-    def solution(self) -> Solution: ...
+    def solution(self) -> Solution:
+        """The estimated pose."""
     @property
     def ransac(self) -> dict[str, Any] | None:
-        """iterations, hypotheses, local_fits, final_fits, inliers, inlier_ratio, micros."""
+        """RANSAC's statistics (iterations, hypotheses, local_fits, final_fits, inliers,
+        inlier_ratio, micros), or None without RANSAC.
+        """
     @property
-    def rotation_error_deg(self) -> float: ...
+    def rotation_error_deg(self) -> float:
+        """Rotation difference to the model's pose, degrees."""
     @property
-    def translation_error_pct(self) -> float: ...
+    def translation_error_pct(self) -> float:
+        """Translation difference, percent of the model's ``|t|``."""
     @property
-    def rmse_px(self) -> float: ...
+    def rmse_px(self) -> float:
+        """RMS pixel reprojection error of the estimated pose over the fitted points."""
     @property
-    def model_rmse_px(self) -> float: ...
+    def model_rmse_px(self) -> float:
+        """The same for the model's own pose."""
     @property
-    def micros(self) -> float: ...
+    def micros(self) -> float:
+        """Wall time of undistortion plus solve, microseconds."""
 
 def solve(
     world: _ArrayLike,
@@ -318,52 +582,81 @@ def solve(
     weights: _ArrayLike | None = None,
     *,
     camera: Camera | None = None,
+    options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-    covariance: _Covariance = None,
     loss: _Loss = None,
+    covariance: _Covariance = None,
 ) -> Solution:
-    """The camera pose from N >= 4 correspondences: world (N, 3), image (N, 2) normalised, or
-    pixels with ``camera``; optional weights (N,) >= 0. Default: EOPnP + maximum-likelihood
-    refinement. Releases the GIL.
+    """The camera pose from 2D-3D correspondences.
 
-    ``covariance``: None, "estimated" (noise from the residuals) or the noise standard
-    deviation in image units (pixels with ``camera``): fills ``Solution.covariance`` and
-    ``Solution.sigma``.
+    Args:
+        world: world points, shape (N, 3), N >= 4.
+        image: their image points, shape (N, 2): normalised coordinates (x/z, y/z), or pixels
+            when ``camera`` is given.
+        weights: optional non-negative weight per point, shape (N,); a point of weight 0 is
+            ignored (exactly as if dropped), weights scale the squared residuals.
+        camera: a ``Camera``: ``image`` holds observed (distorted) pixels. They are undistorted
+            and, in the default mode, the refinement minimises the pixel reprojection error
+            through the camera model, distortion included. Pixels that cannot be undistorted
+            are left out and counted in ``Solution.skipped``.
+        options: a ``SolverOptions`` (or a dict of its fields): refinement, planar branch,
+            iteration limits, robust ``loss``, ``covariance``. None: the defaults.
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead
+            (``refinement="algebraic"``, ``loss=("cauchy", 2.0)``, ``covariance=1.0``, ...),
+            not together with ``options``. A ``loss`` scale or ``covariance`` noise is in
+            pixels with ``camera``, in normalised units otherwise.
 
-    ``loss``: the loss of the final refinement: None or "squared" (default, the
-    maximum-likelihood pose for Gaussian noise), ``("huber", s)`` (a few moderate outliers;
-    ``s`` 1-3 times the noise) or ``("cauchy", s)`` (gross outliers hardly move the pose);
-    ``s`` in pixels with ``camera``, normalised units otherwise.
+    Returns:
+        Solution: the pose (``R``, ``t``, ``rvec``, ``q``), its cost and diagnostics.
 
-    Raises InvalidInputError (InputTypeError), DegenerateError, NoSolutionError,
-    InvalidOptionError."""
+    Raises:
+        InvalidInputError: wrong shapes, too few points, mismatched lengths, NaN or infinite
+            values, negative weights (``InputTypeError`` for non-numeric arrays).
+        DegenerateError: coincident or collinear world points, coincident image points.
+        NoSolutionError: numerical failure (not observed on valid input).
+        InvalidOptionError: an option out of its range.
+        TypeError: an unknown keyword, or both ``options`` and option keywords.
+    """
 
 def solve_all(
     world: _ArrayLike,
     image: _ArrayLike,
     *,
+    options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-    covariance: _Covariance = None,
     loss: _Loss = None,
+    covariance: _Covariance = None,
 ) -> list[Solution]:
-    """Every distinct local minimum, best first (normalised image points)."""
+    """Every distinct local minimum of the cost, best first: poses with most points in front of
+    the camera first, then by increasing reprojection error (at most 32). For N <= 6 and for
+    planar scenes several poses can explain the data about equally well; this lists them.
 
+    ``world`` (N, 3) and ``image`` (N, 2) normalised, and ``options`` or the option keywords,
+    as ``solve`` (no weights or camera: undistort pixels first with ``Camera.undistort``);
+    ``covariance`` gives each pose its own, ``loss`` is in normalised units.
+
+    Returns:
+        list[Solution]: at least one.
+
+    Raises:
+        As ``solve``.
+    """
+
+# A rotation: a (3, 3) matrix, a (3,) rotation vector (OpenCV's rvec) or a (4,) quaternion
+# (w, x, y, z).
 _Rotation = _ArrayLike
-"""A rotation: a (3, 3) matrix, a (3,) rotation vector (OpenCV's rvec) or a (4,) quaternion
-(w, x, y, z)."""
+# A pose (world to camera): a Solution, (rotation, t), or a (3, 4) [R | t] or (4, 4) matrix.
 _Pose = Union[Solution, tuple[_Rotation, _ArrayLike], _ArrayLike]
-"""A pose (world to camera): a ``Solution``, ``(rotation, t)``, or a (3, 4) ``[R | t]`` or
-(4, 4) matrix."""
 
 def refine(
     world: _ArrayLike,
@@ -372,47 +665,94 @@ def refine(
     *,
     weights: _ArrayLike | None = None,
     camera: Camera | None = None,
-    loss: _Loss = None,
-    covariance: _Covariance = None,
+    options: _Options = None,
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
 ) -> Solution:
-    """Refines a prior pose (tracking: the previous frame's) to the maximum-likelihood pose of
-    the basin it starts in, without the global search (OpenCV's ``solvePnPRefineLM``,
-    PoseLib's ``refine_absolute_pose``). ``initial``: a ``Solution``, ``(R, t)``,
-    ``(rvec, t)``, ``(q_wxyz, t)``, or a (3, 4) ``[R | t]`` or (4, 4) matrix. Pixels with
-    ``camera`` (through the camera model, as ``solve``); ``weights`` (N,) >= 0 as ``solve``.
-    Releases the GIL.
+    """Refines a prior pose (tracking: the previous frame's pose) to the maximum-likelihood pose
+    of the basin it starts in: Levenberg-Marquardt on the reprojection error from
+    ``initial``, without EOPnP's global search (OpenCV's ``solvePnPRefineLM``, PoseLib's
+    ``refine_absolute_pose``). From a start in the basin of ``solve``'s pose, the same pose.
 
-    Returns a ``Solution`` with ``converged`` and ``source == "initial"``. Raises as
-    ``solve``, and InvalidOptionError (option "initial") for a non-finite initial pose or
-    one of another form."""
+    Args:
+        world: world points, shape (N, 3), N >= 4.
+        image: their image points, shape (N, 2): normalised, or pixels with ``camera``.
+        initial: the starting pose (world to camera, ``x_cam = R @ X + t``): a ``Solution``
+            (e.g. the previous frame's), a pair ``(rotation, t)`` with ``t`` of shape (3,) and
+            the rotation as a (3, 3) matrix ``R``, a (3,) rotation vector (OpenCV's ``rvec``)
+            or a (4,) quaternion (w, x, y, z; COLMAP's order, normalised here), or a (3, 4)
+            matrix ``[R | t]`` (``Solution.Rt``) or a (4, 4) homogeneous matrix. A matrix ``R``
+            must be a rotation to 1e-6 (``R^T R = I``, ``det R > 0``).
+        weights: optional non-negative weight per point, shape (N,), as ``solve``.
+        camera: a ``Camera``: ``image`` holds observed pixels; the refinement minimises the
+            pixel residuals through the camera model, as ``solve``.
+        options: a ``SolverOptions`` (or a dict of its fields), as ``solve``. Its ``planar``
+            and ``exhaustive`` (of the global search) have no effect here, and ``refine``
+            always ends with the Levenberg-Marquardt refinement: ``refinement="algebraic"``
+            only iterates the Newton start on to ``newton_step_tolerance`` (otherwise at least
+            1e-6).
+        **keywords: ``loss``, ``covariance``, ``newton_iterations``, ``newton_step_tolerance``
+            and ``reprojection_iterations`` as keyword arguments instead, as ``solve``.
+
+    Returns:
+        Solution: the refined pose; ``converged`` says whether the refinement reached a
+        minimum, ``source`` is "initial".
+
+    Raises:
+        As ``solve``; InvalidOptionError (``option`` "initial") for an initial pose that is
+        not finite (the library's message) or not of the forms above.
+    """
 
 def solve_batch(
     problems: Sequence[_Problem],
     *,
     camera: Camera | Sequence[Camera] | None = None,
+    options: _Options = None,
+    threads: int | None = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-    covariance: _Covariance = None,
     loss: _Loss = None,
-    threads: int | None = None,
+    covariance: _Covariance = None,
 ) -> list[Solution | PnpError]:
-    """``solve`` on many problems, ``(world, image)`` or ``(world, image, weights)`` tuples,
-    in parallel (``threads``: None for rayon's default, or a count), the GIL released.
-    ``camera``: one for all problems or one per problem (pixels), or None (normalised).
-    C-contiguous float64 arrays are read in place with the GIL released: do not modify them
-    from another thread during the call.
+    """Solves many independent problems in parallel (``solve`` on each), the GIL released while
+    they are solved.
 
-    Returns one entry per problem: its ``Solution``, or the exception ``solve`` would raise
-    for it (an instance, not raised). Equal to ``solve`` one by one, whatever ``threads``.
-    Raises InvalidInputError (InputTypeError) for a malformed batch before solving anything,
-    InvalidOptionError for bad options."""
+    Each array is copied once, with the GIL held, and the solves read the copy (as ``solve``
+    does): what other threads write to the arrays after the call copied them does not change
+    its results.
+
+    Args:
+        problems: a sequence of ``(world, image)`` or ``(world, image, weights)`` tuples, as
+            ``solve``'s arguments (weights may be None).
+        camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
+            of one ``Camera`` per problem (image points in pixels).
+        options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
+            problem.
+        threads: None (rayon's global pool: one thread per core, or ``RAYON_NUM_THREADS``) or
+            the number of threads (a pool per count, built once and kept).
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        list: one entry per problem, in order: its ``Solution``, or the exception instance
+        (a ``PnpError``) that ``solve`` would raise for it (as
+        ``asyncio.gather(return_exceptions=True)``). Each entry equals ``solve``'s, whatever
+        the thread count.
+
+    Raises:
+        InvalidInputError: a malformed batch (not a sequence of 2- or 3-tuples, an array of the
+            wrong shape; the message names the problem's index), before anything is solved.
+        InputTypeError: an array that is not real numbers.
+        InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+        TypeError: as ``solve``.
+    """
 
 def solve_batch_arrays(
     world: _ArrayLike,
@@ -420,29 +760,53 @@ def solve_batch_arrays(
     weights: _ArrayLike | None = None,
     *,
     camera: Camera | Sequence[Camera] | None = None,
+    options: _Options = None,
+    threads: int | None = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
     reprojection_iterations: int | None = None,
     exhaustive: bool = False,
-    covariance: _Covariance = None,
     loss: _Loss = None,
-    threads: int | None = None,
+    covariance: _Covariance = None,
 ) -> BatchResult:
-    """``solve`` on B problems given as stacked arrays, world (B, N, 3) and image (B, N, 2)
-    (normalised, or pixels with ``camera``: one for all or one per problem), optional weights
-    (B, N), in parallel (``threads`` as ``solve_batch``), the GIL released; the throughput
-    form: no Python object per problem. Problems with fewer points: pad them with weight 0
-    (any finite values), exactly as if dropped.
+    """Solves a batch of problems given as stacked arrays (``solve`` on each), in parallel with the
+    GIL released, and returns the poses as stacked arrays: the form for throughput (no Python
+    object per problem).
 
-    Returns a ``BatchResult``: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost``, ``reprojection_rmse``,
-    ``ok`` (B,), ``covariance`` (B, 6, 6) and ``sigma`` with ``covariance=``, and ``errors``
-    {index: exception}. Row ``i`` equals ``solve(world[i], image[i], weights[i], ...)``
-    exactly, whatever ``threads``. C-contiguous float64 arrays are read in place with the GIL
-    released (do not modify them from another thread during the call); others are converted
-    once. Raises InvalidInputError (InputTypeError) for arrays of
-    the wrong shape (dtype) before solving anything, InvalidOptionError for bad options."""
+    Each array is copied once, with the GIL held, and the solves read the copy (as ``solve``
+    does): what other threads write to the arrays after the call copied them does not change
+    its results. Any array-like of real numbers is accepted.
+
+    Args:
+        world: world points of every problem, shape (B, N, 3).
+        image: their image points, shape (B, N, 2): normalised, or pixels with ``camera``.
+        weights: optional non-negative weights, shape (B, N), as ``solve``'s. Problems with
+            fewer points: pad them (any finite values) with weight 0, which ``solve`` ignores
+            exactly as if the points were dropped; or use ``solve_batch``.
+        camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
+            of B ``Camera`` (pixels).
+        options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
+            problem.
+        threads: as ``solve_batch``.
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        BatchResult: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost`` (B,), ``reprojection_rmse``
+        (B,), ``ok`` (B,) bool, ``covariance`` (B, 6, 6) and ``sigma`` (B,) with a
+        ``covariance`` option (else None), and ``errors``: {index: the exception ``solve``
+        would raise for that problem} (its rows are NaN and ``ok`` False). Row ``i`` equals
+        ``solve(world[i], image[i], weights[i], ...)`` exactly, whatever the thread count.
+
+    Raises:
+        InvalidInputError: an array of the wrong shape (world not (B, N, 3), image not
+            (B, N, 2) or weights not (B, N) with world's B and N), before anything is solved.
+        InputTypeError: an array that is not real numbers.
+        InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+        TypeError: as ``solve``.
+    """
 
 def solve_ransac_batch(
     problems: Sequence[_Problem],
@@ -450,6 +814,8 @@ def solve_ransac_batch(
     camera: Camera | Sequence[Camera] | None = None,
     focal: float | tuple[float, float] | None = None,
     ransac: _RansacArg = None,
+    options: _Options = None,
+    threads: int | None = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
@@ -458,14 +824,38 @@ def solve_ransac_batch(
     exhaustive: bool = False,
     loss: _Loss = None,
     covariance: _Covariance = None,
-    threads: int | None = None,
 ) -> list[tuple[Solution, _RansacInfo] | PnpError]:
-    """``solve_ransac`` on many problems in parallel: entry ``i`` is what ``solve_ransac``
-    returns with seed ``problem_seed(ransac.seed, i)`` (or the exception instance it would
-    raise, e.g. NoConsensusError), whatever ``threads``."""
+    """Robust estimation of many independent problems in parallel (``solve_ransac`` on each),
+    the GIL released for the whole batch. Problem ``i`` uses the seed
+    ``problem_seed(ransac.seed, i)``, so results do not depend on the thread count.
+
+    Args:
+        problems: as ``solve_batch``.
+        camera: a ``Camera`` for every problem or a sequence of one per problem (pixels), or
+            None with ``focal``.
+        focal: ``(fx, fy)`` (or one ``f``) in pixels for every problem, for normalised image
+            points (exactly one of ``camera`` and ``focal``).
+        ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
+        options: a ``SolverOptions`` (or a dict of its fields), as ``solve_ransac``, for every
+            problem.
+        threads: as ``solve_batch``.
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        list: one entry per problem, in order: ``(Solution, info)`` as ``solve_ransac``
+        returns with ``RansacOptions(seed=problem_seed(seed, i))``, or the exception instance
+        it would raise (e.g. ``NoConsensusError``).
+
+    Raises:
+        As ``solve_batch``; InvalidOptionError also for neither or both of camera and focal.
+    """
 
 def problem_seed(base: int, index: int) -> int:
-    """The RANSAC seed of problem ``index`` of a batch with base seed ``base``."""
+    """The RANSAC seed of problem ``index`` of a batch whose base seed is ``base``
+    (``solve_ransac_batch``): ``solve_ransac(..., ransac=RansacOptions(seed=problem_seed(base,
+    i)))`` equals entry ``i`` of the batch.
+    """
 
 def solve_ransac(
     world: _ArrayLike,
@@ -475,6 +865,7 @@ def solve_ransac(
     camera: Camera | None = None,
     focal: float | tuple[float, float] | None = None,
     ransac: _RansacArg = None,
+    options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
@@ -484,20 +875,61 @@ def solve_ransac(
     loss: _Loss = None,
     covariance: _Covariance = None,
 ) -> tuple[Solution, _RansacInfo]:
-    """Robust pose by RANSAC: pixels with ``camera``, or normalised points with
-    ``focal=(fx, fy)`` (exactly one). Returns the pose and the info dict (inlier mask,
-    iterations, inlier ratio, cost, RMSE). ``loss``: of the fits' final refinement (pixels with
-    ``camera``, normalised units with ``focal``). ``covariance``: as ``solve``, the returned
-    pose's covariance from its inliers. Raises NoConsensusError if no pose has 4 inliers."""
+    """Robust camera pose from correspondences with outliers, by RANSAC: Lambda Twist P3P on
+    3-point samples, MSAC scoring with an SPRT, adaptive iteration count, EOPnP local
+    optimisation of each new best hypothesis and an EOPnP final fit on the inliers; seeded.
+
+    Args:
+        world: world points, shape (N, 3).
+        image: image points, shape (N, 2): pixels with ``camera``, normalised with ``focal``.
+        weights: optional non-negative weight per point, shape (N,).
+        camera: a ``Camera``; the threshold applies to pixel reprojection errors through the
+            lens model. Pixels that cannot be undistorted are outliers.
+        focal: ``(fx, fy)`` (or one ``f``) in pixels, for normalised ``image``: the threshold
+            applies to ``sqrt(fx^2 dx^2 + fy^2 dy^2)``. Exactly one of ``camera`` and ``focal``.
+        ransac: a ``RansacOptions``, a dict of its fields, or None (defaults: 4 px threshold,
+            confidence 0.999, at most 10000 samples, seed 0).
+        options: a ``SolverOptions`` (or a dict of its fields): the options of the EOPnP fits,
+            as ``solve``. Its ``loss`` is the loss of the fits' final refinement (the local
+            optimisations and the final fit on the inliers; ``s`` in pixels with ``camera``, in
+            normalised units with ``focal``; the inlier classification is unchanged). Its
+            ``covariance`` gives ``Solution.covariance`` of the returned pose from its inliers
+            (with their weights), the noise in pixels with ``camera`` and in normalised units
+            with ``focal`` (pycolmap's ``estimate_and_refine_absolute_pose(...,
+            return_covariance=True)``).
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        (Solution, dict): the pose fitted to the inliers, and ``info``: ``inliers`` (bool
+        array, shape (N,)), ``num_inliers``, ``inlier_ratio``, ``iterations`` (samples drawn),
+        ``hypotheses``, ``local_fits``, ``final_fits``, ``cost`` (the final fit's cost),
+        ``rmse`` (its normalised RMS residual), ``rmse_px`` (RMS pixel reprojection error over
+        the inliers) and ``micros`` (wall time).
+
+    Raises:
+        InvalidInputError: as ``solve``.
+        InvalidOptionError: a RANSAC or solver option out of range, a focal length not finite
+            and positive, neither or both of ``camera`` and ``focal``.
+        NoConsensusError: no pose with at least 4 inliers.
+        TypeError: as ``solve``.
+    """
 
 def read_colmap_model(path: str | os.PathLike[str]) -> Model:
-    """Reads a COLMAP model directory (text or binary). Raises ModelError."""
+    """Reads a COLMAP sparse model directory: ``cameras``, ``images`` and ``points3D``, in the text
+    (``.txt``) or binary (``.bin``) format (binary preferred when both are present), and checks
+    its cross-references.
+
+    Raises:
+        ModelError: a missing or malformed file, with the file, line or byte offset and reason.
+    """
 
 def register_image(
     model: Model,
     image_id: int,
     *,
     ransac: _RansacArg | bool = None,
+    options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
@@ -507,15 +939,37 @@ def register_image(
     loss: _Loss = None,
     covariance: _Covariance = None,
 ) -> Registration:
-    """Re-estimates an image's pose from its correspondences (plain, or RANSAC with
-    ``ransac=True`` / options) and compares it with the model's (``covariance``: as ``solve``,
-    in pixels; with RANSAC from the inliers). Raises UnknownIdError."""
+    """Re-estimates an image's pose from its 2D-3D correspondences alone and compares it with the
+    model's pose.
+
+    Args:
+        model: a ``Model`` from ``read_colmap_model``.
+        image_id: the image.
+        ransac: None or False: ``solve`` on every correspondence through the image's camera;
+            True (default options), a ``RansacOptions`` or a dict of its fields: robust, as
+            ``solve_ransac``.
+        options: a ``SolverOptions`` (or a dict of its fields), as ``solve``: ``loss``'s scale
+            and ``covariance``'s noise in pixels; ``Registration.solution.covariance`` is from
+            every correspondence used, or with RANSAC from the inliers.
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        Registration: the pose, its errors against the model's, RANSAC's statistics.
+
+    Raises:
+        UnknownIdError: no such image (or its camera is missing).
+        InvalidInputError, DegenerateError, NoConsensusError, ...: as ``solve`` and
+            ``solve_ransac`` on the image's correspondences.
+    """
 
 def register_images(
     model: Model,
     image_ids: Iterable[int] | None = None,
     *,
     ransac: _RansacArg | bool = None,
+    options: _Options = None,
+    threads: int | None = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
     newton_iterations: int | None = None,
@@ -524,13 +978,26 @@ def register_images(
     exhaustive: bool = False,
     loss: _Loss = None,
     covariance: _Covariance = None,
-    threads: int | None = None,
 ) -> list[Registration | PnpError]:
-    """``register_image`` on many images (None: every image, in id order), in parallel
-    (``threads`` as ``solve_batch``), the GIL released; each thread builds the table of the
-    model's 3D points once. Returns one entry per id: its ``Registration``, or the exception
-    ``register_image`` would raise for it (an instance, not raised). Equal to
-    ``register_image`` one by one but the times."""
+    """Registers many images of a model (``register_image`` on each), in parallel, the GIL
+    released for the whole call: each thread looks the model's 3D points up in a table it
+    builds once (``register_image`` builds one per call).
+
+    Args:
+        model: a ``Model`` from ``read_colmap_model``.
+        image_ids: the images (any iterable of ids), or None for every image in id order.
+        ransac, options, **keywords: as ``register_image``.
+        threads: None (rayon's global pool) or the number of threads, as ``solve_batch``.
+
+    Returns:
+        list: one entry per id, in order: its ``Registration``, or the exception
+        ``register_image`` would raise for it (an instance, not raised). Equal to
+        ``register_image`` one by one but the times, whatever ``threads``.
+
+    Raises:
+        InvalidOptionError: an option out of range or a bad ``threads``.
+        TypeError: as ``solve``.
+    """
 
 __all__ = [
     "BatchResult",
@@ -549,6 +1016,7 @@ __all__ = [
     "RansacOptions",
     "Registration",
     "Solution",
+    "SolverOptions",
     "UnknownIdError",
     "__version__",
     "problem_seed",

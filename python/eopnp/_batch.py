@@ -9,7 +9,7 @@ if TYPE_CHECKING:
     import numpy as np
     import numpy.typing as npt
 
-    from ._errors import PnpError
+    from . import PnpError
 
 __all__ = ["BatchResult"]
 

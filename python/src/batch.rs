@@ -1,25 +1,38 @@
 //! `eopnp.solve_batch`, `eopnp.solve_ransac_batch`, `eopnp.solve_batch_arrays` and
-//! `eopnp.problem_seed`: many independent problems on rayon's threads, the GIL released for the
-//! whole batch; each problem gives what the one-problem call gives (the crate's
-//! `Solver::solve_problem` and `Ransac::estimate_problem`, as `Solver::solve_batch` and
-//! `Ransac::estimate_batch` call them).
+//! `eopnp.problem_seed`: many independent problems on rayon's threads, the GIL released while
+//! they are solved; each problem gives what the one-problem call gives.
 //!
-//! The serial part of a batch call, with the GIL held, is kept to what needs the interpreter:
-//! every array's type, dtype, shape and layout is checked first (a malformed batch raises,
-//! naming the problem, before anything is solved), and a C-contiguous, aligned `float64` array
-//! is held (a reference) rather than copied. Each problem's task then reads its own
-//! arrays, converts them to points and solves, with the GIL released; arrays of any other
-//! layout or dtype are converted (copied) with the GIL held. Each problem's own failure (too
-//! few points, NaN, degenerate, no consensus, ...) is that problem's result: the exception
-//! instance the one-problem function would raise.
+//! No caller's buffer is read with the GIL released. With the GIL held, the calling thread
+//! first checks every problem (type, dtype, shape: a malformed batch raises, naming the
+//! problem, before anything is solved), then copies every problem's points into memory of the
+//! call's own, each array read once, as the one-problem functions copy theirs; the solves read
+//! only the copies, and the GIL is released for good once everything is copied. What other
+//! Python threads write to the arrays during the call therefore never reaches a solve: each
+//! problem's result is that of its arrays as the call copied them. (As for any function that
+//! reads numpy arrays with the GIL held, a numpy operation of another thread that itself
+//! releases the GIL while it writes to the same array is not excluded.)
 //!
+//! The copy is pipelined with the solves (`pipelined`): the problems are copied chunk by chunk,
+//! and each chunk is handed to the pool's threads as soon as it is copied, so that they solve
+//! while the calling thread copies the next chunks. The copies go to buffers kept from one
+//! call to the next (`Buffers`), whose memory, when new, is touched with the GIL released
+//! before the copy: on the 2-core VM of the measurements, the page faults of fresh memory and
+//! returning it to the system cost more than the copy itself. (Copied before any solve, into
+//! fresh memory on every call, the copy cost `solve_batch` 18 % of its throughput on 2 threads,
+//! `solve_batch_arrays` 10 %: python/bench/batch.py.)
+//!
+//! Each problem's own failure (too few points, NaN, degenerate, no consensus, ...) is that
+//! problem's result: the exception instance the one-problem function would raise.
 //! `solve_batch` and `solve_ransac_batch` then create one Python result object per problem
 //! (the `Solution`s themselves are built in the tasks); `solve_batch_arrays` takes stacked
 //! arrays and writes every problem's pose into arrays allocated once, from the tasks: no
 //! Python object per problem.
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::mem::MaybeUninit;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Condvar, Mutex, PoisonError};
 
 use eopnp::camera::Camera;
 use eopnp::ransac::problem_seed as seed_of;
@@ -31,26 +44,18 @@ use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedA
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyList, PyModule, PyTuple};
-use rayon::iter::Either;
-use rayon::prelude::*;
 use rayon::ThreadPool;
 
 use crate::camera::PyCamera;
-use crate::convert::{contiguous_array, rows, shape_str, vector};
-use crate::errors::{error, option_error, pnp_error, shape_error};
-use crate::options::SolverOptions;
+use crate::convert::{contiguous_array, points2, points3, readonly, shape_str, vector};
+use crate::errors::{error, option_error, pnp_error, shape_error, InvalidInputError};
+use crate::options::{options_arg, solver_arg, KEYWORDS};
 use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
 use crate::solution::PySolution;
 use crate::solve::check_finite;
 
 fn problems_error(py: Python<'_>, message: String) -> PyErr {
-    error(
-        py,
-        "InvalidInputError",
-        "Shape",
-        message,
-        vec![("argument", "problems".into())],
-    )
+    error::<InvalidInputError>(py, "Shape", message, vec![("argument", "problems".into())])
 }
 
 /// The batch's cameras, and each problem's index into them.
@@ -98,68 +103,355 @@ fn cameras<'py>(
     Ok((cams, (0..n).map(Some).collect()))
 }
 
-/// An array of a problem as the GIL-held phase leaves it: held as it is (an index into the
-/// batch's arrays), or converted by the general path of `convert`.
-enum Held<T> {
-    Borrowed(usize),
-    Owned(Vec<T>),
+/// A problem's array as the check left it: a C-contiguous `float64` array of `len` rows, read
+/// when its chunk is copied, or its rows already converted (any other array-like, through
+/// `convert`'s general path).
+enum Source<'py, T> {
+    Array(Bound<'py, PyArrayDyn<f64>>, usize),
+    Converted(Vec<T>),
 }
 
-/// `obj` when it is a C-contiguous, aligned `float64` array of `ndim` dimensions whose last has
-/// `cols` entries (`None`: any); `None` for anything else (then the general path of `convert`,
-/// with its checks and messages, reads it).
-///
-/// Not numpy's read-only borrow (`PyReadonlyArray`): it registers each borrow in a table per
-/// base array and checks it against the others of that base, which costs O(B^2) for a batch
-/// of B views of one array (`[(W[i], I[i]) for i in range(B)]`, N = 100, 1 thread, measured
-/// on a loaded machine: 33 us per problem for B = 2,500 and 72-82 us for B = 10,000, against
-/// 18-23 us for separate arrays).
-fn borrow<'py>(
+impl<T> Source<'_, T> {
+    fn len(&self) -> usize {
+        match self {
+            Source::Array(_, n) => *n,
+            Source::Converted(v) => v.len(),
+        }
+    }
+}
+
+/// `obj` as a `Source`: a C-contiguous `float64` array of `ndim` dimensions (the last of
+/// `cols` entries, when given) as it is, anything else through `convert`.
+fn source<'py, T>(
     obj: &Bound<'py, PyAny>,
     ndim: usize,
     cols: Option<usize>,
-) -> Option<Bound<'py, PyArrayDyn<f64>>> {
-    let a = obj.cast::<PyArrayDyn<f64>>().ok()?;
-    let shape = a.shape();
-    let fits = shape.len() == ndim
-        && cols.is_none_or(|c| shape[ndim - 1] == c)
-        && a.is_c_contiguous()
-        && a.is_aligned();
-    fits.then(|| a.clone())
+    convert: impl FnOnce() -> PyResult<Vec<T>>,
+) -> PyResult<Source<'py, T>> {
+    Ok(match c_array(obj, ndim, cols) {
+        Some(a) => {
+            let n = a.shape()[0];
+            Source::Array(a, n)
+        }
+        None => Source::Converted(convert()?),
+    })
 }
 
-/// One problem of a list batch, after the GIL-held phase.
-struct Item {
-    world: Held<[f64; 3]>,
-    image: Held<[f64; 2]>,
-    weights: Option<Held<f64>>,
+/// A problem of a list batch, checked.
+struct Entry<'py> {
+    world: Source<'py, Point3<f64>>,
+    image: Source<'py, Point2<f64>>,
+    weights: Option<Source<'py, f64>>,
     /// Index into the batch's cameras.
     camera: Option<usize>,
 }
 
-/// A list batch after the GIL-held phase: its problems, the arrays they index, the cameras.
-struct Batch<'py> {
-    items: Vec<Item>,
-    arrays: Vec<Bound<'py, PyArrayDyn<f64>>>,
+/// A list batch, checked: its problems and cameras.
+struct ListBatch<'py> {
+    entries: Vec<Entry<'py>>,
     cameras: Vec<Bound<'py, PyCamera>>,
 }
 
-/// Holds (as it is, or converted) the `(N, C)` array `obj` of a problem.
-fn hold_rows<'py, const C: usize>(
-    obj: &Bound<'py, PyAny>,
-    name: impl FnOnce() -> String,
-    arrays: &mut Vec<Bound<'py, PyArrayDyn<f64>>>,
-) -> PyResult<Held<[f64; C]>> {
-    if let Some(b) = borrow(obj, 2, Some(C)) {
-        arrays.push(b);
-        return Ok(Held::Borrowed(arrays.len() - 1));
+impl<'py> ListBatch<'py> {
+    /// Checks every problem of `problems` (a sequence of `(world, image)` or `(world, image,
+    /// weights)` tuples) and `camera=`, raising on the first malformed one with its index in
+    /// the message.
+    fn new(
+        py: Python<'py>,
+        problems: &Bound<'py, PyAny>,
+        camera: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Self> {
+        let items: Vec<Bound<'py, PyAny>> = problems
+            .try_iter()
+            .map_err(|_| {
+                problems_error(
+                    py,
+                    "problems: expected a sequence of (world, image) or (world, image, weights) \
+                     tuples"
+                        .into(),
+                )
+            })?
+            .collect::<PyResult<_>>()?;
+        let (cameras, which) = cameras(py, camera, items.len())?;
+        let mut entries = Vec::with_capacity(items.len());
+        for (i, (item, camera)) in items.iter().zip(which).enumerate() {
+            let Some(parts) = problem_parts(item) else {
+                return Err(problems_error(
+                    py,
+                    format!(
+                        "problems[{i}]: expected a (world, image) or (world, image, weights) \
+                         tuple, got {}",
+                        item.get_type().name()?
+                    ),
+                ));
+            };
+            let world = source(&parts.0, 2, Some(3), || {
+                points3(&parts.0, &format!("problems[{i}] world"))
+            })?;
+            let image = source(&parts.1, 2, Some(2), || {
+                points2(&parts.1, &format!("problems[{i}] image"))
+            })?;
+            let weights = match parts.2.as_ref().filter(|w| !w.is_none()) {
+                Some(w) => Some(source(w, 1, None, || {
+                    vector(w, &format!("problems[{i}] weights"), false)
+                })?),
+                None => None,
+            };
+            entries.push(Entry {
+                world,
+                image,
+                weights,
+                camera,
+            });
+        }
+        Ok(ListBatch { entries, cameras })
     }
-    let rows = rows(obj, &name(), C, |r| {
-        let mut a = [0.0; C];
-        a.copy_from_slice(r);
-        a
-    })?;
-    Ok(Held::Owned(rows))
+
+    /// The points of each kind of the problems `range`.
+    fn totals(&self, range: Range<usize>) -> [usize; 3] {
+        self.entries[range].iter().fold([0; 3], |[w, i, k], e| {
+            [
+                w + e.world.len(),
+                i + e.image.len(),
+                k + e.weights.as_ref().map_or(0, Source::len),
+            ]
+        })
+    }
+}
+
+/// Copies the rows of `src` (mapped by `f`) into `out`, which has room for exactly them. An
+/// array changed since it was checked (by Python code of another thread, run while an
+/// array-like was converted) raises `InvalidInputError` naming it (`name`).
+fn put<T: Copy, const C: usize>(
+    src: &Source<'_, T>,
+    out: &mut [MaybeUninit<T>],
+    f: impl Fn(&[f64; C]) -> T,
+    name: impl FnOnce() -> String,
+) -> PyResult<()> {
+    match src {
+        Source::Converted(v) => {
+            for (o, x) in out.iter_mut().zip(v) {
+                o.write(*x);
+            }
+        }
+        Source::Array(a, n) => {
+            let ndim = if C == 1 { 1 } else { 2 };
+            let fits = c_array(a.as_any(), ndim, (ndim == 2).then_some(C))
+                .is_some_and(|a| a.shape()[0] == *n);
+            if !fits {
+                let name = name();
+                return Err(shape_error(
+                    a.py(),
+                    &name,
+                    format!("{name}: the array changed shape or layout during the call"),
+                ));
+            }
+            // SAFETY: C-contiguous and aligned, checked just above; the slice lives only for
+            // this copy, made with the GIL held and no Python code running, and nothing in
+            // this crate borrows the array mutably.
+            let flat = unsafe { a.as_slice() }.expect("checked: C-contiguous and aligned");
+            for (o, r) in out.iter_mut().zip(flat.as_chunks::<C>().0) {
+                o.write(f(r));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One problem of a list batch's chunk: its ranges of the chunk's points, its camera.
+struct Item {
+    world: Range<usize>,
+    image: Range<usize>,
+    weights: Option<Range<usize>>,
+    camera: Option<usize>,
+}
+
+/// A chunk of a list batch, copied: the index of its first problem, its problems' points (one
+/// slice per kind) and where each problem's are.
+struct Chunk<'b> {
+    start: usize,
+    items: Vec<Item>,
+    world: &'b [Point3<f64>],
+    image: &'b [Point2<f64>],
+    weights: &'b [f64],
+}
+
+impl<'b> Chunk<'b> {
+    /// The chunk's problems as their tasks read them.
+    fn inputs<'a>(&'a self, cameras: &'a [&'a Camera]) -> impl Iterator<Item = Input<'a>> + 'a
+    where
+        'b: 'a,
+    {
+        self.items.iter().map(move |it| Input {
+            world: &self.world[it.world.clone()],
+            image: &self.image[it.image.clone()],
+            weights: it.weights.clone().map(|w| &self.weights[w]),
+            camera: it.camera.map(|c| cameras[c]),
+        })
+    }
+}
+
+/// The unwritten rest of a buffer, from which each chunk takes its part.
+struct Rest<'b, T>(&'b mut [MaybeUninit<T>]);
+
+impl<'b, T> Rest<'b, T> {
+    /// The next `n` elements.
+    fn take(&mut self, n: usize) -> &'b mut [MaybeUninit<T>] {
+        let (head, tail) = std::mem::take(&mut self.0).split_at_mut(n);
+        self.0 = tail;
+        head
+    }
+}
+
+/// `part`, every element of which has been written, as initialised.
+fn written<T>(part: &mut [MaybeUninit<T>]) -> &[T] {
+    // SAFETY: every element of `part` was written (the callers write all of them, or return an
+    // error and drop `part` unread), and `MaybeUninit<T>` has the layout of `T`.
+    unsafe { std::slice::from_raw_parts(part.as_ptr().cast::<T>(), part.len()) }
+}
+
+impl<'py> ListBatch<'py> {
+    /// Copies the problems `range` (a chunk) into `rest`'s next parts.
+    fn copy<'b>(
+        &self,
+        range: Range<usize>,
+        rest: &mut (Rest<'b, Point3<f64>>, Rest<'b, Point2<f64>>, Rest<'b, f64>),
+    ) -> PyResult<Chunk<'b>> {
+        let [nw, ni, nk] = self.totals(range.clone());
+        let (world, image, weights) = (rest.0.take(nw), rest.1.take(ni), rest.2.take(nk));
+        let mut items = Vec::with_capacity(range.len());
+        let (mut w, mut m, mut k) = (0, 0, 0);
+        for i in range.clone() {
+            let e = &self.entries[i];
+            let wr = w..w + e.world.len();
+            put(
+                &e.world,
+                &mut world[wr.clone()],
+                |r: &[f64; 3]| Point3::new(r[0], r[1], r[2]),
+                || format!("problems[{i}] world"),
+            )?;
+            let mr = m..m + e.image.len();
+            put(
+                &e.image,
+                &mut image[mr.clone()],
+                |r: &[f64; 2]| Point2::new(r[0], r[1]),
+                || format!("problems[{i}] image"),
+            )?;
+            let kr = match &e.weights {
+                Some(s) => {
+                    let kr = k..k + s.len();
+                    put(
+                        s,
+                        &mut weights[kr.clone()],
+                        |r: &[f64; 1]| r[0],
+                        || format!("problems[{i}] weights"),
+                    )?;
+                    Some(kr)
+                }
+                None => None,
+            };
+            (w, m, k) = (wr.end, mr.end, kr.as_ref().map_or(k, |r| r.end));
+            items.push(Item {
+                world: wr,
+                image: mr,
+                weights: kr,
+                camera: e.camera,
+            });
+        }
+        Ok(Chunk {
+            start: range.start,
+            items,
+            world: written(world),
+            image: written(image),
+            weights: written(weights),
+        })
+    }
+}
+
+/// A batch's copies: one buffer per kind, taken from and given back to `SPARE` (when it is at
+/// most `SPARE_BYTES`), so that a call copies into memory an earlier one touched: no page
+/// faults, and nothing returned to the system, on every call.
+#[derive(Default)]
+struct Buffers {
+    world: Vec<Point3<f64>>,
+    image: Vec<Point2<f64>>,
+    weights: Vec<f64>,
+}
+
+/// Writes a byte of every page of `buf`: the kernel maps its pages now.
+fn touch<T>(buf: &mut [MaybeUninit<T>]) {
+    let bytes = buf.as_mut_ptr().cast::<u8>();
+    for k in (0..size_of_val(buf)).step_by(4096) {
+        // SAFETY: `k` is within `buf`, and any byte of a `MaybeUninit` may be written (volatile:
+        // not a store the compiler may drop because the copy overwrites it).
+        unsafe { std::ptr::write_volatile(bytes.add(k), 0) };
+    }
+}
+
+/// The buffers kept for the next batch (at most one set).
+static SPARE: Mutex<Option<Buffers>> = Mutex::new(None);
+
+/// The largest buffers kept for the next batch: 64 MiB (a batch of 10,000 problems of 100
+/// points, weighted, takes 44 MB).
+const SPARE_BYTES: usize = 64 << 20;
+
+impl Buffers {
+    /// Buffers for `[world, image, weights]` points (the spare ones, grown if needed), their
+    /// memory touched (with the GIL released) when it is new: the page faults of fresh memory
+    /// (about 2 us per 4 KiB page on the 2-core VM: docs/python-log.md) are then not paid while
+    /// the copy holds the GIL.
+    fn take(py: Python<'_>, sizes: [usize; 3]) -> Self {
+        let mut b = SPARE
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .take()
+            .unwrap_or_default();
+        b.world.clear();
+        b.image.clear();
+        b.weights.clear();
+        let before = b.bytes();
+        b.world.reserve_exact(sizes[0]);
+        b.image.reserve_exact(sizes[1]);
+        b.weights.reserve_exact(sizes[2]);
+        if b.bytes() != before {
+            py.detach(|| {
+                touch(b.world.spare_capacity_mut());
+                touch(b.image.spare_capacity_mut());
+                touch(b.weights.spare_capacity_mut());
+            });
+        }
+        b
+    }
+
+    fn bytes(&self) -> usize {
+        size_of::<Point3<f64>>() * self.world.capacity()
+            + size_of::<Point2<f64>>() * self.image.capacity()
+            + size_of::<f64>() * self.weights.capacity()
+    }
+
+    /// Gives the buffers back for the next batch (the larger set, if another call gave its own
+    /// meanwhile; none above `SPARE_BYTES`).
+    fn give_back(self) {
+        if self.bytes() > SPARE_BYTES {
+            return;
+        }
+        let mut spare = SPARE.lock().unwrap_or_else(PoisonError::into_inner);
+        if spare.as_ref().is_none_or(|s| s.bytes() < self.bytes()) {
+            *spare = Some(self);
+        }
+    }
+
+    /// The unwritten parts of the buffers, `sizes` long.
+    fn rest(
+        &mut self,
+        sizes: [usize; 3],
+    ) -> (Rest<'_, Point3<f64>>, Rest<'_, Point2<f64>>, Rest<'_, f64>) {
+        (
+            Rest(&mut self.world.spare_capacity_mut()[..sizes[0]]),
+            Rest(&mut self.image.spare_capacity_mut()[..sizes[1]]),
+            Rest(&mut self.weights.spare_capacity_mut()[..sizes[2]]),
+        )
+    }
 }
 
 /// A problem's world, image and weights (if given).
@@ -187,133 +479,43 @@ fn problem_parts<'py>(item: &Bound<'py, PyAny>) -> Option<Parts<'py>> {
     Some((get(0)?, get(1)?, if len == 3 { get(2) } else { None }))
 }
 
-/// Checks every problem (`(world, image)` or `(world, image, weights)`) and holds its arrays,
-/// raising on the first malformed one with its index in the message.
-fn gather<'py>(
-    py: Python<'py>,
-    problems: &Bound<'py, PyAny>,
-    camera: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Batch<'py>> {
-    let items: Vec<Bound<'py, PyAny>> = problems
-        .try_iter()
-        .map_err(|_| {
-            problems_error(
-                py,
-                "problems: expected a sequence of (world, image) or (world, image, weights) \
-                 tuples"
-                    .into(),
-            )
-        })?
-        .collect::<PyResult<_>>()?;
-    let (cams, which) = cameras(py, camera, items.len())?;
-    let mut out = Vec::with_capacity(items.len());
-    let mut arrays = Vec::with_capacity(2 * items.len());
-    for (i, (item, cam)) in items.iter().zip(which).enumerate() {
-        let Some(parts) = problem_parts(item) else {
-            return Err(problems_error(
-                py,
-                format!(
-                    "problems[{i}]: expected a (world, image) or (world, image, weights) tuple, \
-                     got {}",
-                    item.get_type().name()?
-                ),
-            ));
-        };
-        let world = hold_rows(&parts.0, || format!("problems[{i}] world"), &mut arrays)?;
-        let image = hold_rows(&parts.1, || format!("problems[{i}] image"), &mut arrays)?;
-        let weights = match parts.2.as_ref().filter(|w| !w.is_none()) {
-            Some(w) => Some(match borrow(w, 1, None) {
-                Some(b) => {
-                    arrays.push(b);
-                    Held::Borrowed(arrays.len() - 1)
-                }
-                None => Held::Owned(vector(w, &format!("problems[{i}] weights"), false)?),
-            }),
-            None => None,
-        };
-        out.push(Item {
-            world,
-            image,
-            weights,
-            camera: cam,
-        });
-    }
-    Ok(Batch {
-        items: out,
-        arrays,
-        cameras: cams,
-    })
+/// `obj` when it is a C-contiguous, aligned `float64` array of `ndim` dimensions whose last has
+/// `cols` entries (`None`: any); `None` for anything else (then the general path of `convert`,
+/// with its checks and messages, reads it).
+fn c_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    ndim: usize,
+    cols: Option<usize>,
+) -> Option<Bound<'py, PyArrayDyn<f64>>> {
+    let a = obj.cast::<PyArrayDyn<f64>>().ok()?;
+    let shape = a.shape();
+    let fits = shape.len() == ndim
+        && cols.is_none_or(|c| shape[ndim - 1] == c)
+        && a.is_c_contiguous()
+        && a.is_aligned();
+    fits.then(|| a.clone())
 }
 
-/// One problem as its task reads it: slices of the caller's arrays (or of their converted
-/// copies) and its camera.
+/// One problem as its task reads it: slices of the call's copies, and its camera.
 #[derive(Clone, Copy)]
 struct Input<'a> {
-    world: &'a [[f64; 3]],
-    image: &'a [[f64; 2]],
+    world: &'a [Point3<f64>],
+    image: &'a [Point2<f64>],
     weights: Option<&'a [f64]>,
     camera: Option<&'a Camera>,
 }
 
-impl<'py> Batch<'py> {
-    /// The problems' inputs, borrowing from this batch.
-    fn inputs<'a>(&'a self, cameras: &[&'a Camera]) -> Vec<Input<'a>> {
-        let slice = |k: usize| -> &'a [f64] {
-            // SAFETY: checked C-contiguous and aligned; the batch holds a reference to the
-            // array, so its memory lives as long as the slice. The slice is read with the GIL
-            // released: as numpy's own functions that release the GIL, the call requires that
-            // no other thread modifies the array meanwhile (documented).
-            unsafe { self.arrays[k].as_slice() }.expect("checked: C-contiguous and aligned")
-        };
-        self.items
-            .iter()
-            .map(|it| Input {
-                world: match &it.world {
-                    Held::Borrowed(k) => slice(*k).as_chunks::<3>().0,
-                    Held::Owned(v) => v,
-                },
-                image: match &it.image {
-                    Held::Borrowed(k) => slice(*k).as_chunks::<2>().0,
-                    Held::Owned(v) => v,
-                },
-                weights: it.weights.as_ref().map(|w| match w {
-                    Held::Borrowed(k) => slice(*k),
-                    Held::Owned(v) => v.as_slice(),
-                }),
-                camera: it.camera.map(|c| cameras[c]),
-            })
-            .collect()
-    }
-}
-
-/// A problem's points, read from its arrays (in its task).
-struct Points {
-    world: Vec<Point3<f64>>,
-    image: Vec<Point2<f64>>,
-}
-
-impl Input<'_> {
-    fn points(&self) -> Points {
-        Points {
-            world: self
-                .world
-                .iter()
-                .map(|r| Point3::new(r[0], r[1], r[2]))
-                .collect(),
-            image: self.image.iter().map(|r| Point2::new(r[0], r[1])).collect(),
-        }
-    }
-
-    /// The crate's problem on `pts` (normalised points with `focal`, or pixels through the
-    /// camera), after the package's own check of pixel input (a NaN pixel is rejected, as
-    /// `solve` rejects it; the library would skip it as one that cannot be undistorted).
-    fn problem<'a>(&'a self, pts: &'a Points, focal: (f64, f64)) -> Result<Problem<'a>, PnpError> {
+impl<'a> Input<'a> {
+    /// The crate's problem (normalised points with `focal`, or pixels through the camera),
+    /// after the package's own check of pixel input (a NaN pixel is rejected, as `solve`
+    /// rejects it; the library would skip it as one that cannot be undistorted).
+    fn problem(&self, focal: (f64, f64)) -> Result<Problem<'a>, PnpError> {
         let p = match self.camera {
             Some(c) => {
-                check_finite(&pts.world, &pts.image, self.weights)?;
-                Problem::pixels(&pts.world, &pts.image, c)
+                check_finite(self.world, self.image, self.weights)?;
+                Problem::pixels(self.world, self.image, c)
             }
-            None => Problem::normalised(&pts.world, &pts.image).focal(focal.0, focal.1),
+            None => Problem::normalised(self.world, self.image).focal(focal.0, focal.1),
         };
         Ok(match self.weights {
             Some(w) => p.weights(w),
@@ -323,22 +525,18 @@ impl Input<'_> {
 
     /// `solve` on this problem.
     fn solve(&self, solver: &Solver) -> Result<Solution, PnpError> {
-        let pts = self.points();
-        solver.solve(&self.problem(&pts, (1.0, 1.0))?)
+        solver.solve(&self.problem((1.0, 1.0))?)
     }
 }
 
 /// The pools of `threads=`, by thread count.
 static POOLS: Mutex<Option<HashMap<usize, Arc<ThreadPool>>>> = Mutex::new(None);
 
-/// Runs `f` on rayon's global pool (`threads` None) or on a cached pool of `threads` threads.
-pub(crate) fn in_pool<T: Send>(
-    py: Python<'_>,
-    threads: Option<i64>,
-    f: impl FnOnce() -> T + Send,
-) -> PyResult<T> {
+/// The pool of `threads=`: None for rayon's global pool, or a cached pool of `threads`
+/// threads.
+fn pool(py: Python<'_>, threads: Option<i64>) -> PyResult<Option<Arc<ThreadPool>>> {
     let Some(n) = threads else {
-        return Ok(py.detach(f));
+        return Ok(None);
     };
     let n = usize::try_from(n)
         .ok()
@@ -350,44 +548,152 @@ pub(crate) fn in_pool<T: Send>(
                 format!("threads must be None or an integer in [1, 1024], got {n}"),
             )
         })?;
-    let pool = {
-        let mut pools = POOLS
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let pools = pools.get_or_insert_with(HashMap::new);
-        match pools.get(&n) {
-            Some(p) => Arc::clone(p),
-            None => {
-                let p = rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .thread_name(|i| format!("eopnp-{i}"))
-                    .build()
-                    .map_err(|e| option_error(py, "threads", format!("threads: {e}")))?;
-                let p = Arc::new(p);
-                pools.insert(n, Arc::clone(&p));
-                p
-            }
-        }
-    };
-    Ok(py.detach(|| pool.install(f)))
+    let mut pools = POOLS.lock().unwrap_or_else(PoisonError::into_inner);
+    let pools = pools.get_or_insert_with(HashMap::new);
+    if let Some(p) = pools.get(&n) {
+        return Ok(Some(Arc::clone(p)));
+    }
+    let p = rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .thread_name(|i| format!("eopnp-{i}"))
+        .build()
+        .map_err(|e| option_error(py, "threads", format!("threads: {e}")))?;
+    let p = Arc::new(p);
+    pools.insert(n, Arc::clone(&p));
+    Ok(Some(p))
 }
 
-/// Solves many independent problems in parallel (``solve`` on each), the GIL released for the
-/// whole batch.
+/// Runs `f` on rayon's global pool (`threads` None) or on a cached pool of `threads` threads,
+/// with the GIL released.
+pub(crate) fn in_pool<T: Send>(
+    py: Python<'_>,
+    threads: Option<i64>,
+    f: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    Ok(match pool(py, threads)? {
+        None => py.detach(f),
+        Some(p) => py.detach(|| p.install(f)),
+    })
+}
+
+/// The number of problems per chunk of a pipelined batch of `n` problems on `threads`
+/// threads: at least 4 chunks per thread (for the balance between the threads), at most 64
+/// problems (the first chunk, copied before any thread starts, stays short).
+fn chunk_len(n: usize, threads: usize) -> usize {
+    n.div_ceil(4 * threads.max(1)).clamp(1, 64)
+}
+
+/// Counts the chunks solved, for the calling thread to wait on with the GIL released.
+#[derive(Default)]
+struct Latch {
+    done: Mutex<usize>,
+    changed: Condvar,
+}
+
+impl Latch {
+    fn wait(&self, n: usize) {
+        let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
+        while *done < n {
+            done = self
+                .changed
+                .wait(done)
+                .unwrap_or_else(PoisonError::into_inner);
+        }
+    }
+}
+
+/// Counts one chunk as done when dropped (also when its task panics).
+struct Done<'a>(&'a Latch);
+
+impl Drop for Done<'_> {
+    fn drop(&mut self) {
+        *self.0.done.lock().unwrap_or_else(PoisonError::into_inner) += 1;
+        self.0.changed.notify_all();
+    }
+}
+
+/// Solves a batch chunk by chunk (`sinks`: one per chunk, where its results go), the copy of
+/// the inputs pipelined with the solves: on the calling thread, with the GIL held, `copy(k)`
+/// copies chunk `k`'s inputs into memory of the call's own, and the copy is handed to the
+/// pool, where `work(copy, sink)` solves it, while the calling thread copies the next chunk.
+/// Once every chunk is copied, the GIL is released until every chunk is solved: the calling
+/// thread never waits for the pool with the GIL held, and no task reads a caller's buffer.
 ///
-/// C-contiguous float64 arrays are read in place by the threads, with the GIL released (as
-/// numpy's own functions that release it): do not modify them from another thread during
-/// the call. Any other array-like is converted first.
+/// An error of `copy` stops the copying; the chunks not yet started are skipped, and the
+/// error is returned once the others have finished.
+fn pipelined<C: Send, S: Send>(
+    py: Python<'_>,
+    pool: Option<&ThreadPool>,
+    sinks: Vec<S>,
+    mut copy: impl FnMut(usize) -> PyResult<C>,
+    work: impl Fn(C, S) + Sync,
+) -> PyResult<()> {
+    let latch = Latch::default();
+    let cancel = AtomicBool::new(false);
+    let shared = (&work, &latch, &cancel);
+    match pool {
+        Some(p) => p.in_place_scope(|scope| feed(py, scope, sinks, &mut copy, shared)),
+        None => rayon::in_place_scope(|scope| feed(py, scope, sinks, &mut copy, shared)),
+    }
+}
+
+/// `pipelined`'s calling thread, in the scope of the tasks it spawns.
+fn feed<'scope, C: Send + 'scope, S: Send + 'scope, W: Fn(C, S) + Sync>(
+    py: Python<'_>,
+    scope: &rayon::Scope<'scope>,
+    sinks: Vec<S>,
+    copy: &mut impl FnMut(usize) -> PyResult<C>,
+    (work, latch, cancel): (&'scope W, &'scope Latch, &'scope AtomicBool),
+) -> PyResult<()> {
+    let mut handed = 0;
+    let mut result = Ok(());
+    for (k, sink) in sinks.into_iter().enumerate() {
+        match copy(k) {
+            Ok(chunk) => {
+                handed += 1;
+                scope.spawn(move |_| {
+                    let _done = Done(latch);
+                    if !cancel.load(Ordering::Relaxed) {
+                        work(chunk, sink);
+                    }
+                });
+            }
+            Err(e) => {
+                cancel.store(true, Ordering::Relaxed);
+                result = Err(e);
+                break;
+            }
+        }
+    }
+    // Every task handed over is done before the scope ends: the scope's own wait, with the
+    // GIL held, is then immediate.
+    py.detach(|| latch.wait(handed));
+    result
+}
+
+/// The number of threads of `pool` (None: rayon's global pool).
+fn threads_of(pool: Option<&ThreadPool>) -> usize {
+    pool.map_or_else(rayon::current_num_threads, ThreadPool::current_num_threads)
+}
+
+/// Solves many independent problems in parallel (``solve`` on each), the GIL released while
+/// they are solved.
+///
+/// Each array is copied once, with the GIL held, and the solves read the copy (as ``solve``
+/// does): what other threads write to the arrays after the call copied them does not change
+/// its results.
 ///
 /// Args:
 ///     problems: a sequence of ``(world, image)`` or ``(world, image, weights)`` tuples, as
 ///         ``solve``'s arguments (weights may be None).
 ///     camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
 ///         of one ``Camera`` per problem (image points in pixels).
-///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, covariance, loss: as ``solve``, for every problem.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
+///         problem.
 ///     threads: None (rayon's global pool: one thread per core, or ``RAYON_NUM_THREADS``) or
 ///         the number of threads (a pool per count, built once and kept).
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
 ///
 /// Returns:
 ///     list: one entry per problem, in order: its ``Solution``, or the exception instance
@@ -400,48 +706,43 @@ pub(crate) fn in_pool<T: Send>(
 ///         wrong shape; the message names the problem's index), before anything is solved.
 ///     InputTypeError: an array that is not real numbers.
 ///     InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (problems, *, camera = None, refinement = "ml", planar = "auto",
-    newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false, covariance = None, loss = None, threads = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (problems, *, camera = None, options = None, threads = None, **keywords))]
 pub(crate) fn solve_batch<'py>(
     py: Python<'py>,
     problems: &Bound<'py, PyAny>,
     camera: Option<&Bound<'py, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    covariance: Option<&Bound<'py, PyAny>>,
-    loss: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
-    let batch = gather(py, problems, camera)?;
+    let solver = solver_arg(py, "solve_batch", options, keywords, KEYWORDS)?;
+    let batch = ListBatch::new(py, problems, camera)?;
+    let pool = pool(py, threads)?;
+    let n = batch.entries.len();
+    let len = chunk_len(n, threads_of(pool.as_deref()));
     let cams: Vec<&Camera> = batch.cameras.iter().map(|c| &c.get().inner).collect();
-    let inputs = batch.inputs(&cams);
-    let results = in_pool(py, threads, || {
-        inputs
-            .par_iter()
-            .map(|p| p.solve(&solver).map(|s| PySolution::from(&s)))
-            .collect::<Vec<_>>()
-    })?;
+    let sizes = batch.totals(0..n);
+    let mut buffers = Buffers::take(py, sizes);
+    let mut rest = buffers.rest(sizes);
+    let mut results: Vec<Option<Result<PySolution, PnpError>>> = (0..n).map(|_| None).collect();
+    let done = pipelined(
+        py,
+        pool.as_deref(),
+        results.chunks_mut(len).collect(),
+        |k| batch.copy(k * len..((k + 1) * len).min(n), &mut rest),
+        |chunk: Chunk<'_>, out: &mut [Option<Result<PySolution, PnpError>>]| {
+            for (slot, p) in out.iter_mut().zip(chunk.inputs(&cams)) {
+                *slot = Some(p.solve(&solver).map(|s| PySolution::from(&s)));
+            }
+        },
+    );
+    buffers.give_back();
+    done?;
     let out = PyList::empty(py);
     for r in results {
-        match r {
+        match r.expect("every chunk solved") {
             Ok(s) => out.append(untracked(Bound::new(py, s)?))?,
             Err(e) => out.append(pnp_error(py, &e).into_value(py))?,
         }
@@ -464,7 +765,8 @@ fn untracked<T>(obj: Bound<'_, T>) -> Bound<'_, T> {
 }
 
 /// `obj` as a stacked array of `shape` (`None`: any length; the entries of `want`, known from
-/// `world`, must match), C-contiguous `float64` (converted once when it is not).
+/// `world`, must match), C-contiguous `float64` (converted once when it is not), borrowed
+/// read-only for the call's copy.
 fn stacked<'py>(
     obj: &Bound<'py, PyAny>,
     name: &str,
@@ -488,15 +790,7 @@ fn stacked<'py>(
             ),
         ));
     }
-    a.try_readonly().map_err(|e| {
-        error(
-            obj.py(),
-            "InvalidInputError",
-            "Borrow",
-            format!("{name}: {e}"),
-            vec![],
-        )
-    })
+    readonly(&a, name)
 }
 
 /// A new C-contiguous `float64` array of `shape`, left uninitialised: the tasks write every
@@ -549,13 +843,33 @@ fn write_row(
     }
 }
 
+/// A chunk of rows of `solve_batch_arrays`'s stacked arrays, copied: its first problem's index
+/// and its problems' points, N per problem.
+struct RowsIn<'b> {
+    start: usize,
+    world: &'b [Point3<f64>],
+    image: &'b [Point2<f64>],
+    weights: Option<&'b [f64]>,
+}
+
+/// A chunk's rows of `solve_batch_arrays`'s outputs, and its errors.
+struct Rows<'a> {
+    r: &'a mut [f64],
+    t: &'a mut [f64],
+    cost: &'a mut [f64],
+    rmse: &'a mut [f64],
+    ok: &'a mut [bool],
+    cov: Option<(&'a mut [f64], &'a mut [f64])>,
+    errors: &'a mut Vec<(usize, PnpError)>,
+}
+
 /// Solves a batch of problems given as stacked arrays (``solve`` on each), in parallel with the
 /// GIL released, and returns the poses as stacked arrays: the form for throughput (no Python
 /// object per problem).
 ///
-/// C-contiguous float64 arrays are read in place by the threads, with the GIL released (as
-/// numpy's own functions that release it): do not modify them from another thread during
-/// the call. Any other array-like of real numbers is converted once (a copy).
+/// Each array is copied once, with the GIL held, and the solves read the copy (as ``solve``
+/// does): what other threads write to the arrays after the call copied them does not change
+/// its results. Any array-like of real numbers is accepted.
 ///
 /// Args:
 ///     world: world points of every problem, shape (B, N, 3).
@@ -565,15 +879,17 @@ fn write_row(
 ///         exactly as if the points were dropped; or use ``solve_batch``.
 ///     camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
 ///         of B ``Camera`` (pixels).
-///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, covariance, loss: as ``solve``, for every problem.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
+///         problem.
 ///     threads: as ``solve_batch``.
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
 ///
 /// Returns:
 ///     BatchResult: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost`` (B,), ``reprojection_rmse``
-///     (B,), ``ok`` (B,) bool, ``covariance`` (B, 6, 6) and ``sigma`` (B,) with
-///     ``covariance=`` (else None), and ``errors``: {index: the exception ``solve`` would
-///     raise for that problem} (its rows are NaN and ``ok`` False). Row ``i`` equals
+///     (B,), ``ok`` (B,) bool, ``covariance`` (B, 6, 6) and ``sigma`` (B,) with a
+///     ``covariance`` option (else None), and ``errors``: {index: the exception ``solve``
+///     would raise for that problem} (its rows are NaN and ``ok`` False). Row ``i`` equals
 ///     ``solve(world[i], image[i], weights[i], ...)`` exactly, whatever the thread count.
 ///
 /// Raises:
@@ -581,39 +897,22 @@ fn write_row(
 ///         (B, N, 2) or weights not (B, N) with world's B and N), before anything is solved.
 ///     InputTypeError: an array that is not real numbers.
 ///     InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (world, image, weights = None, *, camera = None, refinement = "ml",
-    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, covariance = None, loss = None,
-    threads = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (world, image, weights = None, *, camera = None, options = None,
+    threads = None, **keywords))]
 pub(crate) fn solve_batch_arrays<'py>(
-    py: Python<'py>,
     world: &Bound<'py, PyAny>,
     image: &Bound<'py, PyAny>,
     weights: Option<&Bound<'py, PyAny>>,
     camera: Option<&Bound<'py, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    covariance: Option<&Bound<'py, PyAny>>,
-    loss: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
+    let py = world.py();
+    let options = options_arg(py, "solve_batch_arrays", options, keywords, KEYWORDS)?;
+    let solver = options.solver();
     let w = stacked(world, "world", &[None, None, Some(3)], "(B, N, 3)")?;
     let (b, n) = (w.shape()[0], w.shape()[1]);
     let bn = format!("(B, N, 2) = ({b}, {n}, 2)");
@@ -629,24 +928,16 @@ pub(crate) fn solve_batch_arrays<'py>(
     };
     let (cams, which) = cameras(py, camera, b)?;
     let cams: Vec<&Camera> = cams.iter().map(|c| &c.get().inner).collect();
+    let pool = pool(py, threads)?;
+    let len = chunk_len(b, threads_of(pool.as_deref()));
 
-    let want_cov = covariance.is_some_and(|c| !c.is_none());
+    let want_cov = options.wants_covariance();
     let r_out = output(py, &[b, 3, 3]);
     let t_out = output(py, &[b, 3]);
     let cost_out = output(py, &[b]);
     let rmse_out = output(py, &[b]);
     let ok_out = PyArray1::<bool>::zeros(py, b, false);
     let cov_out = want_cov.then(|| (output(py, &[b, 6, 6]), output(py, &[b])));
-
-    let ws = w.as_slice().expect("contiguous").as_chunks::<3>().0;
-    let ms = m.as_slice().expect("contiguous").as_chunks::<2>().0;
-    let wts = wt.as_ref().map(|x| x.as_slice().expect("contiguous"));
-    let input = |i: usize| Input {
-        world: &ws[i * n..(i + 1) * n],
-        image: &ms[i * n..(i + 1) * n],
-        weights: wts.map(|x| &x[i * n..(i + 1) * n]),
-        camera: which[i].map(|c| cams[c]),
-    };
     // SAFETY: new arrays, referenced by nothing else until they are returned.
     let (r, t, cost, rmse, ok, cov) = unsafe {
         (
@@ -663,29 +954,116 @@ pub(crate) fn solve_batch_arrays<'py>(
             }),
         )
     };
-    let errors = in_pool(py, threads, || {
-        let cov = match cov {
-            Some((c, s)) => Either::Left(c.par_chunks_mut(36).zip(s.par_iter_mut()).map(Some)),
-            None => Either::Right((0..b).into_par_iter().map(|_| None)),
-        };
-        r.par_chunks_mut(9)
-            .zip(t.par_chunks_mut(3))
-            .zip(cost.par_iter_mut())
-            .zip(rmse.par_iter_mut())
-            .zip(ok.par_iter_mut())
-            .zip(cov)
-            .enumerate()
-            .filter_map(|(i, (((((r, t), cost), rmse), ok), cov))| {
-                let res = input(i).solve(&solver);
-                write_row(&res, r, t, cost, rmse, ok, cov);
-                res.err().map(|e| (i, e))
+    let chunks = b.div_ceil(len);
+    let mut errors: Vec<Vec<(usize, PnpError)>> = (0..chunks).map(|_| Vec::new()).collect();
+    let covs: Vec<Option<(&mut [f64], &mut [f64])>> = match cov {
+        Some((c, s)) => c
+            .chunks_mut(36 * len)
+            .zip(s.chunks_mut(len))
+            .map(Some)
+            .collect(),
+        None => (0..chunks).map(|_| None).collect(),
+    };
+    let sinks: Vec<Rows<'_>> = r
+        .chunks_mut(9 * len)
+        .zip(t.chunks_mut(3 * len))
+        .zip(cost.chunks_mut(len))
+        .zip(rmse.chunks_mut(len))
+        .zip(ok.chunks_mut(len))
+        .zip(covs)
+        .zip(errors.iter_mut())
+        .map(|((((((r, t), cost), rmse), ok), cov), errors)| Rows {
+            r,
+            t,
+            cost,
+            rmse,
+            ok,
+            cov,
+            errors,
+        })
+        .collect();
+    let (ws, ms) = (
+        w.as_slice().expect("contiguous"),
+        m.as_slice().expect("contiguous"),
+    );
+    let wts = wt.as_ref().map(|x| x.as_slice().expect("contiguous"));
+    let sizes = [b * n, b * n, if wts.is_some() { b * n } else { 0 }];
+    let mut buffers = Buffers::take(py, sizes);
+    let mut rest = buffers.rest(sizes);
+    let done = pipelined(
+        py,
+        pool.as_deref(),
+        sinks,
+        // The rows of chunk `k`, copied with the GIL held (the arrays borrowed read-only).
+        |k| {
+            let rows = k * len..((k + 1) * len).min(b);
+            let points = rows.start * n..rows.end * n;
+            let (world, image) = (rest.0.take(points.len()), rest.1.take(points.len()));
+            let src = ws[3 * points.start..3 * points.end].as_chunks::<3>().0;
+            for (o, r) in world.iter_mut().zip(src) {
+                o.write(Point3::new(r[0], r[1], r[2]));
+            }
+            let src = ms[2 * points.start..2 * points.end].as_chunks::<2>().0;
+            for (o, r) in image.iter_mut().zip(src) {
+                o.write(Point2::new(r[0], r[1]));
+            }
+            let weights = wts.map(|x| {
+                let out = rest.2.take(points.len());
+                for (o, v) in out.iter_mut().zip(&x[points.clone()]) {
+                    o.write(*v);
+                }
+                written(out)
+            });
+            Ok(RowsIn {
+                start: rows.start,
+                world: written(world),
+                image: written(image),
+                weights,
             })
-            .collect::<Vec<_>>()
-    })?;
+        },
+        |input: RowsIn<'_>, out: Rows<'_>| {
+            let Rows {
+                r,
+                t,
+                cost,
+                rmse,
+                ok,
+                mut cov,
+                errors,
+            } = out;
+            for j in 0..ok.len() {
+                let i = input.start + j;
+                let p = Input {
+                    world: &input.world[j * n..(j + 1) * n],
+                    image: &input.image[j * n..(j + 1) * n],
+                    weights: input.weights.map(|x| &x[j * n..(j + 1) * n]),
+                    camera: which[i].map(|c| cams[c]),
+                };
+                let res = p.solve(&solver);
+                let cov = cov
+                    .as_mut()
+                    .map(|(c, s)| (&mut c[36 * j..36 * (j + 1)], &mut s[j]));
+                write_row(
+                    &res,
+                    &mut r[9 * j..9 * (j + 1)],
+                    &mut t[3 * j..3 * (j + 1)],
+                    &mut cost[j],
+                    &mut rmse[j],
+                    &mut ok[j],
+                    cov,
+                );
+                if let Err(e) = res {
+                    errors.push((i, e));
+                }
+            }
+        },
+    );
+    buffers.give_back();
+    done?;
     drop((w, m, wt));
 
     let errs = PyDict::new(py);
-    for (i, e) in &errors {
+    for (i, e) in errors.iter().flatten() {
         errs.set_item(*i, pnp_error(py, e).into_value(py))?;
     }
     let module = BATCH.get_or_try_init(py, || {
@@ -712,9 +1090,11 @@ pub(crate) fn solve_batch_arrays<'py>(
 ///     focal: ``(fx, fy)`` (or one ``f``) in pixels for every problem, for normalised image
 ///         points (exactly one of ``camera`` and ``focal``).
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
-///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, loss, covariance: as ``solve_ransac``.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve_ransac``, for every
+///         problem.
 ///     threads: as ``solve_batch``.
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
 ///
 /// Returns:
 ///     list: one entry per problem, in order: ``(Solution, info)`` as ``solve_ransac``
@@ -724,38 +1104,19 @@ pub(crate) fn solve_batch_arrays<'py>(
 /// Raises:
 ///     As ``solve_batch``; InvalidOptionError also for neither or both of camera and focal.
 #[pyfunction]
-#[pyo3(signature = (problems, *, camera = None, focal = None, ransac = None, refinement = "ml",
-    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, loss = None, covariance = None,
-    threads = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (problems, *, camera = None, focal = None, ransac = None, options = None,
+    threads = None, **keywords))]
 pub(crate) fn solve_ransac_batch<'py>(
-    py: Python<'py>,
     problems: &Bound<'py, PyAny>,
     camera: Option<&Bound<'py, PyAny>>,
     focal: Option<&Bound<'py, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    loss: Option<&Bound<'py, PyAny>>,
-    covariance: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
+    let py = problems.py();
+    let solver = solver_arg(py, "solve_ransac_batch", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
     let has_camera = camera.is_some_and(|c| !c.is_none());
@@ -768,16 +1129,29 @@ pub(crate) fn solve_ransac_batch<'py>(
                 .into(),
         ));
     }
-    let batch = gather(py, problems, camera)?;
+    let batch = ListBatch::new(py, problems, camera)?;
+    let pool = pool(py, threads)?;
+    let n = batch.entries.len();
+    let len = chunk_len(n, threads_of(pool.as_deref()));
     let cams: Vec<&Camera> = batch.cameras.iter().map(|c| &c.get().inner).collect();
-    let inputs = batch.inputs(&cams);
-    let results = in_pool(py, threads, || {
-        inputs
-            .par_iter()
-            .enumerate()
-            .map(|(i, p)| estimate(&ransac, &solver, i, p, focal))
-            .collect::<Vec<_>>()
-    })?;
+    let sizes = batch.totals(0..n);
+    let mut buffers = Buffers::take(py, sizes);
+    let mut rest = buffers.rest(sizes);
+    let mut results: Vec<Option<Estimate>> = (0..n).map(|_| None).collect();
+    let done = pipelined(
+        py,
+        pool.as_deref(),
+        results.chunks_mut(len).collect(),
+        |k| batch.copy(k * len..((k + 1) * len).min(n), &mut rest),
+        |chunk: Chunk<'_>, out: &mut [Option<Estimate>]| {
+            for (j, (slot, p)) in out.iter_mut().zip(chunk.inputs(&cams)).enumerate() {
+                *slot = Some(estimate(&ransac, &solver, chunk.start + j, &p, focal));
+            }
+        },
+    );
+    buffers.give_back();
+    done?;
+    let results = results.into_iter().map(|r| r.expect("every chunk solved"));
     let out = PyList::empty(py);
     for r in results {
         match r {
@@ -788,22 +1162,24 @@ pub(crate) fn solve_ransac_batch<'py>(
     Ok(out)
 }
 
-/// `solve_ransac` on problem `index` of a batch (seed `problem_seed(ransac.seed, index)`):
-/// the solution, the crate's result and the info's `rmse_px`.
+/// A problem's result of `solve_ransac_batch`: the solution, the crate's result and the info's
+/// `rmse_px`.
+type Estimate = Result<(PySolution, RansacSolution, f64), PnpError>;
+
+/// `solve_ransac` on problem `index` of a batch (seed `problem_seed(ransac.seed, index)`).
 fn estimate(
     ransac: &Ransac,
     solver: &Solver,
     index: usize,
     p: &Input<'_>,
     focal: Option<(f64, f64)>,
-) -> Result<(PySolution, RansacSolution, f64), PnpError> {
-    let pts = p.points();
-    let problem = p.problem(&pts, focal.unwrap_or((1.0, 1.0)))?;
+) -> Estimate {
+    let problem = p.problem(focal.unwrap_or((1.0, 1.0)))?;
     let r = ransac
         .seed(seed_of(ransac.seed, index))
         .estimate(solver, &problem)?;
     let sol = PySolution::from(&r.solution);
-    let px = ransac_rmse_px(&sol, &r, &pts.world, &pts.image, p.camera, focal);
+    let px = ransac_rmse_px(&sol, &r, p.world, p.image, p.camera, focal);
     Ok((sol, r, px))
 }
 

@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
 use crate::convert::{array1, array2, matrix3, points2, vector};
-use crate::errors::{camera_error, error};
+use crate::errors::{camera_error, error, CameraError};
 
 /// A camera: a model, its parameters in COLMAP's order, and the image size.
 ///
@@ -74,9 +74,8 @@ impl PyCamera {
         let params = vector(params, "params", false)?;
         let size = |v: i64, name: &str| {
             u64::try_from(v).map_err(|_| {
-                error(
+                error::<CameraError>(
                     py,
-                    "CameraError",
                     "InvalidParams",
                     format!("invalid camera parameters: {name} must be >= 0, got {v}"),
                     vec![],
@@ -120,9 +119,8 @@ impl PyCamera {
     ) -> PyResult<Self> {
         let (k, d) = opencv_inputs(K, Some(dist))?;
         let d: [f64; 4] = d.as_slice().try_into().map_err(|_| {
-            error(
+            error::<CameraError>(
                 py,
-                "CameraError",
                 "InvalidParams",
                 format!(
                     "invalid camera parameters: cv2.fisheye takes 4 distortion coefficients, got {}",

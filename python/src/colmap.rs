@@ -6,7 +6,6 @@ use std::sync::Arc;
 
 use eopnp::colmap::{self, Image, Model, Registrar, Registration};
 use eopnp::ransac::Ransac;
-use eopnp::Solver;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -17,7 +16,7 @@ use crate::batch::in_pool;
 use crate::camera::PyCamera;
 use crate::convert::{array1, array2};
 use crate::errors::{model_error, register_error};
-use crate::options::SolverOptions;
+use crate::options::{solver_arg, KEYWORDS};
 use crate::ransac::ransac_arg;
 use crate::solution::PySolution;
 
@@ -257,28 +256,42 @@ pub(crate) fn read_colmap_model(py: Python<'_>, path: PathBuf) -> PyResult<PyMod
 ///     micros: wall time of undistortion plus solve, microseconds.
 #[pyclass(frozen, module = "eopnp", name = "Registration")]
 pub(crate) struct PyRegistration {
+    /// The image's id.
     #[pyo3(get)]
     image_id: u32,
+    /// The image's name.
     #[pyo3(get)]
     name: String,
+    /// The image's 2D-3D correspondences.
     #[pyo3(get)]
     n: usize,
+    /// Correspondences the pose was fitted to (all that could be undistorted, or RANSAC's
+    /// inliers).
     #[pyo3(get)]
     inliers: usize,
+    /// Observations whose pixel could not be undistorted.
     #[pyo3(get)]
     skipped: usize,
+    /// The estimated pose.
     #[pyo3(get)]
     solution: Py<PySolution>,
+    /// RANSAC's statistics (iterations, hypotheses, local_fits, final_fits, inliers,
+    /// inlier_ratio, micros), or None without RANSAC.
     #[pyo3(get)]
     ransac: Option<Py<PyDict>>,
+    /// Rotation difference to the model's pose, degrees.
     #[pyo3(get)]
     rotation_error_deg: f64,
+    /// Translation difference, percent of the model's ``|t|``.
     #[pyo3(get)]
     translation_error_pct: f64,
+    /// RMS pixel reprojection error of the estimated pose over the fitted points.
     #[pyo3(get)]
     rmse_px: f64,
+    /// The same for the model's own pose.
     #[pyo3(get)]
     model_rmse_px: f64,
+    /// Wall time of undistortion plus solve, microseconds.
     #[pyo3(get)]
     micros: f64,
 }
@@ -303,10 +316,11 @@ impl PyRegistration {
 ///     ransac: None or False: ``solve`` on every correspondence through the image's camera;
 ///         True (default options), a ``RansacOptions`` or a dict of its fields: robust, as
 ///         ``solve_ransac``.
-///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive, loss: as ``solve`` (``loss``'s scale in pixels).
-///     covariance: as ``solve`` (the noise in pixels): ``Registration.solution.covariance``,
-///         from every correspondence used, or with RANSAC from the inliers.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``: ``loss``'s scale
+///         and ``covariance``'s noise in pixels; ``Registration.solution.covariance`` is from
+///         every correspondence used, or with RANSAC from the inliers.
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
 ///
 /// Returns:
 ///     Registration: the pose, its errors against the model's, RANSAC's statistics.
@@ -316,38 +330,17 @@ impl PyRegistration {
 ///     InvalidInputError, DegenerateError, NoConsensusError, ...: as ``solve`` and
 ///         ``solve_ransac`` on the image's correspondences.
 #[pyfunction]
-#[pyo3(signature = (model, image_id, *, ransac = None, refinement = "ml", planar = "auto",
-    newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false, loss = None, covariance = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (model, image_id, *, ransac = None, options = None, **keywords))]
 pub(crate) fn register_image(
     py: Python<'_>,
     model: &Bound<'_, PyModel>,
     image_id: u32,
     ransac: Option<&Bound<'_, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    loss: Option<&Bound<'_, PyAny>>,
-    covariance: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyAny>>,
+    keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyRegistration> {
-    let (solver, ransac) = registration_options(
-        py,
-        ransac,
-        SolverOptions {
-            refinement,
-            planar,
-            newton_iterations,
-            newton_step_tolerance,
-            reprojection_iterations,
-            exhaustive,
-            loss,
-            covariance,
-        },
-    )?;
+    let solver = solver_arg(py, "register_image", options, keywords, KEYWORDS)?;
+    let ransac = registration_ransac(py, ransac)?;
     let m = Arc::clone(&model.get().inner);
     let reg = py
         .detach(|| colmap::register_image(&m, image_id, &solver, ransac.as_ref()))
@@ -355,15 +348,13 @@ pub(crate) fn register_image(
     to_py(py, reg)
 }
 
-/// The solver and the RANSAC options of ``register_image``'s arguments.
-fn registration_options(
+/// The RANSAC options of ``register_image``'s ``ransac``: None or False (plain), True
+/// (defaults), a ``RansacOptions`` or a dict.
+fn registration_ransac(
     py: Python<'_>,
     ransac: Option<&Bound<'_, PyAny>>,
-    options: SolverOptions<'_, '_>,
-) -> PyResult<(Solver, Option<Ransac>)> {
-    let solver = options.solver(py)?;
-    // `ransac`: None or False (plain), True (defaults), RansacOptions or a dict.
-    let ransac = match ransac {
+) -> PyResult<Option<Ransac>> {
+    Ok(match ransac {
         None => None,
         Some(r) if r.is_instance_of::<pyo3::types::PyBool>() => {
             if r.extract::<bool>()? {
@@ -373,8 +364,7 @@ fn registration_options(
             }
         }
         Some(r) => Some(ransac_arg(py, Some(r))?),
-    };
-    Ok((solver, ransac))
+    })
 }
 
 /// A ``Registration`` of `reg`.
@@ -416,8 +406,7 @@ fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
 /// Args:
 ///     model: a ``Model`` from ``read_colmap_model``.
 ///     image_ids: the images (any iterable of ids), or None for every image in id order.
-///     ransac, refinement, planar, newton_iterations, newton_step_tolerance,
-///         reprojection_iterations, exhaustive, loss, covariance: as ``register_image``.
+///     ransac, options, **keywords: as ``register_image``.
 ///     threads: None (rayon's global pool) or the number of threads, as ``solve_batch``.
 ///
 /// Returns:
@@ -427,41 +416,21 @@ fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
 ///
 /// Raises:
 ///     InvalidOptionError: an option out of range or a bad ``threads``.
+///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (model, image_ids = None, *, ransac = None, refinement = "ml",
-    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, loss = None, covariance = None,
-    threads = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (model, image_ids = None, *, ransac = None, options = None, threads = None,
+    **keywords))]
 pub(crate) fn register_images<'py>(
     py: Python<'py>,
     model: &Bound<'py, PyModel>,
     image_ids: Option<&Bound<'py, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    loss: Option<&Bound<'py, PyAny>>,
-    covariance: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let (solver, ransac) = registration_options(
-        py,
-        ransac,
-        SolverOptions {
-            refinement,
-            planar,
-            newton_iterations,
-            newton_step_tolerance,
-            reprojection_iterations,
-            exhaustive,
-            loss,
-            covariance,
-        },
-    )?;
+    let solver = solver_arg(py, "register_images", options, keywords, KEYWORDS)?;
+    let ransac = registration_ransac(py, ransac)?;
     let m = Arc::clone(&model.get().inner);
     let ids: Vec<u32> = match image_ids {
         None => m.images.keys().copied().collect(),

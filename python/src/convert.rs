@@ -1,6 +1,7 @@
 //! Arrays in and out: any array-like of real numbers (float or integer dtype, any strides and
 //! byte order) is read as `f64`; other dtypes and wrong shapes raise `InputTypeError` and
-//! `InvalidInputError`. Results are new C-contiguous `float64` arrays.
+//! `InvalidInputError`. The arrays are copied into Rust's memory with the GIL held, before
+//! any solve releases it. Results are new C-contiguous `float64` arrays.
 
 use nalgebra::{Point2, Point3};
 use numpy::ndarray::Ix2;
@@ -9,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::PyModule;
 
-use crate::errors::{dtype_error, error, shape_error};
+use crate::errors::{dtype_error, error, shape_error, InvalidInputError};
 
 static NUMPY: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
 
@@ -29,15 +30,8 @@ pub(crate) fn readonly<'py, D: numpy::ndarray::Dimension>(
     arr: &Bound<'py, numpy::PyArray<f64, D>>,
     name: &str,
 ) -> PyResult<numpy::PyReadonlyArray<'py, f64, D>> {
-    arr.try_readonly().map_err(|e| {
-        error(
-            arr.py(),
-            "InvalidInputError",
-            "Borrow",
-            format!("{name}: {e}"),
-            vec![],
-        )
-    })
+    arr.try_readonly()
+        .map_err(|e| error::<InvalidInputError>(arr.py(), "Borrow", format!("{name}: {e}"), vec![]))
 }
 
 /// `obj` as a `float64` array: as is if it is one, otherwise through `numpy.asarray` when its
@@ -89,13 +83,49 @@ pub(crate) fn contiguous_array<'py>(
     Ok(arr.call_method0("copy")?.cast_into::<PyArrayDyn<f64>>()?)
 }
 
-/// The rows of an `(N, C)` array, each mapped by `f`.
+/// The rows of `obj` mapped by `f` when it is a C-contiguous, aligned `float64` array of
+/// shape `(N, cols)`, read straight from numpy's buffer into the result (one copy, without the
+/// dynamic borrow bookkeeping of `readonly`: about 900 instructions per array, 40 % of a
+/// call's own work at N = 10, and O(B^2) for a batch of B views of one array); `None` for
+/// anything else.
+pub(crate) fn fast_rows<T>(
+    obj: &Bound<'_, PyAny>,
+    cols: usize,
+    f: impl Fn(&[f64]) -> T,
+) -> Option<Vec<T>> {
+    let arr = obj.cast::<PyArrayDyn<f64>>().ok()?;
+    let shape = arr.shape();
+    if shape.len() != 2 || shape[1] != cols || !arr.is_c_contiguous() || !arr.is_aligned() {
+        return None;
+    }
+    // SAFETY: C-contiguous and aligned, checked above; the slice lives only for the copy
+    // below, made with the GIL held (`obj` is bound to it), so no Python code can write to
+    // the array meanwhile, and nothing in this crate borrows it mutably.
+    let flat = unsafe { arr.as_slice() }.ok()?;
+    Some(flat.chunks_exact(cols).map(f).collect())
+}
+
+/// The one-dimensional C-contiguous, aligned `float64` array `obj` copied, as `fast_rows`;
+/// `None` for anything else.
+pub(crate) fn fast_vector(obj: &Bound<'_, PyAny>) -> Option<Vec<f64>> {
+    let arr = obj.cast::<PyArrayDyn<f64>>().ok()?;
+    if arr.shape().len() != 1 || !arr.is_c_contiguous() || !arr.is_aligned() {
+        return None;
+    }
+    // SAFETY: as `fast_rows`.
+    Some(unsafe { arr.as_slice() }.ok()?.to_vec())
+}
+
+/// The rows of an `(N, C)` array, each mapped by `f`, copied with the GIL held.
 pub(crate) fn rows<T>(
     obj: &Bound<'_, PyAny>,
     name: &str,
     cols: usize,
     f: impl Fn(&[f64]) -> T,
 ) -> PyResult<Vec<T>> {
+    if let Some(rows) = fast_rows(obj, cols, &f) {
+        return Ok(rows);
+    }
     let arr = float_array(obj, name)?;
     let py = obj.py();
     let shape = arr.shape();
@@ -109,16 +139,9 @@ pub(crate) fn rows<T>(
             ),
         ));
     }
-    // C order and aligned (the common case): the rows read straight from numpy's buffer into
-    // the result, one copy, without the dynamic borrow bookkeeping of `readonly` (about 900
-    // instructions per array: for the two arrays, 40 % of the call's own work at N = 10).
-    if arr.is_c_contiguous() && arr.is_aligned() {
-        // SAFETY: C-contiguous and aligned, checked above; the slice lives only for the copy
-        // below, made with the GIL held, so no Python code can write to the array meanwhile,
-        // and nothing in this crate borrows it mutably.
-        if let Ok(flat) = unsafe { arr.as_slice() } {
-            return Ok(flat.chunks_exact(cols).map(f).collect());
-        }
+    // A C-order aligned array of another dtype, converted by `float_array`.
+    if let Some(rows) = fast_rows(arr.as_any(), cols, &f) {
+        return Ok(rows);
     }
     let ro = readonly(&arr, name)?;
     let view = ro
@@ -164,6 +187,9 @@ pub(crate) fn matrix3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[[f64; 3];
 /// A one-dimensional array of numbers; with `flatten`, also a `(1, n)` or `(n, 1)` array (as
 /// OpenCV returns distortion vectors).
 pub(crate) fn vector(obj: &Bound<'_, PyAny>, name: &str, flatten: bool) -> PyResult<Vec<f64>> {
+    if let Some(v) = fast_vector(obj) {
+        return Ok(v);
+    }
     let arr = float_array(obj, name)?;
     let py = obj.py();
     let shape = arr.shape();

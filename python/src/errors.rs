@@ -1,14 +1,182 @@
-//! Rust errors as the Python exceptions of `eopnp/_errors.py` (one class per family of
-//! `PnpError` variants; the variant's name in `kind`, its fields as attributes).
+//! The exceptions of the package, created here with PyO3's `create_exception!` (one class per
+//! family of `PnpError` variants, plus the camera and COLMAP families), and the Rust errors as
+//! instances of them: the library's message (`str(e)`), the variant's name in `e.kind`, its
+//! fields as attributes and in `e.details`.
+//!
+//! ```text
+//! PnpError(Exception)                          base of every error of this package
+//! ├── InvalidInputError(PnpError, ValueError)  TooFewPoints, LengthMismatch, WeightsLength,
+//! │   │                                        NonFinite, InvalidWeight; wrong array shapes
+//! │   └── InputTypeError(InvalidInputError, TypeError)   arrays that are not real numbers
+//! ├── DegenerateError(PnpError, ValueError)    Degenerate
+//! ├── NoSolutionError(PnpError, RuntimeError)  NoSolution
+//! ├── InvalidOptionError(PnpError, ValueError) InvalidOption; bad keyword values
+//! ├── NoConsensusError(PnpError, RuntimeError) NoConsensus
+//! ├── CameraError(PnpError, ValueError)        an invalid camera
+//! ├── ModelError(PnpError)                     a COLMAP model that cannot be read
+//! └── UnknownIdError(PnpError, LookupError)    no such image or camera in a COLMAP model
+//! ```
+//!
+//! `create_exception!` takes one base class: each class is created with its base in this
+//! package's hierarchy, and `add_to_module` gives the classes that also derive from a builtin
+//! exception their second base (`__bases__`), once, when the module is initialised and before
+//! any instance exists. Their method resolution order is then that of
+//! `class InvalidInputError(PnpError, ValueError)`. Instances pickle by `BaseException`'s own
+//! `__reduce__`: the class (by its name in `eopnp`), the message, and the attributes.
 
-use eopnp::camera::CameraError;
-use eopnp::colmap::{Location, ModelError, RegisterError};
-use eopnp::{DegenerateKind, InputKind, PnpError};
+use eopnp::camera::CameraError as RustCameraError;
+use eopnp::colmap::{Location, ModelError as RustModelError, RegisterError};
+use eopnp::{DegenerateKind, InputKind, PnpError as RustPnpError};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyLookupError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::sync::PyOnceLock;
-use pyo3::types::{PyDict, PyModule};
+use pyo3::types::{PyDict, PyTuple, PyType};
+use pyo3::PyTypeInfo;
 
-static ERRORS: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
+create_exception!(
+    eopnp,
+    PnpError,
+    PyException,
+    "Base class of every exception raised by eopnp.\n\
+     \n\
+     Attributes:\n    \
+         kind: the name of the Rust ``PnpError`` variant (``\"TooFewPoints\"``,\n        \
+             ``\"NonFinite\"``, ...) or of the package's check (``\"Shape\"``, ``\"DType\"``, ...).\n    \
+         details: the variant's fields as a dict; each is also an attribute of the exception\n        \
+             (e.g. ``e.index`` and ``e.input`` of a non-finite value).\n\
+     \n\
+     Exceptions raised by the package pickle with their ``kind`` and fields."
+);
+create_exception!(
+    eopnp,
+    InvalidInputError,
+    PnpError,
+    "Bad input (also a ``ValueError``): too few points (``got``, ``need``), mismatched lengths\n\
+     (``world``, ``image``; ``weights``, ``points``), a NaN or infinite value (``index``,\n\
+     ``input``: ``\"world\"``, ``\"image\"`` or ``\"weights\"``), a negative weight (``index``),\n\
+     or an array of the wrong shape (kind ``\"Shape\"``, ``argument``)."
+);
+create_exception!(
+    eopnp,
+    InputTypeError,
+    InvalidInputError,
+    "An input that is not an array of real numbers (also a ``TypeError``; kind ``\"DType\"``,\n\
+     ``argument``): complex, boolean, object or string data."
+);
+create_exception!(
+    eopnp,
+    DegenerateError,
+    PnpError,
+    "A degenerate configuration (also a ``ValueError``; kind ``\"Degenerate\"``);\n\
+     ``degeneracy`` is one of ``\"coincident_world_points\"``, ``\"collinear_world_points\"``,\n\
+     ``\"coincident_image_points\"``, ``\"scale_out_of_range\"``."
+);
+create_exception!(
+    eopnp,
+    NoSolutionError,
+    PnpError,
+    "No candidate pose survived (also a ``RuntimeError``): numerical failure on extremely\n\
+     ill-conditioned input."
+);
+create_exception!(
+    eopnp,
+    InvalidOptionError,
+    PnpError,
+    "An option out of its range or of the wrong form (also a ``ValueError``; ``option``: its\n\
+     name)."
+);
+create_exception!(
+    eopnp,
+    NoConsensusError,
+    PnpError,
+    "RANSAC found no consensus (also a ``RuntimeError``): no pose had enough inliers for a fit,\n\
+     or the best pose's ``inliers`` are no more than a wrong pose reaches by chance\n\
+     (``needed``: the least accepted; ``iterations``: samples drawn)."
+);
+create_exception!(
+    eopnp,
+    CameraError,
+    PnpError,
+    "An invalid camera (also a ``ValueError``): unsupported model, wrong number of parameters,\n\
+     non-finite or non-positive focal lengths, a malformed ``K`` or distortion vector."
+);
+create_exception!(
+    eopnp,
+    ModelError,
+    PnpError,
+    "A COLMAP model that cannot be read: ``file``, ``line`` or ``offset`` (or None), and\n\
+     ``reason``."
+);
+create_exception!(
+    eopnp,
+    UnknownIdError,
+    PnpError,
+    "No image (kind ``\"UnknownImage\"``) or camera (``\"UnknownCamera\"``) with this ``id`` in\n\
+     the model (also a ``LookupError``)."
+);
+
+/// Adds the exception classes to the module, each with its builtin second base (see the
+/// module's documentation).
+pub(crate) fn add_to_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    let mixed: [(Bound<'_, PyType>, Bound<'_, PyType>, Bound<'_, PyType>); 8] = [
+        (
+            InvalidInputError::type_object(py),
+            PnpError::type_object(py),
+            PyValueError::type_object(py),
+        ),
+        (
+            InputTypeError::type_object(py),
+            InvalidInputError::type_object(py),
+            PyTypeError::type_object(py),
+        ),
+        (
+            DegenerateError::type_object(py),
+            PnpError::type_object(py),
+            PyValueError::type_object(py),
+        ),
+        (
+            NoSolutionError::type_object(py),
+            PnpError::type_object(py),
+            PyRuntimeError::type_object(py),
+        ),
+        (
+            InvalidOptionError::type_object(py),
+            PnpError::type_object(py),
+            PyValueError::type_object(py),
+        ),
+        (
+            NoConsensusError::type_object(py),
+            PnpError::type_object(py),
+            PyRuntimeError::type_object(py),
+        ),
+        (
+            CameraError::type_object(py),
+            PnpError::type_object(py),
+            PyValueError::type_object(py),
+        ),
+        (
+            UnknownIdError::type_object(py),
+            PnpError::type_object(py),
+            PyLookupError::type_object(py),
+        ),
+    ];
+    for (class, base, builtin) in mixed {
+        // Idempotent: the same two bases whenever the module is initialised.
+        class.setattr("__bases__", PyTuple::new(py, [base, builtin])?)?;
+    }
+    m.add("PnpError", PnpError::type_object(py))?;
+    m.add("InvalidInputError", InvalidInputError::type_object(py))?;
+    m.add("InputTypeError", InputTypeError::type_object(py))?;
+    m.add("DegenerateError", DegenerateError::type_object(py))?;
+    m.add("NoSolutionError", NoSolutionError::type_object(py))?;
+    m.add("InvalidOptionError", InvalidOptionError::type_object(py))?;
+    m.add("NoConsensusError", NoConsensusError::type_object(py))?;
+    m.add("CameraError", CameraError::type_object(py))?;
+    m.add("ModelError", ModelError::type_object(py))?;
+    m.add("UnknownIdError", UnknownIdError::type_object(py))?;
+    Ok(())
+}
 
 /// A value of an exception's field.
 pub(crate) enum Field {
@@ -41,61 +209,57 @@ impl From<String> for Field {
     }
 }
 
-/// An instance of `eopnp.<class>(message, kind, **fields)` as a `PyErr`.
-pub(crate) fn error(
-    py: Python<'_>,
-    class: &str,
+/// An instance of `class(message)` with `kind`, `details` and the fields set, as a `PyErr`.
+fn instance(
+    class: &Bound<'_, PyType>,
     kind: &str,
-    message: impl Into<String>,
+    message: String,
     fields: Vec<(&'static str, Field)>,
 ) -> PyErr {
-    let message = message.into();
+    let py = class.py();
     let build = || -> PyResult<PyErr> {
-        let module = ERRORS.get_or_try_init(py, || {
-            PyModule::import(py, "eopnp._errors").map(Bound::unbind)
-        })?;
-        let class = module.bind(py).getattr(class)?;
-        let kwargs = PyDict::new(py);
+        let exc = class.call1((message,))?;
+        let details = PyDict::new(py);
         for (key, value) in fields {
-            match value {
-                Field::Int(v) => kwargs.set_item(key, v)?,
-                Field::Str(v) => kwargs.set_item(key, v)?,
-                Field::None => kwargs.set_item(key, py.None())?,
-            }
+            let value = match value {
+                Field::Int(v) => v.into_pyobject(py)?.into_any(),
+                Field::Str(v) => v.into_pyobject(py)?.into_any(),
+                Field::None => py.None().into_bound(py),
+            };
+            details.set_item(key, &value)?;
+            exc.setattr(key, value)?;
         }
-        let exc = class.call((message.as_str(), kind), Some(&kwargs))?;
+        exc.setattr("kind", kind)?;
+        exc.setattr("details", details)?;
         Ok(PyErr::from_value(exc))
     };
     build().unwrap_or_else(|e| e)
 }
 
+/// An instance of the exception class `T` with `kind` and `fields`, as a `PyErr`.
+pub(crate) fn error<T: PyTypeInfo>(
+    py: Python<'_>,
+    kind: &str,
+    message: impl Into<String>,
+    fields: Vec<(&'static str, Field)>,
+) -> PyErr {
+    instance(&T::type_object(py), kind, message.into(), fields)
+}
+
 /// `InvalidInputError` for an array of the wrong shape.
 pub(crate) fn shape_error(py: Python<'_>, argument: &str, message: String) -> PyErr {
-    error(
-        py,
-        "InvalidInputError",
-        "Shape",
-        message,
-        vec![("argument", argument.into())],
-    )
+    error::<InvalidInputError>(py, "Shape", message, vec![("argument", argument.into())])
 }
 
 /// `InputTypeError` for an array that is not of real numbers.
 pub(crate) fn dtype_error(py: Python<'_>, argument: &str, message: String) -> PyErr {
-    error(
-        py,
-        "InputTypeError",
-        "DType",
-        message,
-        vec![("argument", argument.into())],
-    )
+    error::<InputTypeError>(py, "DType", message, vec![("argument", argument.into())])
 }
 
 /// `InvalidOptionError` for an option of the bindings out of its range.
 pub(crate) fn option_error(py: Python<'_>, option: &str, message: String) -> PyErr {
-    error(
+    error::<InvalidOptionError>(
         py,
-        "InvalidOptionError",
         "InvalidOption",
         message,
         vec![("option", option.into())],
@@ -121,51 +285,51 @@ fn degeneracy(kind: DegenerateKind) -> &'static str {
 }
 
 /// The exception of a solver error, with the library's message.
-pub(crate) fn pnp_error(py: Python<'_>, e: &PnpError) -> PyErr {
+pub(crate) fn pnp_error(py: Python<'_>, e: &RustPnpError) -> PyErr {
     let msg = e.to_string();
-    let (class, kind, fields): (&str, &str, Vec<(&'static str, Field)>) = match *e {
-        PnpError::TooFewPoints { got, need } => (
-            "InvalidInputError",
+    let (class, kind, fields): (Bound<'_, PyType>, &str, Vec<(&'static str, Field)>) = match *e {
+        RustPnpError::TooFewPoints { got, need } => (
+            InvalidInputError::type_object(py),
             "TooFewPoints",
             vec![("got", got.into()), ("need", need.into())],
         ),
-        PnpError::LengthMismatch { world, image } => (
-            "InvalidInputError",
+        RustPnpError::LengthMismatch { world, image } => (
+            InvalidInputError::type_object(py),
             "LengthMismatch",
             vec![("world", world.into()), ("image", image.into())],
         ),
-        PnpError::WeightsLength { weights, points } => (
-            "InvalidInputError",
+        RustPnpError::WeightsLength { weights, points } => (
+            InvalidInputError::type_object(py),
             "WeightsLength",
             vec![("weights", weights.into()), ("points", points.into())],
         ),
-        PnpError::NonFinite { index, input } => (
-            "InvalidInputError",
+        RustPnpError::NonFinite { index, input } => (
+            InvalidInputError::type_object(py),
             "NonFinite",
             vec![("index", index.into()), ("input", input_name(input).into())],
         ),
-        PnpError::InvalidWeight { index } => (
-            "InvalidInputError",
+        RustPnpError::InvalidWeight { index } => (
+            InvalidInputError::type_object(py),
             "InvalidWeight",
             vec![("index", index.into())],
         ),
-        PnpError::Degenerate(kind) => (
-            "DegenerateError",
+        RustPnpError::Degenerate(kind) => (
+            DegenerateError::type_object(py),
             "Degenerate",
             vec![("degeneracy", degeneracy(kind).into())],
         ),
-        PnpError::NoSolution => ("NoSolutionError", "NoSolution", vec![]),
-        PnpError::InvalidOption { option } => (
-            "InvalidOptionError",
+        RustPnpError::NoSolution => (NoSolutionError::type_object(py), "NoSolution", vec![]),
+        RustPnpError::InvalidOption { option } => (
+            InvalidOptionError::type_object(py),
             "InvalidOption",
             vec![("option", option.into())],
         ),
-        PnpError::NoConsensus {
+        RustPnpError::NoConsensus {
             iterations,
             inliers,
             needed,
         } => (
-            "NoConsensusError",
+            NoConsensusError::type_object(py),
             "NoConsensus",
             vec![
                 ("iterations", iterations.into()),
@@ -173,36 +337,35 @@ pub(crate) fn pnp_error(py: Python<'_>, e: &PnpError) -> PyErr {
                 ("needed", needed.into()),
             ],
         ),
-        _ => ("PnpError", "Other", vec![]),
+        _ => (PnpError::type_object(py), "Other", vec![]),
     };
-    error(py, class, kind, msg, fields)
+    instance(&class, kind, msg, fields)
 }
 
 /// The exception of a camera error.
-pub(crate) fn camera_error(py: Python<'_>, e: &CameraError) -> PyErr {
+pub(crate) fn camera_error(py: Python<'_>, e: &RustCameraError) -> PyErr {
     let kind = match e {
-        CameraError::UnsupportedModel(_) => "UnsupportedModel",
-        CameraError::ParamCount { .. } => "ParamCount",
-        CameraError::InvalidParams(_) => "InvalidParams",
-        CameraError::NonFinite => "NonFinite",
-        CameraError::NoConvergence { .. } => "NoConvergence",
-        CameraError::BeyondHemisphere { .. } => "BeyondHemisphere",
-        CameraError::OutOfRange { .. } => "OutOfRange",
+        RustCameraError::UnsupportedModel(_) => "UnsupportedModel",
+        RustCameraError::ParamCount { .. } => "ParamCount",
+        RustCameraError::InvalidParams(_) => "InvalidParams",
+        RustCameraError::NonFinite => "NonFinite",
+        RustCameraError::NoConvergence { .. } => "NoConvergence",
+        RustCameraError::BeyondHemisphere { .. } => "BeyondHemisphere",
+        RustCameraError::OutOfRange { .. } => "OutOfRange",
         _ => "Other",
     };
-    error(py, "CameraError", kind, e.to_string(), vec![])
+    error::<CameraError>(py, kind, e.to_string(), vec![])
 }
 
 /// The exception of a COLMAP reading error.
-pub(crate) fn model_error(py: Python<'_>, e: &ModelError) -> PyErr {
+pub(crate) fn model_error(py: Python<'_>, e: &RustModelError) -> PyErr {
     let (line, offset) = match e.location {
         Location::Line(l) => (Field::from(l), Field::None),
         Location::Offset(o) => (Field::None, Field::Int(o)),
         Location::File => (Field::None, Field::None),
     };
-    error(
+    error::<ModelError>(
         py,
-        "ModelError",
         "Model",
         e.to_string(),
         vec![
@@ -218,20 +381,18 @@ pub(crate) fn model_error(py: Python<'_>, e: &ModelError) -> PyErr {
 pub(crate) fn register_error(py: Python<'_>, e: &RegisterError) -> PyErr {
     match e {
         RegisterError::Solver(e) => pnp_error(py, e),
-        RegisterError::UnknownImage(id) => error(
+        RegisterError::UnknownImage(id) => error::<UnknownIdError>(
             py,
-            "UnknownIdError",
             "UnknownImage",
             e.to_string(),
             vec![("id", (*id).into())],
         ),
-        RegisterError::UnknownCamera(id) => error(
+        RegisterError::UnknownCamera(id) => error::<UnknownIdError>(
             py,
-            "UnknownIdError",
             "UnknownCamera",
             e.to_string(),
             vec![("id", (*id).into())],
         ),
-        _ => error(py, "PnpError", "Other", e.to_string(), vec![]),
+        _ => error::<PnpError>(py, "Other", e.to_string(), vec![]),
     }
 }

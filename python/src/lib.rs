@@ -1,17 +1,19 @@
 //! The extension module `eopnp._eopnp` of the `eopnp` Python package (PyO3, abi3): the Rust
-//! crate's solver, cameras, RANSAC and COLMAP reader for numpy arrays. `eopnp/__init__.py`
-//! re-exports it with the exceptions of `eopnp/_errors.py`; `eopnp/__init__.pyi` has the
-//! types and the documentation.
+//! crate's solver, cameras, RANSAC and COLMAP reader for numpy arrays, and the package's
+//! exceptions (`errors`). `eopnp/__init__.py` re-exports it; `eopnp/__init__.pyi` has the
+//! types, its docstrings generated from the ones here (`python/gen_stub_docs.py`).
 //!
-//! Every one-problem entry point converts its arrays to `f64` points (copies: the arrays may
-//! be mutated while the GIL is released), runs the library with the GIL released, and maps each error
-//! to the exception class of its `PnpError` family.
+//! Every function that solves takes `options=` (an `eopnp.SolverOptions`) or the same options
+//! as keyword arguments; `options::solver_arg` turns either into the `eopnp::Solver`.
 //!
-//! `solve_batch`, `solve_ransac_batch` and `solve_batch_arrays` (`batch`) solve one problem
-//! per rayon task (feature `rayon`) with the GIL released for the whole batch, each task
-//! reading its own problem's arrays (held, not copied); `solve_batch_arrays` writes the
-//! poses into stacked arrays from the tasks. `covariance=` fills `Solution.covariance`
-//! through `Solver::covariance`.
+//! Every entry point converts its arrays to `f64` points (copies, made with the GIL held:
+//! another Python thread may modify the arrays while the GIL is released), runs the library
+//! with the GIL released, and maps each error to the exception class of its `PnpError`
+//! family.
+//!
+//! `solve_batch`, `solve_ransac_batch` and `solve_batch_arrays` (`batch`) copy every problem
+//! first, then solve one problem per rayon task (feature `rayon`) with the GIL released for the
+//! whole batch; `solve_batch_arrays` writes the poses into stacked arrays from the tasks.
 
 use pyo3::prelude::*;
 
@@ -29,6 +31,7 @@ mod solve;
 #[pymodule]
 fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    errors::add_to_module(m)?;
     m.add_function(wrap_pyfunction!(solve::solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve::solve_all, m)?)?;
     m.add_function(wrap_pyfunction!(solve::refine, m)?)?;
@@ -45,6 +48,7 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<solution::PySolution>()?;
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<ransac::PyRansacOptions>()?;
+    m.add_class::<options::PySolverOptions>()?;
     m.add_class::<colmap::PyModel>()?;
     m.add_class::<colmap::PyImage>()?;
     m.add_class::<colmap::PyRegistration>()?;

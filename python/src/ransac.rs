@@ -12,7 +12,7 @@ use pyo3::types::{PyDict, PyTuple};
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
 use crate::errors::{option_error, pnp_error};
-use crate::options::SolverOptions;
+use crate::options::{solver_arg, KEYWORDS};
 use crate::solution::PySolution;
 use crate::solve::check_finite;
 
@@ -305,15 +305,16 @@ fn rmse_px(
 ///         applies to ``sqrt(fx^2 dx^2 + fy^2 dy^2)``. Exactly one of ``camera`` and ``focal``.
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None (defaults: 4 px threshold,
 ///         confidence 0.999, at most 10000 samples, seed 0).
-///     refinement, planar, newton_iterations, newton_step_tolerance, reprojection_iterations,
-///         exhaustive: the options of the EOPnP fits, as ``solve``.
-///     loss: the loss of the fits' final refinement (the local optimisations and the final
-///         fit on the inliers), as ``solve``: ``s`` in pixels with ``camera``, in normalised
-///         units with ``focal``. The inlier classification is unchanged.
-///     covariance: as ``solve``: ``Solution.covariance`` of the returned pose from its
-///         inliers (with their weights), the noise in pixels with ``camera`` and in normalised
-///         units with ``focal`` (pycolmap's ``estimate_and_refine_absolute_pose(...,
+///     options: a ``SolverOptions`` (or a dict of its fields): the options of the EOPnP fits,
+///         as ``solve``. Its ``loss`` is the loss of the fits' final refinement (the local
+///         optimisations and the final fit on the inliers; ``s`` in pixels with ``camera``, in
+///         normalised units with ``focal``; the inlier classification is unchanged). Its
+///         ``covariance`` gives ``Solution.covariance`` of the returned pose from its inliers
+///         (with their weights), the noise in pixels with ``camera`` and in normalised units
+///         with ``focal`` (pycolmap's ``estimate_and_refine_absolute_pose(...,
 ///         return_covariance=True)``).
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
 ///
 /// Returns:
 ///     (Solution, dict): the pose fitted to the inliers, and ``info``: ``inliers`` (bool
@@ -324,42 +325,28 @@ fn rmse_px(
 ///
 /// Raises:
 ///     InvalidInputError: as ``solve``.
-///     InvalidOptionError: a RANSAC option out of range, a focal length not finite and
-///         positive, neither or both of ``camera`` and ``focal``.
+///     InvalidOptionError: a RANSAC or solver option out of range, a focal length not finite
+///         and positive, neither or both of ``camera`` and ``focal``.
 ///     NoConsensusError: no pose with at least 4 inliers.
+///     TypeError: as ``solve``.
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, focal = None, ransac = None,
-    refinement = "ml", planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, loss = None, covariance = None))]
+    options = None, **keywords))]
+// One Rust parameter per Python parameter: the problem (world, image, weights), its camera or
+// focal lengths, and the RANSAC and solver options (`options=`, `**keywords`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_ransac<'py>(
-    py: Python<'py>,
     world: &Bound<'py, PyAny>,
     image: &Bound<'py, PyAny>,
     weights: Option<&Bound<'py, PyAny>>,
     camera: Option<&Bound<'py, PyCamera>>,
     focal: Option<&Bound<'py, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    loss: Option<&Bound<'py, PyAny>>,
-    covariance: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
+    let py = world.py();
+    let solver = solver_arg(py, "solve_ransac", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
     let w = points3(world, "world")?;

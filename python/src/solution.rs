@@ -48,28 +48,47 @@ pub(crate) struct PySolution {
     /// (w, x, y, z).
     q: [f64; 4],
     rvec: [f64; 3],
+    /// The minimised cost (refinement "ml"): the (weighted) sum of the loss of the squared
+    /// reprojection residuals, in pixels^2 for pixel input (through the camera), in normalised
+    /// units otherwise (the sum of squared residuals with the default loss); or the algebraic
+    /// cost (refinement "algebraic").
     #[pyo3(get)]
     cost: f64,
+    /// The paper's algebraic cost of the rotation.
     #[pyo3(get)]
     algebraic_cost: f64,
+    /// RMS normalised reprojection residual (multiply by the focal length for pixels); inf if
+    /// a point lies in the focal plane (algebraic mode only).
     #[pyo3(get)]
     reprojection_rmse: f64,
+    /// More than half of the points are in front of the camera.
     #[pyo3(get)]
     cheirality_ok: bool,
+    /// The configuration is close to degenerate; the pose may be ambiguous.
     #[pyo3(get)]
     degenerate: bool,
+    /// The planar branch produced the starting candidate.
     #[pyo3(get)]
     planar: bool,
+    /// The candidate generator of the winning start ("case1", ..., "planar1", "planar2",
+    /// "extra_start"; "initial" for ``refine``).
     #[pyo3(get)]
     source: &'static str,
+    /// Damped-Newton iterations of the winning candidate (0 when skipped: an exact fit, whose
+    /// start is already the minimum of the algebraic cost).
     #[pyo3(get)]
     newton_iterations: u32,
+    /// Levenberg-Marquardt iterations of the refinement (0 in algebraic mode).
     #[pyo3(get)]
     reprojection_iterations: u32,
+    /// The refinement stopped at a minimum (False when it ran out of iterations or could not
+    /// start; True in algebraic mode).
     #[pyo3(get)]
     converged: bool,
+    /// Correspondences that entered the solve (weight > 0, undistorted).
     #[pyo3(get)]
     used: usize,
+    /// Correspondences left out because their pixel could not be undistorted.
     #[pyo3(get)]
     skipped: usize,
     /// Row-major covariance and sigma (boxed: most solutions have none, and a batch moves

@@ -1,16 +1,17 @@
-//! `eopnp.solve` and `eopnp.solve_all`: one problem, normalised or pixels through a camera.
-//! The solve runs with the GIL released.
+//! `eopnp.solve`, `eopnp.solve_all` and `eopnp.refine`: one problem, normalised or pixels
+//! through a camera. The arrays are copied into points with the GIL held; the solve runs with
+//! the GIL released.
 
 use eopnp::Problem;
 use eopnp::{InputKind, PnpError};
 use nalgebra::{Point2, Point3};
 use pyo3::prelude::*;
-use pyo3::types::PyList;
+use pyo3::types::{PyDict, PyList};
 
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
 use crate::errors::pnp_error;
-use crate::options::SolverOptions;
+use crate::options::{solver_arg, KEYWORDS, REFINE_KEYWORDS};
 use crate::pose::pose_arg;
 use crate::solution::PySolution;
 
@@ -63,27 +64,12 @@ pub(crate) fn check_finite(
 ///         and, in the default mode, the refinement minimises the pixel reprojection error
 ///         through the camera model, distortion included. Pixels that cannot be undistorted
 ///         are left out and counted in ``Solution.skipped``.
-///     refinement: "ml" (default; alias "reprojection"): EOPnP then Levenberg-Marquardt on
-///         the reprojection error, the maximum-likelihood pose; "algebraic": EOPnP alone.
-///     planar: planar branch selection: "auto" (default), "planar" or "nonplanar".
-///     newton_iterations: maximum damped-Newton iterations per candidate (default 50).
-///     newton_step_tolerance: Newton stops when the step falls to this (default 1e-12).
-///     reprojection_iterations: maximum Levenberg-Marquardt iterations (default 200).
-///     exhaustive: refine every start of every generator (default False: a start certified
-///         globally optimal ends the search).
-///     covariance: None (default: no covariance), "estimated" (the noise estimated from the
-///         residuals, ``sigma^2 = sum of squared residuals / (2 n - 6)``) or the noise standard
-///         deviation of each image coordinate (pixels with ``camera``, normalised units
-///         otherwise; pycolmap assumes 1 px): fills ``Solution.covariance``, the 6x6
-///         covariance of ``[delta_q, delta_t]`` with ``R = Exp(2 delta_q) R_hat``,
-///         ``t = t_hat + delta_t`` (pycolmap's convention), and ``Solution.sigma``.
-///     loss: the loss of the final refinement: None or "squared" (default; the
-///         maximum-likelihood pose for Gaussian noise), ``("huber", s)`` (quadratic up to a
-///         residual of ``s``, linear beyond: a few moderate outliers; ``s`` about 1-3 times
-///         the noise) or ``("cauchy", s)`` (the influence of a residual decays beyond ``s``:
-///         gross outliers hardly move the pose, when RANSAC is not run). ``s`` is in pixels
-///         with ``camera``, in normalised units otherwise; it must be finite and > 0 (about
-///         1e-154 < s < 1e154). ``Solution.cost`` is then the loss's cost.
+///     options: a ``SolverOptions`` (or a dict of its fields): refinement, planar branch,
+///         iteration limits, robust ``loss``, ``covariance``. None: the defaults.
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead
+///         (``refinement="algebraic"``, ``loss=("cauchy", 2.0)``, ``covariance=1.0``, ...),
+///         not together with ``options``. A ``loss`` scale or ``covariance`` noise is in
+///         pixels with ``camera``, in normalised units otherwise.
 ///
 /// Returns:
 ///     Solution: the pose (``R``, ``t``, ``rvec``, ``q``), its cost and diagnostics.
@@ -94,37 +80,20 @@ pub(crate) fn check_finite(
 ///     DegenerateError: coincident or collinear world points, coincident image points.
 ///     NoSolutionError: numerical failure (not observed on valid input).
 ///     InvalidOptionError: an option out of its range.
+///     TypeError: an unknown keyword, or both ``options`` and option keywords.
 #[pyfunction]
-#[pyo3(signature = (world, image, weights = None, *, camera = None, refinement = "ml",
-    planar = "auto", newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None, exhaustive = false, covariance = None, loss = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (world, image, weights = None, *, camera = None, options = None,
+    **keywords))]
 pub(crate) fn solve(
     py: Python<'_>,
     world: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     weights: Option<&Bound<'_, PyAny>>,
     camera: Option<&Bound<'_, PyCamera>>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    covariance: Option<&Bound<'_, PyAny>>,
-    loss: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyAny>>,
+    keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
+    let solver = solver_arg(py, "solve", options, keywords, KEYWORDS)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
@@ -152,9 +121,9 @@ pub(crate) fn solve(
 /// the camera first, then by increasing reprojection error (at most 32). For N <= 6 and for
 /// planar scenes several poses can explain the data about equally well; this lists them.
 ///
-/// ``world`` (N, 3) and ``image`` (N, 2) normalised, and the solver options, as ``solve``
-/// (no weights or camera: undistort pixels first with ``Camera.undistort``), ``covariance``
-/// as ``solve`` (each pose's own) and ``loss`` as ``solve`` (normalised units).
+/// ``world`` (N, 3) and ``image`` (N, 2) normalised, and ``options`` or the option keywords,
+/// as ``solve`` (no weights or camera: undistort pixels first with ``Camera.undistort``);
+/// ``covariance`` gives each pose its own, ``loss`` is in normalised units.
 ///
 /// Returns:
 ///     list[Solution]: at least one.
@@ -162,34 +131,15 @@ pub(crate) fn solve(
 /// Raises:
 ///     As ``solve``.
 #[pyfunction]
-#[pyo3(signature = (world, image, *, refinement = "ml", planar = "auto",
-    newton_iterations = None, newton_step_tolerance = None, reprojection_iterations = None,
-    exhaustive = false, covariance = None, loss = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (world, image, *, options = None, **keywords))]
 pub(crate) fn solve_all<'py>(
     py: Python<'py>,
     world: &Bound<'py, PyAny>,
     image: &Bound<'py, PyAny>,
-    refinement: &str,
-    planar: &str,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
-    exhaustive: bool,
-    covariance: Option<&Bound<'py, PyAny>>,
-    loss: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let solver = SolverOptions {
-        refinement,
-        planar,
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        exhaustive,
-        loss,
-        covariance,
-    }
-    .solver(py)?;
+    let solver = solver_arg(py, "solve_all", options, keywords, KEYWORDS)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let all = py
@@ -201,15 +151,15 @@ pub(crate) fn solve_all<'py>(
 /// Seconds per solve of `repeats` solves of the same problem in Rust, with the GIL released
 /// and no conversion: the benchmark's reference for the Python call overhead (private).
 #[pyfunction]
-#[pyo3(signature = (world, image, repeats, *, refinement = "ml"))]
+#[pyo3(signature = (world, image, repeats, *, options = None))]
 pub(crate) fn _time_solve(
     py: Python<'_>,
     world: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     repeats: u32,
-    refinement: &str,
+    options: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<f64> {
-    let solver = SolverOptions::default_with(refinement).solver(py)?;
+    let solver = solver_arg(py, "_time_solve", options, None, KEYWORDS)?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let r = py.detach(|| {
@@ -249,8 +199,13 @@ pub(crate) fn _time_solve(
 ///     weights: optional non-negative weight per point, shape (N,), as ``solve``.
 ///     camera: a ``Camera``: ``image`` holds observed pixels; the refinement minimises the
 ///         pixel residuals through the camera model, as ``solve``.
-///     loss, covariance, newton_iterations, newton_step_tolerance, reprojection_iterations:
-///         as ``solve``.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``. Its ``planar``
+///         and ``exhaustive`` (of the global search) have no effect here, and ``refine``
+///         always ends with the Levenberg-Marquardt refinement: ``refinement="algebraic"``
+///         only iterates the Newton start on to ``newton_step_tolerance`` (otherwise at least
+///         1e-6).
+///     **keywords: ``loss``, ``covariance``, ``newton_iterations``, ``newton_step_tolerance``
+///         and ``reprojection_iterations`` as keyword arguments instead, as ``solve``.
 ///
 /// Returns:
 ///     Solution: the refined pose; ``converged`` says whether the refinement reached a
@@ -260,32 +215,19 @@ pub(crate) fn _time_solve(
 ///     As ``solve``; InvalidOptionError (``option`` "initial") for an initial pose that is
 ///     not finite (the library's message) or not of the forms above.
 #[pyfunction]
-#[pyo3(signature = (world, image, initial, *, weights = None, camera = None, loss = None,
-    covariance = None, newton_iterations = None, newton_step_tolerance = None,
-    reprojection_iterations = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (world, image, initial, *, weights = None, camera = None, options = None,
+    **keywords))]
 pub(crate) fn refine(
-    py: Python<'_>,
     world: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     initial: &Bound<'_, PyAny>,
     weights: Option<&Bound<'_, PyAny>>,
     camera: Option<&Bound<'_, PyCamera>>,
-    loss: Option<&Bound<'_, PyAny>>,
-    covariance: Option<&Bound<'_, PyAny>>,
-    newton_iterations: Option<i64>,
-    newton_step_tolerance: Option<f64>,
-    reprojection_iterations: Option<i64>,
+    options: Option<&Bound<'_, PyAny>>,
+    keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
-    let solver = SolverOptions {
-        newton_iterations,
-        newton_step_tolerance,
-        reprojection_iterations,
-        loss,
-        covariance,
-        ..SolverOptions::default_with("ml")
-    }
-    .solver(py)?;
+    let py = world.py();
+    let solver = solver_arg(py, "refine", options, keywords, REFINE_KEYWORDS)?;
     let initial = pose_arg(initial, "initial")?;
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
