@@ -12,9 +12,11 @@
 //! (`codegen/src/defs/gp3p.rs`) eliminates `l3` and then `l2` by resultants: its octic in `l1`
 //! has the first depths as real roots, and `l2 = -r0(l1) / r1(l1)`,
 //! `l3 = (q2 - q1) / (p1 - p2)` follow linearly (where those denominators vanish, from the
-//! quadrics themselves). Each depth triple is polished by Gauss-Newton on the three quadrics,
-//! and the pose is the rigid motion between the orthonormal frames of the world triangle and
-//! of the triangle of the points on the rays. Lengths are scaled by the world triangle's
+//! quadrics themselves). Each depth triple is polished by Gauss-Newton on the three quadrics and
+//! kept only if it then solves them (to `1e-9` of their scale: the octic's coefficients are
+//! rounded, and a root the finder reports far out, where evaluating them is all rounding, or
+//! the real part of a near-real pair, solves nothing), and the pose is the rigid motion between
+//! the orthonormal frames of the world triangle and of the triangle of the points on the rays. Lengths are scaled by the world triangle's
 //! longest side and centres taken relative to their centroid first, so the kernel's
 //! coefficients are O(1).
 //!
@@ -105,7 +107,7 @@ pub fn gp3p(
             continue;
         };
         let l = gauss_newton(l, &e);
-        if !l.iter().all(|d| d.is_finite() && *d > 0.0) {
+        if !l.iter().all(|d| d.is_finite() && *d > 0.0) || !solves(&l, &e) {
             continue;
         }
         // The points on the rays, back in the caller's units.
@@ -189,6 +191,29 @@ fn depths(e: &[f64; 12], l1: f64, r1: f64, r0: f64) -> Option<Vector3<f64>> {
         }
     }
     best.map(|(_, l)| l)
+}
+
+/// Relative residual a depth triple must reach to be a solution: a root of the octic gives,
+/// after the polish, the quadrics to a few `u` of their scale; a spurious root (the real part of
+/// a complex pair, or a root of the rounded octic far out where its evaluation is all rounding
+/// error) leaves them far from 0 and gives no pose.
+const SOLVED: f64 = 1e-9;
+
+/// Whether `l` solves the three quadrics to [`SOLVED`] relative to the sum of the absolute
+/// values of each quadric's terms.
+fn solves(l: &Vector3<f64>, e: &[f64; 12]) -> bool {
+    let r = residuals(l, e);
+    PAIRS.into_iter().enumerate().all(|(k, (i, j))| {
+        let (a, b, c, d) = (e[4 * k], e[4 * k + 1], e[4 * k + 2], e[4 * k + 3]);
+        let (li, lj) = (l[i], l[j]);
+        let scale = li * li
+            + lj * lj
+            + 2.0 * (a * li * lj).abs()
+            + 2.0 * (b * li).abs()
+            + 2.0 * (c * lj).abs()
+            + d.abs();
+        r[k].abs() <= SOLVED * scale
+    })
 }
 
 /// The three quadrics at `l`.

@@ -128,8 +128,9 @@ pub fn gp3p_elimination() -> Kernel {
     for n in 0..5 {
         k.output(&format!("r0_{n}"), r0u.coeff(n));
     }
-    k.output_doc = "`[f0, ..., f8, r1_0, ..., r1_3, r0_0, ..., r0_4]`: the coefficients of `F`, `r1` \
+    k.output_doc =
+        "`[f0, ..., f8, r1_0, ..., r1_3, r0_0, ..., r0_4]`: the coefficients of `F`, `r1` \
                     and `r0` in ascending powers of `l1`."
-        .into();
+            .into();
     k
 }

@@ -104,7 +104,10 @@ fn recovers_the_true_pose_of_random_rigs() {
         "gp3p: true pose found in {found} of {trials}; worst error of a found pose {worst_found:e}, \
          worst ray residual {worst_ray:e}"
     );
-    assert!(found >= trials - 3, "the true pose found in only {found} of {trials}");
+    assert!(
+        found >= trials - 3,
+        "the true pose found in only {found} of {trials}"
+    );
 }
 
 /// One centre for the three rays: the solutions are P3P's.
@@ -134,13 +137,29 @@ fn one_centre_gives_the_p3p_solutions() {
 /// Degenerate input gives no pose, never a NaN one.
 #[test]
 fn degenerate_input_gives_no_pose() {
-    let c = [Point3::origin(), Point3::new(0.5, 0.0, 0.0), Point3::new(0.0, 0.5, 0.0)];
-    let d = [Vector3::new(0.0, 0.0, 1.0), Vector3::new(0.1, 0.0, 1.0), Vector3::new(0.0, 0.1, 1.0)];
-    let collinear = [Point3::new(0.0, 0.0, 5.0), Point3::new(1.0, 0.0, 5.0), Point3::new(2.0, 0.0, 5.0)];
+    let c = [
+        Point3::origin(),
+        Point3::new(0.5, 0.0, 0.0),
+        Point3::new(0.0, 0.5, 0.0),
+    ];
+    let d = [
+        Vector3::new(0.0, 0.0, 1.0),
+        Vector3::new(0.1, 0.0, 1.0),
+        Vector3::new(0.0, 0.1, 1.0),
+    ];
+    let collinear = [
+        Point3::new(0.0, 0.0, 5.0),
+        Point3::new(1.0, 0.0, 5.0),
+        Point3::new(2.0, 0.0, 5.0),
+    ];
     assert!(gp3p(&collinear, &c, &d).is_empty());
     let same = [Point3::new(0.0, 0.0, 5.0); 3];
     assert!(gp3p(&same, &c, &d).is_empty());
-    let w = [Point3::new(0.0, 0.0, 5.0), Point3::new(1.0, 0.0, 5.0), Point3::new(0.0, 1.0, 5.0)];
+    let w = [
+        Point3::new(0.0, 0.0, 5.0),
+        Point3::new(1.0, 0.0, 5.0),
+        Point3::new(0.0, 1.0, 5.0),
+    ];
     let zero = [Vector3::zeros(), d[1], d[2]];
     assert!(gp3p(&w, &c, &zero).is_empty());
     let nan = [Point3::new(f64::NAN, 0.0, 0.0), c[1], c[2]];
