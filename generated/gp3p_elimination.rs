@@ -2,7 +2,7 @@
 // Committed copy: generated/gp3p_elimination.rs; refresh it with `cargo run -p eopnp-codegen -- emit generated`.
 // Ops after CSE: 324 mul, 229 add. Naive expansion: 5122 terms, 30470 mul, 5104 add.
 
-/// The generalized three-point pose (docs/algorithm.md, the generalized minimal solver): from the coefficients of the three distance quadrics `E_ij = l_i^2 + l_j^2 - 2 a_ij l_i l_j + 2 b_ij l_i + 2 c_ij l_j + d_ij` in the depths along the rays, the octic `F(l1)` whose real roots are the first depths, and the polynomials `r1(l1)`, `r0(l1)` that give the second, `l2 = -r0 / r1`.
+/// The generalized three-point pose (docs/algorithm.md, G8): from the coefficients of the three distance quadrics `E_ij = l_i^2 + l_j^2 - 2 a_ij l_i l_j + 2 b_ij l_i + 2 c_ij l_j + d_ij` in the depths along the rays, the octic `F(l1)` whose real roots are the first depths, and the polynomials `r1(l1)`, `r0(l1)` that give the second, `l2 = -r0 / r1`.
 ///
 /// # Inputs
 /// - `e`: `[a12, b12, c12, d12, a13, b13, c13, d13, a23, b23, c23, d23]`: the coefficients of `E12`, `E13`, `E23`

@@ -1,4 +1,4 @@
-//! The generalized three-point pose (gP3P; docs/algorithm.md, "The generalized minimal solver"):
+//! The generalized three-point pose (gP3P; docs/algorithm.md, G8 "The generalized minimal solver"):
 //! three rays `c_i + lambda_i v_i` (centre and unit direction in the rig frame) through three
 //! world points `X_i`. The rigid motion preserves distances, so the depths `lambda_i` solve the
 //! three quadrics
@@ -66,7 +66,7 @@ fn reduce_mod_monic_quadratic(p: &UPoly, pp: &Poly, qq: &Poly) -> [Poly; 2] {
 pub fn gp3p_elimination() -> Kernel {
     let mut k = Kernel::new("gp3p_elimination", DEF);
     k.doc(
-        "The generalized three-point pose (docs/algorithm.md, the generalized minimal solver): \
+        "The generalized three-point pose (docs/algorithm.md, G8): \
          from the coefficients of the three distance quadrics `E_ij = l_i^2 + l_j^2 - 2 a_ij l_i \
          l_j + 2 b_ij l_i + 2 c_ij l_j + d_ij` in the depths along the rays, the octic `F(l1)` \
          whose real roots are the first depths, and the polynomials `r1(l1)`, `r0(l1)` that give \
