@@ -2,7 +2,7 @@
 // Refresh the committed copy with `cargo run -p eopnp-codegen -- emit generated`.
 
 /// Operation counts of every generated kernel, in manifest order.
-pub const ALL_KERNEL_OPS: [&KernelOps; 21] = [
+pub const ALL_KERNEL_OPS: [&KernelOps; 22] = [
     &COST_COEFFICIENTS_OPS,
     &COST_OPS,
     &COST_GRADIENT_OPS,
@@ -24,4 +24,5 @@ pub const ALL_KERNEL_OPS: [&KernelOps; 21] = [
     &DISTORTION_FISHEYE_OPS,
     &DISTORTION_FULL_OPENCV_OPS,
     &DISTORTION_THIN_PRISM_OPS,
+    &GP3P_ELIMINATION_OPS,
 ];

@@ -97,6 +97,11 @@ pub mod internals {
         pub use crate::numeric::roots::*;
     }
 
+    /// The generalized three-point pose, the minimal solver of rigs (`src/numeric/gp3p.rs`).
+    pub mod gp3p {
+        pub use crate::numeric::gp3p::*;
+    }
+
     /// The error metrics of docs/algorithm.md section 1 (the paper's): the largest angle
     /// between corresponding columns of two rotations, in degrees, and the translation error
     /// in percent.

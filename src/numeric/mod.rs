@@ -4,6 +4,8 @@
 //! and the lane layout of the vectorised O(N) passes. Nothing here knows about the PnP problem's stages.
 
 pub(crate) mod bounds;
+#[cfg_attr(not(feature = "internals"), allow(dead_code))]
+pub(crate) mod gp3p;
 pub(crate) mod lanes;
 pub(crate) mod linalg;
 pub(crate) mod mat3;

@@ -559,7 +559,7 @@ fn gauss_newton(mut l: Vector3<f64>, a: [f64; 3], b: [f64; 3]) -> Vector3<f64> {
 /// `eps / sin(angle)` when the triangle is nearly flat (1e-9 at an angle of 1e-7, which the
 /// degeneracy cut lets through): it is re-orthogonalised against the edge (one Gram-Schmidt
 /// step), so the frame, and the rotation built from two frames, is orthonormal to rounding.
-fn triangle_frame(p: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
+pub(super) fn triangle_frame(p: &[Vector3<f64>; 3]) -> Option<Matrix3<f64>> {
     let u = p[0] - p[1];
     let n = u.cross(&(p[0] - p[2]));
     let (un, nn) = (u.norm(), n.norm());

@@ -2,4 +2,5 @@
 
 pub mod camera;
 pub mod cost;
+pub mod gp3p;
 pub mod resultant;

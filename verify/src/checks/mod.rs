@@ -21,17 +21,20 @@
 //!
 //! One file per kernel family: `cost.rs` (the cost's coefficients, value, gradient and Hessian),
 //! `local_model.rs` (`newton`'s local model), `nullspace.rs` (the cases' cubics, resultants and
-//! determinants); [`all`] lists every check in report order.
+//! determinants), `gp3p.rs` (the generalized three-point pose); [`all`] lists every check in
+//! report order.
 
 use crate::reference::gamma;
 use crate::report::Measurement;
 use nalgebra::Matrix3;
 
 mod cost;
+mod gp3p;
 mod local_model;
 mod nullspace;
 
 pub use cost::{cost_coefficients, cost_value, gradient, hessian, Against, Variant};
+pub use gp3p::{gp3p_known_root, gp3p_octic, gp3p_solutions};
 pub use local_model::{hessian_directions, local_model, LocalAgainst};
 pub use nullspace::{
     case2_cubics, case2_known_root, case2_resultant, case3_cubics, case3_known_root, case3_quartic,
@@ -59,6 +62,8 @@ pub fn sym3(h: &[f64; 6]) -> Matrix3<f64> {
 pub const N_COST: usize = 10_000;
 /// Number of samples for the resultant checks.
 pub const N_RESULTANT: usize = 5_000;
+/// Number of samples for the generalized three-point pose's checks.
+pub const N_GP3P: usize = 5_000;
 
 /// Every check, in report order.
 #[must_use]
@@ -105,5 +110,8 @@ pub fn all() -> Vec<Measurement> {
     out.push(case4_matrix(N_RESULTANT));
     out.push(case4_determinant(N_RESULTANT));
     out.extend(case4_known_root(N_RESULTANT));
+    out.push(gp3p_octic(N_GP3P));
+    out.push(gp3p_known_root(N_GP3P));
+    out.push(gp3p_solutions(N_GP3P));
     out
 }
