@@ -2,7 +2,7 @@
 // Refresh the committed copy with `cargo run -p eopnp-codegen -- emit generated`.
 
 /// Operation counts of every generated kernel, in manifest order.
-pub const ALL_KERNEL_OPS: [&KernelOps; 22] = [
+pub const ALL_KERNEL_OPS: [&KernelOps; 23] = [
     &COST_COEFFICIENTS_OPS,
     &COST_OPS,
     &COST_GRADIENT_OPS,
@@ -11,6 +11,7 @@ pub const ALL_KERNEL_OPS: [&KernelOps; 22] = [
     &PLANAR_COST_GRADIENT_OPS,
     &PLANAR_COST_HESSIAN_OPS,
     &SO3_LOCAL_MODEL_OPS,
+    &SO3_LOCAL_AFFINE_OPS,
     &CASE2_RESULTANT_OPS,
     &CASE2_CUBICS_OPS,
     &CASE3_QUARTIC_OPS,

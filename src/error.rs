@@ -103,6 +103,22 @@ pub enum PnpError {
         /// Which input holds the offending value.
         input: InputKind,
     },
+    /// The camera indices of a rig problem ([`crate::Problem::rig`]) are not one per
+    /// correspondence.
+    CameraIndicesLength {
+        /// Length of the camera-index slice.
+        indices: usize,
+        /// Number of correspondences.
+        points: usize,
+    },
+    /// Correspondence `index` of a rig problem names camera `camera`, which the rig does not
+    /// have.
+    UnknownCamera {
+        /// Index of the first such correspondence.
+        index: usize,
+        /// The camera index it gives.
+        camera: u32,
+    },
     /// A weight is negative (weights must be >= 0; a weight of 0 ignores the point).
     InvalidWeight {
         /// Index of the first negative weight.
@@ -158,6 +174,15 @@ impl fmt::Display for PnpError {
                 "{input} {index} is not finite (NaN or infinite); remove or fix that \
                  correspondence"
             ),
+            PnpError::CameraIndicesLength { indices, points } => write!(
+                f,
+                "got {indices} camera indices for {points} correspondences; pass one camera \
+                 index per point"
+            ),
+            PnpError::UnknownCamera { index, camera } => write!(
+                f,
+                "correspondence {index} is in camera {camera}, which the rig does not have"
+            ),
             PnpError::InvalidWeight { index } => write!(
                 f,
                 "weight {index} is negative; weights must be >= 0 (use 0 to ignore a point)"
@@ -169,6 +194,15 @@ impl fmt::Display for PnpError {
             ),
             PnpError::InvalidOption { option: "initial" } => f.write_str(
                 "the initial pose is not finite: its rotation and translation must be finite",
+            ),
+            PnpError::InvalidOption { option: "rig" } => {
+                f.write_str("a rig needs at least one camera")
+            }
+            PnpError::InvalidOption {
+                option: "cam_from_rig",
+            } => f.write_str(
+                "a camera's pose in the rig (cam_from_rig) is not finite: its rotation and \
+                 translation must be finite",
             ),
             PnpError::InvalidOption { option: "loss" } => f.write_str(
                 "the loss scale is out of range: Huber and Cauchy take a finite scale s > 0 \

@@ -90,6 +90,7 @@ mod generated {
     include!(concat!(env!("OUT_DIR"), "/planar_cost_gradient.rs"));
     include!(concat!(env!("OUT_DIR"), "/planar_cost_hessian.rs"));
     include!(concat!(env!("OUT_DIR"), "/so3_local_model.rs"));
+    include!(concat!(env!("OUT_DIR"), "/so3_local_affine.rs"));
     include!(concat!(env!("OUT_DIR"), "/case2_resultant.rs"));
     include!(concat!(env!("OUT_DIR"), "/case2_cubics.rs"));
     include!(concat!(env!("OUT_DIR"), "/case3_quartic.rs"));

@@ -56,12 +56,14 @@ pub mod camera;
 pub mod colmap;
 pub mod covariance;
 mod error;
+mod generalized;
 // The audit-only kernels (the global-chart cost) are used by `verify/` through `internals`.
 #[cfg_attr(not(feature = "internals"), allow(dead_code))]
 mod kernels;
 mod numeric;
 mod pipeline;
 mod problem;
+mod rig;
 mod robust;
 mod solver;
 mod source;
@@ -78,6 +80,7 @@ pub use error::{DegenerateKind, InputKind, PnpError};
 pub use pipeline::bench_hooks;
 pub use pipeline::{CandidateSource, Loss, PlanarDetection, Refinement, Solution, Solutions};
 pub use problem::Problem;
+pub use rig::Rig;
 pub use robust::{p3p, ransac};
 pub use solver::{solve, Solver};
 

@@ -3,9 +3,11 @@
 use nalgebra::{Point2, Point3};
 
 use crate::camera::Camera;
+use crate::rig::Rig;
 
-/// One pose problem: world points and their observations, either normalised image points or
-/// observed pixels through a camera, with optional per-point weights. Every entry point that
+/// One pose problem: world points and their observations (normalised image points, observed
+/// pixels through a camera, or pixels through the cameras of a [`Rig`]), with optional
+/// per-point weights. Every entry point that
 /// solves takes one: [`Solver::solve`](crate::Solver::solve),
 /// [`Solver::solve_all`](crate::Solver::solve_all), [`Solver::refine`](crate::Solver::refine),
 /// [`Ransac::estimate`](crate::ransac::Ransac::estimate) and the batch forms.
@@ -58,6 +60,12 @@ pub(crate) enum Observations<'a> {
         points: &'a [Point2<f64>],
         camera: &'a Camera,
     },
+    /// Observed pixels, each in one camera of a rig.
+    Rig {
+        points: &'a [Point2<f64>],
+        cameras: &'a [u32],
+        rig: &'a Rig,
+    },
 }
 
 impl<'a> Problem<'a> {
@@ -86,6 +94,64 @@ impl<'a> Problem<'a> {
             observations: Observations::Pixels {
                 points: pixels,
                 camera,
+            },
+            weights: None,
+        }
+    }
+
+    /// World points and the pixels where the cameras of a multi-camera rig observed them:
+    /// correspondence `i` was seen by camera `cameras[i]` of `rig`. The pose solved for is the
+    /// rig's, `x_rig = R X + t` (see [`Rig`] for the cameras' poses in it); in the default mode
+    /// it minimises the pixel error through each observation's camera model. A rig of one
+    /// camera, or observations from one camera only, is the central problem of that camera.
+    ///
+    /// ```
+    /// use eopnp::camera::Camera;
+    /// use eopnp::{Problem, Rig, Solver};
+    /// use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion, Vector3};
+    ///
+    /// // Two cameras looking left and right, 0.5 units apart.
+    /// let cam = Camera::pinhole(600.0, 600.0, 320.0, 240.0)?;
+    /// let left = Isometry3::from_parts(
+    ///     Translation3::new(0.25, 0.0, 0.0),
+    ///     UnitQuaternion::from_euler_angles(0.0, 0.6, 0.0),
+    /// );
+    /// let right = Isometry3::from_parts(
+    ///     Translation3::new(-0.25, 0.0, 0.0),
+    ///     UnitQuaternion::from_euler_angles(0.0, -0.6, 0.0),
+    /// );
+    /// let rig = Rig::new(vec![(cam.clone(), left), (cam, right)])?;
+    /// // The rig's pose in the world, and points in front of each camera.
+    /// let rig_from_world = Isometry3::from_parts(
+    ///     Translation3::new(0.1, -0.2, 0.3),
+    ///     UnitQuaternion::from_euler_angles(0.05, 0.1, -0.02),
+    /// );
+    /// let (mut world, mut pixels, mut which) = (Vec::new(), Vec::new(), Vec::new());
+    /// for i in 0..12 {
+    ///     let k = i % 2;
+    ///     let p_cam = Point3::new((i % 3) as f64 - 1.0, (i % 4) as f64 * 0.4 - 0.6, 4.0 + (i % 5) as f64);
+    ///     let cam_from_rig = rig.cam_from_rig()[k];
+    ///     world.push(rig_from_world.inverse() * (cam_from_rig.inverse() * p_cam));
+    ///     pixels.push(rig.cameras()[k].project(Point2::new(p_cam.x / p_cam.z, p_cam.y / p_cam.z)));
+    ///     which.push(k as u32);
+    /// }
+    /// let sol = Solver::default().solve(&Problem::rig(&world, &pixels, &which, &rig))?;
+    /// assert!((sol.translation - rig_from_world.translation.vector).norm() < 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn rig(
+        world: &'a [Point3<f64>],
+        pixels: &'a [Point2<f64>],
+        cameras: &'a [u32],
+        rig: &'a Rig,
+    ) -> Self {
+        Problem {
+            world,
+            observations: Observations::Rig {
+                points: pixels,
+                cameras,
+                rig,
             },
             weights: None,
         }

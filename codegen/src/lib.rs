@@ -41,6 +41,7 @@ pub const KERNELS: &[(&str, KernelDef)] = &[
         cost::planar_cost_at(Order::Hessian)
     }),
     ("so3_local_model", cost::so3_local_model),
+    ("so3_local_affine", cost::so3_local_affine),
     ("case2_resultant", || resultant::resultant(Case::Two)),
     ("case2_cubics", || resultant::cubics(Case::Two)),
     ("case3_quartic", resultant::case3_quartic),

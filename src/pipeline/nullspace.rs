@@ -47,6 +47,11 @@ pub enum CandidateSource {
     /// `search`: a P3P pose of three of the points (default mode, at most five points with a
     /// non-zero weight; docs/algorithm.md, `search`), refined by `refine` without `newton`.
     P3p,
+    /// A rig (generalized EOPnP): the null vector of the generalized cost's homogenised matrix
+    /// (docs/algorithm.md, generalized EOPnP).
+    Generalized,
+    /// A rig: a generalized three-point pose (gP3P) of three of the rays.
+    Gp3p,
 }
 
 /// Upper bound on the number of candidates: 1 + 4 + 9 + 8 (`nullspace` cases 1-4) + 5

@@ -85,6 +85,29 @@ pub struct Solution {
 }
 
 impl Solution {
+    /// A solution of the pose `(rotation, translation)` with its diagnostics at their neutral
+    /// values (cost 0, everything converged and in front), for the solvers outside the
+    /// pipeline (rigs) to fill in.
+    pub(crate) fn from_parts(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Solution {
+        Solution {
+            rotation,
+            translation,
+            cost: 0.0,
+            algebraic_cost: 0.0,
+            reprojection_rmse: 0.0,
+            cheirality_ok: true,
+            degenerate: false,
+            planar: false,
+            source: CandidateSource::Initial,
+            newton_iterations: 0,
+            reprojection_iterations: 0,
+            converged: true,
+            used: 0,
+            skipped: 0,
+            covariance: None,
+        }
+    }
+
     /// The world-to-camera pose as an isometry (`x_cam = pose * X`): the rotation as a unit
     /// quaternion (closed form from [`Solution::rotation`], renormalised), the translation.
     ///

@@ -307,6 +307,20 @@ impl Ransac {
             Observations::Pixels { points, camera } => {
                 self.estimate_pixels(solver, camera, world, points, weights)
             }
+            Observations::Rig {
+                points,
+                cameras,
+                rig,
+            } => self.estimate_rig(
+                solver,
+                &crate::generalized::RigInput {
+                    world,
+                    pixels: points,
+                    cameras,
+                    rig,
+                    weights,
+                },
+            ),
         }
     }
 
@@ -590,6 +604,7 @@ fn inlier_weight(inliers: &[bool], weights: Option<&[f64]>, i: usize) -> f64 {
 }
 
 mod chance;
+mod rig;
 mod score;
 
 pub(crate) use score::index;

@@ -13,7 +13,10 @@ use crate::pipeline::{
 };
 use crate::problem::{Observations, Problem};
 
+mod rig;
 mod undistort;
+
+pub(crate) use rig::in_rig;
 
 pub(crate) use undistort::undistort_all;
 use undistort::Undistorted;
@@ -317,6 +320,11 @@ impl Solver {
             Observations::Pixels { points, camera } => {
                 self.refine_pixels(world, points, camera, weights, initial)
             }
+            Observations::Rig {
+                points,
+                cameras,
+                rig,
+            } => self.refine_rig(&rig_problem(world, points, cameras, rig, weights), initial),
         }
     }
 
@@ -332,6 +340,11 @@ impl Solver {
             Observations::Pixels { points, camera } => {
                 self.pixels(world, points, camera, weights, all)
             }
+            Observations::Rig {
+                points,
+                cameras,
+                rig,
+            } => self.rig(&rig_problem(world, points, cameras, rig, weights), all),
         }
     }
 
@@ -578,6 +591,23 @@ pub fn solve(world: &[Point3<f64>], image: &[Point2<f64>]) -> Result<Solution, P
 }
 
 /// The rotation of a finite initial pose, or [`PnpError::InvalidOption`] (`"initial"`).
+/// A rig problem's parts.
+fn rig_problem<'a>(
+    world: &'a [Point3<f64>],
+    pixels: &'a [Point2<f64>],
+    cameras: &'a [u32],
+    rig: &'a crate::rig::Rig,
+    weights: Option<&'a [f64]>,
+) -> crate::generalized::RigInput<'a> {
+    crate::generalized::RigInput {
+        world,
+        pixels,
+        cameras,
+        rig,
+        weights,
+    }
+}
+
 fn check_initial(initial: &Isometry3<f64>) -> Result<Matrix3<f64>, PnpError> {
     let finite = initial.translation.vector.iter().all(|x| x.is_finite())
         && initial.rotation.coords.iter().all(|x| x.is_finite());

@@ -431,3 +431,77 @@ pub fn so3_local_model() -> Kernel {
             .to_string();
     k
 }
+
+/// The generalized (multi-camera) cost's affine part at a rotation `R` in the same chart as
+/// [`so3_local_model`] (`s -> R(s) R`, docs/algorithm.md, generalized EOPnP): rays with centres
+/// make the cost `f(R) = vec(R)^T M vec(R) + 2 g^T vec(R) + k`, and in Cayley coordinates
+/// `(1 + s^T s)^2 f(R(s) R) = C_k(s) + A_k(s)` with `C_k` the quadratic part's model and
+/// `A_k(s) = 2 (1 + s^T s) g_k^T rbar(s) + k (1 + s^T s)^2`, `g_k = D^T g`,
+/// `D = blockdiag(R^T, R^T, R^T)`: the value, gradient and Hessian of `A_k` at `s = 0`, to add
+/// to [`so3_local_model`]'s.
+pub fn so3_local_affine() -> Kernel {
+    let mut k = Kernel::new("so3_local_affine", DEF);
+    k.doc(
+        "The affine part of the generalized cost `f(R) = vec(R)^T M vec(R) + 2 g^T vec(R) + k` \
+         (docs/algorithm.md, generalized EOPnP) in the CGR chart centred on `R` (`s -> R(s) R`): \
+         the value, gradient and Hessian at `s = 0` of `A_k(s) = 2 (1 + s^T s) g_k^T rbar(s) + \
+         k (1 + s^T s)^2`, `g_k = D^T g`, `D = blockdiag(R^T, R^T, R^T)`. Added to \
+         `so3_local_model`'s outputs they give the model of the whole cost.",
+    );
+    let gnames: Vec<String> = (0..9).map(|i| format!("g{i}")).collect();
+    let g = k.input_array(
+        "g",
+        &gnames,
+        "the linear term `g` of the cost (9 numbers, the row-major `vec(R)` order)",
+    );
+    let kk = k.input_scalar("k", "the constant term `k` of the cost");
+    let rnames: Vec<String> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| format!("r{}{}", i + 1, j + 1)))
+        .collect();
+    let r = k.input_array(
+        "r",
+        &rnames,
+        "the rotation `R`, row-major (`r11, r12, ..., r33`)",
+    );
+    // g_k[3a + i] = sum_p R[i][p] g[3a + p]
+    let mut gk: Vec<Poly> = Vec::new();
+    for a in 0..3 {
+        for i in 0..3 {
+            let mut e = Poly::zero();
+            for p in 0..3 {
+                e = e.add(&r[3 * i + p].mul(&g[3 * a + p]));
+            }
+            gk.push(k.define(&format!("gk{}", 3 * a + i), e));
+        }
+    }
+    let sv = [k.ring.add("__s1"), k.ring.add("__s2"), k.ring.add("__s3")];
+    let s = [Poly::var(sv[0]), Poly::var(sv[1]), Poly::var(sv[2])];
+    let sts = s[0].mul(&s[0]).add(&s[1].mul(&s[1])).add(&s[2].mul(&s[2]));
+    let one_plus = Poly::int(1).add(&sts);
+    let rb = rbar(&s);
+    let mut lin = Poly::zero();
+    for (gi, ri) in gk.iter().zip(rb.iter()) {
+        lin = lin.add(&gi.mul(ri));
+    }
+    let a = one_plus
+        .mul(&lin)
+        .scale(&q(2))
+        .add(&kk.mul(&one_plus.mul(&one_plus)));
+    // Value, gradient and Hessian at s = 0: the derivatives with s set to 0.
+    let at0 = |p: &Poly| p.substitute_all(&|v| sv.contains(&v).then(Poly::zero));
+    let grad: Vec<Poly> = (0..3).map(|i| a.derivative(sv[i])).collect();
+    let mut outs = vec![("f".to_string(), at0(&a))];
+    for i in 0..3 {
+        outs.push((format!("g{i}"), at0(&grad[i])));
+    }
+    for &(i, j) in &SYM3 {
+        outs.push((format!("hc{i}{j}"), at0(&grad[i].derivative(sv[j]))));
+    }
+    for (n, p) in outs {
+        k.output(&n, p);
+    }
+    k.output_doc = "`[f, g0, g1, g2, hc00, hc01, hc02, hc11, hc12, hc22]`: `A_k` (which is \
+                    `2 g^T vec(R) + k`), its gradient and its Hessian (upper triangle) at `s = 0`."
+        .to_string();
+    k
+}

@@ -1,0 +1,213 @@
+//! The rays of a rig problem: each pixel undistorted through its camera and turned into a ray of
+//! the rig frame (its camera's centre and a unit direction), and the working frame the search
+//! runs in.
+
+use nalgebra::{Matrix3, Point2, Point3, Vector3};
+
+use crate::camera::Projector;
+use crate::error::{DegenerateKind, InputKind, PnpError};
+use crate::rig::Rig;
+
+/// A rig problem as the solver reads it.
+#[derive(Clone, Copy)]
+pub(crate) struct RigInput<'a> {
+    pub world: &'a [Point3<f64>],
+    pub pixels: &'a [Point2<f64>],
+    pub cameras: &'a [u32],
+    pub rig: &'a Rig,
+    pub weights: Option<&'a [f64]>,
+}
+
+/// One kept correspondence (its pixel undistorts): the indices into the input, the ray.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ray {
+    /// Index of the correspondence in the caller's slices.
+    pub index: usize,
+    /// Its camera.
+    pub camera: usize,
+    /// Its weight (the caller's, 1 without weights; > 0).
+    pub weight: f64,
+    /// The ray's centre (its camera's centre) in the rig frame.
+    pub centre: Vector3<f64>,
+    /// The ray's unit direction in the rig frame.
+    pub direction: Vector3<f64>,
+}
+
+/// The rays of a problem and what the later stages need of it.
+#[derive(Clone)]
+pub(crate) struct Rays {
+    pub rays: Vec<Ray>,
+    /// The projectors of the rig's cameras, by index.
+    pub projectors: Vec<Projector>,
+    /// Correspondences left out: their pixel could not be undistorted.
+    pub skipped: usize,
+    /// The working frame: world points `(X - x_mean) / scale`, centres `(c - c_mean) / scale`.
+    pub x_mean: Vector3<f64>,
+    pub c_mean: Vector3<f64>,
+    pub scale: f64,
+    /// The scatter of the centred world points, smallest eigenvalue over the largest: the
+    /// planarity ratio of the central solver's `branch`.
+    pub planarity: f64,
+}
+
+/// The camera every correspondence is in, if they are all in one (after checking the indices'
+/// count and range, so that a bad index is reported as on the general path).
+///
+/// # Errors
+/// [`PnpError::CameraIndicesLength`], [`PnpError::UnknownCamera`].
+pub(crate) fn one_camera(input: &RigInput<'_>) -> Result<Option<usize>, PnpError> {
+    if input.cameras.len() != input.world.len() {
+        return Err(PnpError::CameraIndicesLength {
+            indices: input.cameras.len(),
+            points: input.world.len(),
+        });
+    }
+    let n = input.rig.cameras().len();
+    if let Some((index, &camera)) = input
+        .cameras
+        .iter()
+        .enumerate()
+        .find(|(_, &c)| c as usize >= n)
+    {
+        return Err(PnpError::UnknownCamera { index, camera });
+    }
+    let first = input.cameras.first().copied();
+    Ok(first
+        .filter(|f| input.cameras.iter().all(|c| c == f))
+        .map(|f| f as usize))
+}
+
+/// Checks a rig problem (the documented error order: lengths, weights, non-finite values,
+/// camera indices), undistorts every pixel through its camera and forms the rays; a pixel that
+/// cannot be undistorted is left out (counted in `skipped`), a point of weight 0 too.
+///
+/// # Errors
+/// [`PnpError`] for mismatched lengths, bad weights, non-finite input, unknown cameras, fewer
+/// than four usable correspondences, coincident or collinear world points.
+pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
+    let n = input.world.len();
+    if input.pixels.len() != n {
+        return Err(PnpError::LengthMismatch {
+            world: n,
+            image: input.pixels.len(),
+        });
+    }
+    if input.cameras.len() != n {
+        return Err(PnpError::CameraIndicesLength {
+            indices: input.cameras.len(),
+            points: n,
+        });
+    }
+    if let Some(w) = input.weights {
+        if w.len() != n {
+            return Err(PnpError::WeightsLength {
+                weights: w.len(),
+                points: n,
+            });
+        }
+    }
+    for i in 0..n {
+        if !input.world[i].coords.iter().all(|v| v.is_finite()) {
+            return Err(PnpError::NonFinite {
+                index: i,
+                input: InputKind::World,
+            });
+        }
+        let p = input.pixels[i];
+        if !(p.x.is_finite() && p.y.is_finite()) {
+            return Err(PnpError::NonFinite {
+                index: i,
+                input: InputKind::Image,
+            });
+        }
+        if let Some(w) = input.weights {
+            if !w[i].is_finite() {
+                return Err(PnpError::NonFinite {
+                    index: i,
+                    input: InputKind::Weight,
+                });
+            }
+            if w[i] < 0.0 {
+                return Err(PnpError::InvalidWeight { index: i });
+            }
+        }
+        if input.cameras[i] as usize >= input.rig.cameras().len() {
+            return Err(PnpError::UnknownCamera {
+                index: i,
+                camera: input.cameras[i],
+            });
+        }
+    }
+    let projectors: Vec<Projector> = input.rig.cameras().iter().map(|c| c.projector()).collect();
+    let mut rays = Vec::with_capacity(n);
+    let mut skipped = 0;
+    for i in 0..n {
+        let weight = input.weights.map_or(1.0, |w| w[i]);
+        let k = input.cameras[i] as usize;
+        let Ok((m, _)) = projectors[k].undistort(input.pixels[i]) else {
+            skipped += 1;
+            continue;
+        };
+        if !(weight > 0.0) {
+            continue;
+        }
+        let (rk, _) = input.rig.pose(k);
+        let direction = (rk.transpose() * Vector3::new(m.x, m.y, 1.0)).normalize();
+        rays.push(Ray {
+            index: i,
+            camera: k,
+            weight,
+            centre: input.rig.centre(k).coords,
+            direction,
+        });
+    }
+    if rays.len() < 4 {
+        return Err(PnpError::TooFewPoints {
+            got: rays.len(),
+            need: 4,
+        });
+    }
+    // The working frame: weighted centroids, the RMS distance of the world points.
+    let wsum: f64 = rays.iter().map(|r| r.weight).sum();
+    let x_mean = rays
+        .iter()
+        .map(|r| input.world[r.index].coords * r.weight)
+        .sum::<Vector3<f64>>()
+        / wsum;
+    let c_mean = rays
+        .iter()
+        .map(|r| r.centre * r.weight)
+        .sum::<Vector3<f64>>()
+        / wsum;
+    let mut scatter = Matrix3::zeros();
+    for r in &rays {
+        let d = input.world[r.index].coords - x_mean;
+        scatter += d * d.transpose() * r.weight;
+    }
+    scatter /= wsum;
+    let scale = scatter.trace().sqrt();
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(PnpError::Degenerate(if scale == 0.0 {
+            DegenerateKind::CoincidentWorldPoints
+        } else {
+            DegenerateKind::ScaleOutOfRange
+        }));
+    }
+    let eig = (scatter / (scale * scale)).symmetric_eigenvalues();
+    let mut ev = [eig[0], eig[1], eig[2]];
+    ev.sort_by(f64::total_cmp);
+    // Collinear: the second singular value of the centred points (the square root of the
+    // scatter's eigenvalue) at most 1e-8 times the first, as the central solver's `frame`.
+    if ev[1].max(0.0).sqrt() <= 1e-8 * ev[2].sqrt() {
+        return Err(PnpError::Degenerate(DegenerateKind::CollinearWorldPoints));
+    }
+    Ok(Rays {
+        rays,
+        projectors,
+        skipped,
+        x_mean,
+        c_mean,
+        scale,
+        planarity: ev[0].max(0.0) / ev[2],
+    })
+}

@@ -1,0 +1,242 @@
+//! The maximum-likelihood refinement of a rig's pose: Levenberg-Marquardt on the pixel error of
+//! every observation through its own camera (its pose in the rig, its model and distortion),
+//! with the solver's robust loss by iteratively reweighted steps, and the pose covariance from
+//! the same normal equations.
+
+use nalgebra::{Matrix2x3, Matrix3, Matrix6, SMatrix, Vector2, Vector3, Vector6};
+
+use super::rays::Rays;
+use crate::covariance::{NoiseModel, PoseCovariance};
+use crate::numeric::rotation::{exp_so3, skew};
+use crate::pipeline::Loss;
+use crate::rig::Rig;
+use nalgebra::Point3;
+
+/// The outcome of a refinement.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Refined {
+    pub r: Matrix3<f64>,
+    pub t: Vector3<f64>,
+    /// `sum w rho(|e|^2)`, pixels^2.
+    pub cost: f64,
+    /// `sum w |e|^2` and `sum w` (for the RMS error).
+    pub squared: f64,
+    pub weight_sum: f64,
+    /// Observations in front of their camera, and their number.
+    pub in_front: usize,
+    pub iterations: u32,
+    pub converged: bool,
+}
+
+/// The residual (pixels) of ray `k` at the pose and its Jacobian with respect to
+/// `(omega, delta t)` (`R <- Exp(omega) R`, `t <- t + delta t`), or `None` behind its camera.
+fn residual(
+    rays: &Rays,
+    rig: &Rig,
+    world: &[Point3<f64>],
+    pixels: &[nalgebra::Point2<f64>],
+    ray: usize,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> Option<(Vector2<f64>, SMatrix<f64, 2, 6>)> {
+    let ry = &rays.rays[ray];
+    let (rk, tk) = rig.pose(ry.camera);
+    let rx = r * world[ry.index].coords;
+    let p = rk * (rx + t) + tk;
+    if !(p.z > 0.0) {
+        return None;
+    }
+    let (x, y) = (p.x / p.z, p.y / p.z);
+    let ((u, v), jp) = rays.projectors[ry.camera].project_with_jacobian(x, y);
+    let obs = pixels[ry.index];
+    let e = Vector2::new(u - obs.x, v - obs.y);
+    let iz = 1.0 / p.z;
+    let dxy = Matrix2x3::new(iz, 0.0, -x * iz, 0.0, iz, -y * iz);
+    let jp = nalgebra::Matrix2::new(jp[0], jp[1], jp[2], jp[3]);
+    let a = jp * dxy * rk;
+    let mut j = SMatrix::<f64, 2, 6>::zeros();
+    j.fixed_view_mut::<2, 3>(0, 0)
+        .copy_from(&(a * (-skew(&rx))));
+    j.fixed_view_mut::<2, 3>(0, 3).copy_from(&a);
+    Some((e, j))
+}
+
+/// The squared pixel error of ray `k` at the pose (`x_rig = R X + t`), infinite behind its
+/// camera.
+pub(crate) fn pixel_error2(
+    rays: &Rays,
+    rig: &Rig,
+    world: &[Point3<f64>],
+    pixels: &[nalgebra::Point2<f64>],
+    k: usize,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> f64 {
+    let ry = &rays.rays[k];
+    let (rk, tk) = rig.pose(ry.camera);
+    let p = rk * (r * world[ry.index].coords + t) + tk;
+    if !(p.z > 0.0) {
+        return f64::INFINITY;
+    }
+    let (u, v) = rays.projectors[ry.camera].project(p.x / p.z, p.y / p.z);
+    let obs = pixels[ry.index];
+    (u - obs.x).powi(2) + (v - obs.y).powi(2)
+}
+
+/// `sum w rho(|e|^2)`, `sum w |e|^2` and the points in front at the pose; an observation behind
+/// its camera makes the cost infinite (no step may put a point there).
+fn evaluate(
+    rays: &Rays,
+    rig: &Rig,
+    world: &[Point3<f64>],
+    pixels: &[nalgebra::Point2<f64>],
+    loss: Loss,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> (f64, f64, usize) {
+    let (mut cost, mut sq, mut front) = (0.0, 0.0, 0);
+    for (k, ry) in rays.rays.iter().enumerate() {
+        let (rk, tk) = rig.pose(ry.camera);
+        let p = rk * (r * world[ry.index].coords + t) + tk;
+        if !(p.z > 0.0) {
+            cost = f64::INFINITY;
+            continue;
+        }
+        front += 1;
+        let (u, v) = rays.projectors[ry.camera].project(p.x / p.z, p.y / p.z);
+        let obs = pixels[ry.index];
+        let e2 = (u - obs.x).powi(2) + (v - obs.y).powi(2);
+        let _ = k;
+        cost += ry.weight * loss.eval(e2).0;
+        sq += ry.weight * e2;
+    }
+    (cost, sq, front)
+}
+
+/// Levenberg-Marquardt from `(r, t)` (the original frame), at most `max_iterations`
+/// iterations: the normal equations `(J^T W J + lambda diag(J^T W J)) delta = -J^T W e`, `W`
+/// the weights times the loss's IRLS weights at the current residuals; a step is kept if it
+/// lowers the cost (`lambda / 10`), otherwise `lambda x 10`; stops when the step is below
+/// `xtol` (relative), the gradient below `gtol`, or `lambda` above 1e16.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refine(
+    rays: &Rays,
+    rig: &Rig,
+    world: &[Point3<f64>],
+    pixels: &[nalgebra::Point2<f64>],
+    loss: Loss,
+    r0: &Matrix3<f64>,
+    t0: &Vector3<f64>,
+    max_iterations: u32,
+) -> Refined {
+    let (mut r, mut t) = (*r0, *t0);
+    let (mut cost, mut squared, mut front) = evaluate(rays, rig, world, pixels, loss, &r, &t);
+    let weight_sum: f64 = rays.rays.iter().map(|x| x.weight).sum();
+    let mut lambda = 1e-6;
+    let mut iterations = 0;
+    let mut converged = false;
+    while iterations < max_iterations && cost.is_finite() {
+        iterations += 1;
+        let mut jtj = Matrix6::zeros();
+        let mut jte = Vector6::zeros();
+        for (k, ry) in rays.rays.iter().enumerate() {
+            let Some((e, j)) = residual(rays, rig, world, pixels, k, &r, &t) else {
+                continue;
+            };
+            let w = ry.weight * loss.eval(e.norm_squared()).1;
+            jtj += j.transpose() * j * w;
+            jte += j.transpose() * e * w;
+        }
+        let gmax = jte.amax();
+        if gmax <= 1e-13 * (jtj.trace() * cost.max(1e-300)).sqrt() {
+            converged = true;
+            break;
+        }
+        let mut stepped = false;
+        while lambda <= 1e16 {
+            let mut a = jtj;
+            for i in 0..6 {
+                a[(i, i)] += lambda * jtj[(i, i)].max(1e-12 * jtj.trace() / 6.0);
+            }
+            let Some(ch) = a.cholesky() else {
+                lambda *= 10.0;
+                continue;
+            };
+            let d = -ch.solve(&jte);
+            let rn = exp_so3(&Vector3::new(d[0], d[1], d[2])) * r;
+            let tn = t + Vector3::new(d[3], d[4], d[5]);
+            let (cn, sn, fnr) = evaluate(rays, rig, world, pixels, loss, &rn, &tn);
+            if cn < cost {
+                let small = d.norm() <= 1e-10 * (1.0 + t.norm());
+                (r, t, cost, squared, front) = (rn, tn, cn, sn, fnr);
+                lambda = (lambda / 10.0).max(1e-15);
+                stepped = true;
+                if small {
+                    converged = true;
+                }
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !stepped {
+            // No step lowers the cost any more: a minimum to rounding.
+            converged = true;
+            break;
+        }
+        if converged {
+            break;
+        }
+    }
+    Refined {
+        r,
+        t,
+        cost,
+        squared,
+        weight_sum,
+        in_front: front,
+        iterations,
+        converged,
+    }
+}
+
+/// The pose's covariance (pycolmap's convention, [`crate::covariance`]: `[delta_q, delta_t]`,
+/// `R = Exp(2 delta_q) R_hat`) from the Gauss-Newton normal equations of the pixel error at the
+/// pose, for the noise `noise` in pixels; `None` if they are singular.
+pub(crate) fn covariance(
+    rays: &Rays,
+    rig: &Rig,
+    world: &[Point3<f64>],
+    pixels: &[nalgebra::Point2<f64>],
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+    noise: NoiseModel,
+) -> Option<PoseCovariance> {
+    let mut jtj = Matrix6::zeros();
+    let (mut sq, mut n) = (0.0, 0usize);
+    for (k, ry) in rays.rays.iter().enumerate() {
+        let (e, j) = residual(rays, rig, world, pixels, k, r, t)?;
+        jtj += j.transpose() * j * ry.weight;
+        sq += ry.weight * e.norm_squared();
+        n += 1;
+    }
+    let sigma = match noise {
+        NoiseModel::Sigma(s) => s,
+        NoiseModel::Estimated => {
+            if n <= 3 {
+                return None;
+            }
+            (sq / (2 * n - 6) as f64).sqrt()
+        }
+    };
+    let inv = jtj.cholesky()?.inverse();
+    // omega = 2 delta_q: the rotation block / 4, the cross blocks / 2.
+    let mut d = Matrix6::identity();
+    for i in 0..3 {
+        d[(i, i)] = 0.5;
+    }
+    let matrix = d * inv * d * (sigma * sigma);
+    matrix
+        .iter()
+        .all(|x| x.is_finite())
+        .then_some(PoseCovariance { matrix, sigma })
+}
