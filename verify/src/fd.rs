@@ -14,7 +14,7 @@
 //! is the rounding of the evaluation of the derivative itself (`O(u)` relative to the
 //! absolute-value scale) plus `h^2 T3 / 6`, negligible.
 
-use crate::reference::{self, M9};
+use crate::reference::{self, Chart, M9};
 use nalgebra::Vector3;
 
 /// `u^(1/3)`, the relative central-difference step.
@@ -112,26 +112,26 @@ pub const EVAL_ROUNDING: f64 = 64.0 * reference::U;
 
 /// Central-difference gradient of `F` at 0 along the unit vector `u`, step `h`.
 #[must_use]
-pub fn chart_central(m: &M9, r: &nalgebra::Matrix3<f64>, u: &Vector3<f64>, h: f64) -> f64 {
+pub fn chart_central(f: &impl Chart, u: &Vector3<f64>, h: f64) -> f64 {
     let sp = [h * u[0], h * u[1], h * u[2]];
     let sm = [-h * u[0], -h * u[1], -h * u[2]];
-    (reference::chart_f(m, r, &sp) - reference::chart_f(m, r, &sm)) / (2.0 * h)
+    (f.value(&sp) - f.value(&sm)) / (2.0 * h)
 }
 
 /// Second difference of `F` at 0 along `u`, step `h`: `u^T hess F(0) u + O(h^2)`.
 #[must_use]
-pub fn chart_second(m: &M9, r: &nalgebra::Matrix3<f64>, u: &Vector3<f64>, h: f64) -> f64 {
+pub fn chart_second(f: &impl Chart, u: &Vector3<f64>, h: f64) -> f64 {
     let sp = [h * u[0], h * u[1], h * u[2]];
     let sm = [-h * u[0], -h * u[1], -h * u[2]];
-    let f0 = reference::chart_f(m, r, &[0.0; 3]);
-    (reference::chart_f(m, r, &sp) - 2.0 * f0 + reference::chart_f(m, r, &sm)) / (h * h)
+    let f0 = f.value(&[0.0; 3]);
+    (f.value(&sp) - 2.0 * f0 + f.value(&sm)) / (h * h)
 }
 
 /// Complex-step derivative `d/dt F(t u)` at `t`: `Im F((t + i h) u) / h`.
 #[must_use]
-pub fn chart_complex_step(m: &M9, r: &nalgebra::Matrix3<f64>, u: &Vector3<f64>, t: f64) -> f64 {
+pub fn chart_complex_step(f: &impl Chart, u: &Vector3<f64>, t: f64) -> f64 {
     use num_complex::Complex64;
     let z = Complex64::new(t, H_COMPLEX);
     let s = [z * u[0], z * u[1], z * u[2]];
-    reference::chart_f(m, r, &s).im / H_COMPLEX
+    f.value(&s).im / H_COMPLEX
 }

@@ -20,7 +20,7 @@
 //!   absolute-value matrix.
 //!
 //! One file per kernel family: `cost.rs` (the cost's coefficients, value, gradient and Hessian),
-//! `local_model.rs` (`newton`'s local model), `nullspace.rs` (the cases' cubics, resultants and
+//! `local_model.rs` (`newton`'s local model and its affine part for the generalized cost), `nullspace.rs` (the cases' cubics, resultants and
 //! determinants), `gp3p.rs` (the generalized three-point pose); [`all`] lists every check in
 //! report order.
 
@@ -35,7 +35,7 @@ mod nullspace;
 
 pub use cost::{cost_coefficients, cost_value, gradient, hessian, Against, Variant};
 pub use gp3p::{gp3p_known_root, gp3p_octic, gp3p_solutions};
-pub use local_model::{hessian_directions, local_model, LocalAgainst};
+pub use local_model::{hessian_directions, local_affine, local_model, LocalAgainst, LocalKernel};
 pub use nullspace::{
     case2_cubics, case2_known_root, case2_resultant, case3_cubics, case3_known_root, case3_quartic,
     case3_resultant, case4_determinant, case4_known_root, case4_known_system, case4_matrix,
@@ -99,6 +99,16 @@ pub fn all() -> Vec<Measurement> {
         LocalAgainst::CsHessian,
     ] {
         out.push(local_model(a, N_COST));
+    }
+    for a in [
+        LocalAgainst::Value,
+        LocalAgainst::Explicit,
+        LocalAgainst::FdGradient,
+        LocalAgainst::FdHessian,
+        LocalAgainst::CsGradient,
+        LocalAgainst::CsHessian,
+    ] {
+        out.push(local_affine(a, N_COST));
     }
     out.push(case2_resultant(N_RESULTANT));
     out.extend(case2_known_root(N_RESULTANT));

@@ -29,7 +29,10 @@ pub use cost::{
 pub use determinants::{
     bezout, bezout_abs_permanent, det_with_bound, hadamard, permanent, poly_eval, sylvester,
 };
-pub use local_model::{blockdiag_rt, chart_amplitude, chart_f, local_model, vec_r, LocalModel};
+pub use local_model::{
+    affine_amplitude, affine_chart_f, affine_model, blockdiag_rt, chart_amplitude, chart_f,
+    local_model, vec_r, AffineChart, Chart, LocalModel, QuadraticChart,
+};
 pub use nullspace::{
     case2_cubics, case2_inputs, case3_cubics, case3_k, case3_monomials, case3_table, case4_layout,
     case4_layout_at, case4_m_from_t, case4_t_at, h_upper21,
