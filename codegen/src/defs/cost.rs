@@ -491,8 +491,8 @@ pub fn so3_local_affine() -> Kernel {
     let at0 = |p: &Poly| p.substitute_all(&|v| sv.contains(&v).then(Poly::zero));
     let grad: Vec<Poly> = (0..3).map(|i| a.derivative(sv[i])).collect();
     let mut outs = vec![("f".to_string(), at0(&a))];
-    for i in 0..3 {
-        outs.push((format!("g{i}"), at0(&grad[i])));
+    for (i, gi) in grad.iter().enumerate() {
+        outs.push((format!("g{i}"), at0(gi)));
     }
     for &(i, j) in &SYM3 {
         outs.push((format!("hc{i}{j}"), at0(&grad[i].derivative(sv[j]))));

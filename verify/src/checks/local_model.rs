@@ -54,7 +54,7 @@ pub enum LocalKernel {
 
 /// One random sample: the kernel's outputs, the explicit model, the direct value and the chart.
 enum Sample {
-    Quadratic { m: rf::M9, r: Matrix3<f64> },
+    Quadratic { m: Box<rf::M9>, r: Matrix3<f64> },
     Affine { g: V9, k: f64, r: Matrix3<f64> },
 }
 
@@ -64,7 +64,7 @@ impl Sample {
             LocalKernel::Quadratic => {
                 let m = st::cost_matrix(rng);
                 Sample::Quadratic {
-                    m,
+                    m: Box::new(m),
                     r: st::rotation(rng),
                 }
             }
@@ -106,7 +106,7 @@ impl Sample {
     fn direct(&self) -> f64 {
         let vr = rf::vec_r(self.r());
         match self {
-            Sample::Quadratic { m, .. } => vr.dot(&(m * vr)),
+            Sample::Quadratic { m, .. } => vr.dot(&(**m * vr)),
             Sample::Affine { g, k, .. } => 2.0 * g.dot(&vr) + k,
         }
     }
