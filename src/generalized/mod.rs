@@ -294,50 +294,30 @@ fn finish(
         })
         .fold(0.0, f64::max);
     let algebraic = m.f / cost.scale;
-    let (r, t, cost_px, squared, weight_sum, front, iterations, converged) =
-        if opts.refinement == Refinement::Algebraic {
-            let e = refine::refine(
-                rays,
-                input.rig,
-                input.world,
-                input.pixels,
-                opts.loss,
-                r,
-                t,
-                0,
-            );
-            (
-                e.r,
-                e.t,
-                e.cost,
-                e.squared,
-                e.weight_sum,
-                e.in_front,
-                0,
-                true,
-            )
-        } else {
-            let e = refine::refine(
-                rays,
-                input.rig,
-                input.world,
-                input.pixels,
-                opts.loss,
-                r,
-                t,
-                opts.reprojection_iterations,
-            );
-            (
-                e.r,
-                e.t,
-                e.cost,
-                e.squared,
-                e.weight_sum,
-                e.in_front,
-                e.iterations,
-                e.converged,
-            )
-        };
+    // The algebraic mode evaluates the pixel cost at the object-space minimum (no iteration).
+    let algebraic_only = opts.refinement == Refinement::Algebraic;
+    let iterations = if algebraic_only {
+        0
+    } else {
+        opts.reprojection_iterations
+    };
+    let e = refine::refine(
+        rays,
+        input.rig,
+        input.world,
+        input.pixels,
+        opts.loss,
+        r,
+        t,
+        iterations,
+    );
+    let (r, t, cost_px, squared, weight_sum, front) =
+        (e.r, e.t, e.cost, e.squared, e.weight_sum, e.in_front);
+    let (iterations, converged) = if algebraic_only {
+        (0, true)
+    } else {
+        (e.iterations, e.converged)
+    };
     let n = rays.rays.len();
     let covariance = opts.covariance.and_then(|noise| {
         refine::covariance(rays, input.rig, input.world, input.pixels, &r, &t, noise)
