@@ -167,6 +167,10 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             need: 4,
         });
     }
+    let first = input.world[rays[0].index];
+    if rays.iter().all(|r| input.world[r.index] == first) {
+        return Err(PnpError::Degenerate(DegenerateKind::CoincidentWorldPoints));
+    }
     // The working frame: weighted centroids, the RMS distance of the world points.
     let wsum: f64 = rays.iter().map(|r| r.weight).sum();
     let x_mean = rays
@@ -193,12 +197,23 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             DegenerateKind::ScaleOutOfRange
         }));
     }
-    let eig = (scatter / (scale * scale)).symmetric_eigenvalues();
-    let mut ev = [eig[0], eig[1], eig[2]];
-    ev.sort_by(f64::total_cmp);
-    // Collinear: the second singular value of the centred points (the square root of the
-    // scatter's eigenvalue) at most 1e-8 times the first, as the central solver's `frame`.
-    if ev[1].max(0.0).sqrt() <= 1e-8 * ev[2].sqrt() {
+    let eig = (scatter / (scale * scale)).symmetric_eigen();
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let ev = order.map(|i| eig.eigenvalues[i]);
+    // Collinear: every centred point within 1e-8 of its distance from the centroid of the
+    // principal line, as the central solver's `frame` (its second singular value at most
+    // 1e-8 times the first). Measured on the points themselves (one O(N) pass), not on the
+    // scatter's small eigenvalue, whose rounding is u times the largest.
+    let axis = eig.eigenvectors.column(order[2]).into_owned();
+    let (mut off_line, mut along) = (0.0f64, 0.0f64);
+    for r in &rays {
+        let d = input.world[r.index].coords - x_mean;
+        let a = d.dot(&axis);
+        off_line = off_line.max((d - axis * a).norm());
+        along = along.max(a.abs());
+    }
+    if off_line <= 1e-8 * along {
         return Err(PnpError::Degenerate(DegenerateKind::CollinearWorldPoints));
     }
     Ok(Rays {

@@ -29,7 +29,9 @@ pub(crate) struct Refined {
 }
 
 /// The residual (pixels) of ray `k` at the pose and its Jacobian with respect to
-/// `(omega, delta t)` (`R <- Exp(omega) R`, `t <- t + delta t`), or `None` behind its camera.
+/// `(omega, delta t)` (`R <- Exp(omega) R`, `t <- t + delta t`), or `None` at depth 0. A point
+/// behind its camera projects through `(x / z, y / z)` like the others (the central `refine`'s
+/// residual): its error keeps a wrong pose from fitting the other points alone.
 fn residual(
     rays: &Rays,
     rig: &Rig,
@@ -43,7 +45,7 @@ fn residual(
     let (rk, tk) = rig.pose(ry.camera);
     let rx = r * world[ry.index].coords;
     let p = rk * (rx + t) + tk;
-    if !(p.z > 0.0) {
+    if !(p.z != 0.0) {
         return None;
     }
     let (x, y) = (p.x / p.z, p.y / p.z);
@@ -83,8 +85,12 @@ pub(crate) fn pixel_error2(
     (u - obs.x).powi(2) + (v - obs.y).powi(2)
 }
 
-/// `sum w rho(|e|^2)`, `sum w |e|^2` and the points in front at the pose; an observation behind
-/// its camera makes the cost infinite (no step may put a point there).
+/// `sum w rho(|e|^2)` and `sum w |e|^2` at the pose (infinite if a point is at depth 0; one
+/// behind its camera projects through `(x / z, y / z)`, as in [`residual`]) and the number of
+/// observations in front of their camera; with a `reference` pose, also whether any observation
+/// is on the other side of its camera than at the reference (a step may not move a point
+/// across a camera's plane: the central `refine`'s rule).
+#[allow(clippy::too_many_arguments)]
 fn evaluate(
     rays: &Rays,
     rig: &Rig,
@@ -93,30 +99,50 @@ fn evaluate(
     loss: Loss,
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
-) -> (f64, f64, usize) {
-    let (mut cost, mut sq, mut front) = (0.0, 0.0, 0);
-    for (k, ry) in rays.rays.iter().enumerate() {
+    reference: Option<(&Matrix3<f64>, &Vector3<f64>)>,
+) -> Evaluated {
+    let mut out = Evaluated {
+        cost: 0.0,
+        squared: 0.0,
+        front: 0,
+        flipped: false,
+    };
+    for ry in &rays.rays {
         let (rk, tk) = rig.pose(ry.camera);
-        let p = rk * (r * world[ry.index].coords + t) + tk;
-        if !(p.z > 0.0) {
-            cost = f64::INFINITY;
+        let x = world[ry.index].coords;
+        let p = rk * (r * x + t) + tk;
+        let front = p.z > 0.0;
+        if let Some((r0, t0)) = reference {
+            let z0 = rk.row(2).transpose().dot(&(r0 * x + t0)) + tk.z;
+            out.flipped |= front != (z0 > 0.0);
+        }
+        if !(p.z != 0.0) {
+            out.cost = f64::INFINITY;
             continue;
         }
-        front += 1;
+        out.front += usize::from(front);
         let (u, v) = rays.projectors[ry.camera].project(p.x / p.z, p.y / p.z);
         let obs = pixels[ry.index];
         let e2 = (u - obs.x).powi(2) + (v - obs.y).powi(2);
-        let _ = k;
-        cost += ry.weight * loss.eval(e2).0;
-        sq += ry.weight * e2;
+        out.cost += ry.weight * loss.eval(e2).0;
+        out.squared += ry.weight * e2;
     }
-    (cost, sq, front)
+    out
+}
+
+/// What [`evaluate`] returns.
+#[derive(Clone, Copy)]
+struct Evaluated {
+    cost: f64,
+    squared: f64,
+    front: usize,
+    flipped: bool,
 }
 
 /// Levenberg-Marquardt from `(r, t)` (the original frame), at most `max_iterations`
 /// iterations: the normal equations `(J^T W J + lambda diag(J^T W J)) delta = -J^T W e`, `W`
-/// the weights times the loss's IRLS weights at the current residuals; a step is kept if it
-/// lowers the cost (`lambda / 10`), otherwise `lambda x 10`; stops when the step is below
+/// the weights times the loss's IRLS weights at the current residuals; a step is kept if it lowers the cost and moves no observation across
+/// its camera's plane (`lambda / 10`), otherwise `lambda x 10`; stops when the step is below
 /// `xtol` (relative), the gradient below `gtol`, or `lambda` above 1e16.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
@@ -130,7 +156,8 @@ pub(crate) fn refine(
     max_iterations: u32,
 ) -> Refined {
     let (mut r, mut t) = (*r0, *t0);
-    let (mut cost, mut squared, mut front) = evaluate(rays, rig, world, pixels, loss, &r, &t);
+    let start = evaluate(rays, rig, world, pixels, loss, &r, &t, None);
+    let (mut cost, mut squared, mut front) = (start.cost, start.squared, start.front);
     let weight_sum: f64 = rays.rays.iter().map(|x| x.weight).sum();
     let mut lambda = 1e-6;
     let mut iterations = 0;
@@ -165,10 +192,10 @@ pub(crate) fn refine(
             let d = -ch.solve(&jte);
             let rn = exp_so3(&Vector3::new(d[0], d[1], d[2])) * r;
             let tn = t + Vector3::new(d[3], d[4], d[5]);
-            let (cn, sn, fnr) = evaluate(rays, rig, world, pixels, loss, &rn, &tn);
-            if cn < cost {
+            let next = evaluate(rays, rig, world, pixels, loss, &rn, &tn, Some((&r, &t)));
+            if !next.flipped && next.cost < cost {
                 let small = d.norm() <= 1e-10 * (1.0 + t.norm());
-                (r, t, cost, squared, front) = (rn, tn, cn, sn, fnr);
+                (r, t, cost, squared, front) = (rn, tn, next.cost, next.squared, next.front);
                 lambda = (lambda / 10.0).max(1e-15);
                 stepped = true;
                 if small {
