@@ -17,6 +17,9 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> res.R, res.t, res.ok, res.errors            # (B, 3, 3), (B, 3), (B,) bool, {i: exc}
 >>> sol = eopnp.solve(world, pixels, camera=cam, loss=("cauchy", 2.0))  # robust, 2 px scale
 >>> sol = eopnp.refine(world, pixels, prev_sol, camera=cam)     # tracking: from a prior pose
+>>> rig = eopnp.Rig([cam0, cam1], [cam0_from_rig, cam1_from_rig])  # x_cam = R_k @ x_rig + t_k
+>>> sol = eopnp.solve_generalized(pixels, world, camera_idxs, rig=rig)  # x_rig = R @ X + t
+>>> sol, info = eopnp.solve_generalized_ransac(pixels, world, camera_idxs, cams_from_rig, cams)
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
 read as float64 (copied, with the GIL held); results are new float64 arrays. Errors raise the
@@ -40,6 +43,7 @@ from ._eopnp import (
     PnpError,
     RansacOptions,
     Registration,
+    Rig,
     Solution,
     SolverOptions,
     UnknownIdError,
@@ -47,12 +51,17 @@ from ._eopnp import (
     problem_seed,
     read_colmap_model,
     refine,
+    refine_generalized,
     register_image,
     register_images,
     solve,
     solve_all,
     solve_batch,
     solve_batch_arrays,
+    solve_generalized,
+    solve_generalized_batch,
+    solve_generalized_ransac,
+    solve_generalized_ransac_batch,
     solve_ransac,
     solve_ransac_batch,
 )
@@ -73,6 +82,7 @@ __all__ = [
     "PnpError",
     "RansacOptions",
     "Registration",
+    "Rig",
     "Solution",
     "SolverOptions",
     "UnknownIdError",
@@ -80,12 +90,17 @@ __all__ = [
     "problem_seed",
     "read_colmap_model",
     "refine",
+    "refine_generalized",
     "register_image",
     "register_images",
     "solve",
     "solve_all",
     "solve_batch",
     "solve_batch_arrays",
+    "solve_generalized",
+    "solve_generalized_batch",
+    "solve_generalized_ransac",
+    "solve_generalized_ransac_batch",
     "solve_ransac",
     "solve_ransac_batch",
 ]

@@ -17,6 +17,9 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> res.R, res.t, res.ok, res.errors            # (B, 3, 3), (B, 3), (B,) bool, {i: exc}
 >>> sol = eopnp.solve(world, pixels, camera=cam, loss=("cauchy", 2.0))  # robust, 2 px scale
 >>> sol = eopnp.refine(world, pixels, prev_sol, camera=cam)     # tracking: from a prior pose
+>>> rig = eopnp.Rig([cam0, cam1], [cam0_from_rig, cam1_from_rig])  # x_cam = R_k @ x_rig + t_k
+>>> sol = eopnp.solve_generalized(pixels, world, camera_idxs, rig=rig)  # x_rig = R @ X + t
+>>> sol, info = eopnp.solve_generalized_ransac(pixels, world, camera_idxs, cams_from_rig, cams)
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
 read as float64 (copied, with the GIL held); results are new float64 arrays. Errors raise the
@@ -52,6 +55,9 @@ _Source = Literal[
     "planar2",
     "extra_start",
     "initial",
+    "p3p",
+    "generalized",
+    "gp3p",
     "other",
 ]
 # loss=: None or "squared" (default), ("huber", s) or ("cauchy", s), the scale s in pixels
@@ -79,7 +85,10 @@ class InvalidInputError(PnpError, ValueError):
     """Bad input (also a ``ValueError``): too few points (``got``, ``need``), mismatched lengths
     (``world``, ``image``; ``weights``, ``points``), a NaN or infinite value (``index``,
     ``input``: ``"world"``, ``"image"`` or ``"weights"``), a negative weight (``index``),
-    or an array of the wrong shape (kind ``"Shape"``, ``argument``).
+    an array of the wrong shape (kind ``"Shape"``, ``argument``); for a rig, camera indices
+    not one per point (kind ``"CameraIndicesLength"``, ``indices``, ``points``) or naming a
+    camera the rig does not have (kind ``"UnknownCamera"``: correspondence ``index`` is in
+    ``camera``).
     """
 class InputTypeError(InvalidInputError, TypeError):
     """An input that is not an array of real numbers (also a ``TypeError``; kind ``"DType"``,
@@ -120,7 +129,9 @@ class UnknownIdError(PnpError, LookupError):
 class SolverOptions:
     """The options of the solver (the Rust ``eopnp::Solver``), for ``options=`` of every function
     that solves (``solve``, ``solve_all``, ``refine``, ``solve_ransac``, ``solve_batch``,
-    ``solve_ransac_batch``, ``solve_batch_arrays``, ``register_image``, ``register_images``).
+    ``solve_ransac_batch``, ``solve_batch_arrays``, ``register_image``, ``register_images``, and
+    for rigs ``solve_generalized``, ``solve_generalized_ransac``, ``refine_generalized``,
+    ``solve_generalized_batch``, ``solve_generalized_ransac_batch``).
     Those functions also take each option as a keyword argument (not together with
     ``options=``).
 
@@ -208,7 +219,9 @@ _Options = Union[SolverOptions, Mapping[str, Any], None]
 
 @final
 class Solution:
-    """A camera pose and how it was found (``x_cam = R @ X + t``, world to camera).
+    """A camera pose and how it was found (``x_cam = R @ X + t``, world to camera); from the
+    generalized functions (``solve_generalized``, ...), the rig's pose (``x_rig = R @ X + t``,
+    rig_from_world).
 
     Attributes:
         R: rotation matrix, shape (3, 3).
@@ -227,7 +240,8 @@ class Solution:
         degenerate: the configuration is close to degenerate; the pose may be ambiguous.
         planar: the planar branch produced the starting candidate.
         source: the candidate generator of the winning start ("case1", ..., "planar1",
-            "planar2", "extra_start"; "initial" for ``refine``).
+            "planar2", "extra_start", "p3p"; for a rig "generalized" or "gp3p"; "initial" for
+            ``refine`` and ``refine_generalized``).
         newton_iterations: damped-Newton iterations of the winning candidate (0 when skipped:
             an exact fit, whose start is already the minimum of the algebraic cost).
         reprojection_iterations: Levenberg-Marquardt iterations of the refinement.
@@ -284,7 +298,8 @@ class Solution:
     @property
     def source(self) -> _Source:
         """The candidate generator of the winning start ("case1", ..., "planar1", "planar2",
-        "extra_start"; "initial" for ``refine``).
+        "extra_start", "p3p"; for a rig "generalized" or "gp3p"; "initial" for ``refine`` and
+        ``refine_generalized``).
         """
     @property
     def newton_iterations(self) -> int:
@@ -999,6 +1014,314 @@ def register_images(
         TypeError: as ``solve``.
     """
 
+@final
+class Rig:
+    """A multi-camera rig: calibrated cameras fixed to one body (a car's or a headset's cameras, a
+    stereo pair), each with its pose in the rig.
+
+    ``Rig(cameras, cams_from_rig)``: ``cameras`` a sequence of K ``Camera``, ``cams_from_rig``
+    a sequence of K poses, camera ``k``'s pose in the rig: ``x_cam = R_k @ x_rig + t_k``
+    (``cam_from_rig``, the convention of COLMAP's rigs and pycolmap's ``cams_from_rig``). Each
+    pose is a ``(rotation, t)`` pair (the rotation a (3, 3) matrix, a (3,) rotation vector or a
+    (4,) quaternion (w, x, y, z)), a (3, 4) ``[R | t]`` or a (4, 4) homogeneous matrix (a
+    (K, 3, 4) array is a sequence of K such matrices), or a ``Solution``, as ``refine``'s
+    ``initial``. From pycolmap: ``[p.matrix() for p in cams_from_rig]`` (``Rigid3d``) and
+    ``Camera(c.model.name, c.params, c.width, c.height)``.
+
+    The rig's own frame is any frame fixed to the body (often the first camera's: its pose is
+    then the identity). A problem on the rig (``solve_generalized``) gives the rig's pose in
+    the world, ``x_rig = R @ X + t`` (rig_from_world), and camera ``k``'s pose in the world is
+    ``x_cam = R_k @ (R @ X + t) + t_k``.
+
+    Immutable, comparable (``==``), picklable.
+
+    Attributes:
+        cameras: the K cameras, in index order.
+        cams_from_rig: each camera's ``[R_k | t_k]``, shape (K, 3, 4).
+        centres: each camera's centre in the rig frame, ``-R_k^T t_k``, shape (K, 3).
+
+    Raises:
+        InvalidOptionError: no camera (``option`` "cameras"), an entry of ``cameras`` that is
+            not a ``Camera``, not K poses, a pose not of the forms above, not finite, or whose
+            matrix is not a rotation to 1e-6 (``option`` "cams_from_rig").
+    """
+    def __new__(
+        cls, cameras: Sequence[Camera], cams_from_rig: Sequence[_Pose] | _ArrayLike
+    ) -> "Rig": ...
+    @property
+    def cameras(self) -> list[Camera]:
+        """The cameras, in index order (a new list on each access)."""
+    @property
+    def cams_from_rig(self) -> _F64Array:
+        """Each camera's pose in the rig, ``[R_k | t_k]`` with ``x_cam = R_k @ x_rig + t_k``,
+        shape (K, 3, 4).
+        """
+    @property
+    def centres(self) -> _F64Array:
+        """Each camera's centre in the rig frame, ``-R_k^T t_k``, shape (K, 3)."""
+    def __len__(self) -> int: ...
+    def __eq__(self, value: object, /) -> bool: ...
+
+# A rig problem of the rig batches: (points2D, points3D, camera_idxs) or (points2D, points3D,
+# camera_idxs, weights), pixels first as pycolmap's generalized functions take them.
+_RigProblem = Union[
+    tuple[_ArrayLike, _ArrayLike, _ArrayLike],
+    tuple[_ArrayLike, _ArrayLike, _ArrayLike, _ArrayLike | None],
+]
+
+def solve_generalized(
+    points2D: _ArrayLike,
+    points3D: _ArrayLike,
+    camera_idxs: _ArrayLike,
+    cams_from_rig: Sequence[_Pose] | _ArrayLike | None = None,
+    cameras: Sequence[Camera] | None = None,
+    *,
+    rig: Rig | None = None,
+    weights: _ArrayLike | None = None,
+    options: _Options = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+) -> Solution:
+    """The pose of a multi-camera rig from pixels observed by its cameras (the generalized PnP
+    problem): each correspondence ``i`` is the world point ``points3D[i]`` observed at pixel
+    ``points2D[i]`` of camera ``camera_idxs[i]``. Generalized EOPnP, then by default
+    Levenberg-Marquardt on every pixel's reprojection error through its own camera (lens
+    distortion included): the maximum-likelihood pose. When every point is in one camera, that
+    camera's central problem (``solve`` with that camera), composed with its pose in the rig.
+
+    The arguments follow pycolmap's ``estimate_and_refine_generalized_absolute_pose(points2D,
+    points3D, camera_idxs, cams_from_rig, cameras)``: pixels first, unlike ``solve(world,
+    image)``.
+
+    Args:
+        points2D: the observed (distorted) pixels, shape (N, 2), N >= 4.
+        points3D: their world points, shape (N, 3).
+        camera_idxs: the camera of each correspondence, integers of shape (N,), indices into
+            ``cameras``.
+        cams_from_rig: each camera's pose in the rig, ``x_cam = R_k @ x_rig + t_k`` (camera
+            from rig, as pycolmap's ``cams_from_rig``), one per camera, in any form ``Rig``
+            takes.
+        cameras: the rig's cameras (``Camera``), indexed by ``camera_idxs``.
+        rig: a ``Rig`` instead of ``cams_from_rig`` and ``cameras`` (built once, e.g. for many
+            frames of one rig): give either ``cams_from_rig`` and ``cameras``, or ``rig``.
+        weights: optional non-negative weight per correspondence, shape (N,), as ``solve``.
+        options: a ``SolverOptions`` (or a dict of its fields), as ``solve``: ``loss`` scale
+            and ``covariance`` noise in pixels.
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        Solution: the rig's pose in the world, ``x_rig = R @ X + t`` (rig_from_world, as
+        pycolmap's ``rig_from_world``); camera ``k`` is at ``x_cam = R_k @ (R @ X + t) + t_k``.
+        ``cost`` is the pixel cost over every camera; ``reprojection_rmse`` is the RMS pixel
+        error divided by the largest focal length of the rig's cameras (that camera's own
+        normalised RMS when every point is in one camera); ``covariance`` is of the rig's pose.
+
+    Raises:
+        InvalidInputError: as ``solve``, and camera indices not one per point (kind
+            ``"CameraIndicesLength"``) or naming a camera the rig does not have (kind
+            ``"UnknownCamera"``, with the correspondence's ``index`` and its ``camera``).
+        InputTypeError: arrays that are not real numbers, camera indices that are not
+            integers.
+        DegenerateError, NoSolutionError: as ``solve``.
+        InvalidOptionError: an option out of range; a rig given in neither or both forms, or
+            not as ``Rig`` takes it.
+        TypeError: as ``solve``.
+    """
+
+def solve_generalized_ransac(
+    points2D: _ArrayLike,
+    points3D: _ArrayLike,
+    camera_idxs: _ArrayLike,
+    cams_from_rig: Sequence[_Pose] | _ArrayLike | None = None,
+    cameras: Sequence[Camera] | None = None,
+    *,
+    rig: Rig | None = None,
+    weights: _ArrayLike | None = None,
+    ransac: _RansacArg = None,
+    options: _Options = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+) -> tuple[Solution, _RansacInfo]:
+    """Robust pose of a multi-camera rig from correspondences with outliers, by RANSAC:
+    generalized three-point poses (gP3P) of samples spread over the cameras, MSAC scoring of
+    each pixel's reprojection error through its own camera with an SPRT, adaptive iteration
+    count, generalized EOPnP local optimisation and final fit on the inliers; seeded. With
+    every point in one camera, that camera's ``solve_ransac``, composed with its pose in the
+    rig.
+
+    The arguments follow pycolmap's ``estimate_and_refine_generalized_absolute_pose(points2D,
+    points3D, camera_idxs, cams_from_rig, cameras)``: pixels first, unlike ``solve_ransac``.
+
+    Args:
+        points2D, points3D, camera_idxs, cams_from_rig, cameras, rig, weights: as
+            ``solve_generalized``.
+        ransac: a ``RansacOptions``, a dict of its fields, or None (defaults: 4 px threshold,
+            confidence 0.999, at most 10000 samples, seed 0); the threshold is on each pixel's
+            reprojection error through its camera.
+        options: a ``SolverOptions`` (or a dict of its fields), as ``solve_ransac``: the options
+            of the fits; ``loss`` scale and ``covariance`` noise in pixels.
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        (Solution, dict): the rig's pose fitted to the inliers (``x_rig = R @ X + t``,
+        rig_from_world), and ``info`` as ``solve_ransac``'s: ``inliers`` (bool array, shape
+        (N,)), ``num_inliers``, ``inlier_ratio``, ``iterations``, ``hypotheses``,
+        ``local_fits``, ``final_fits``, ``cost``, ``rmse``, ``rmse_px`` (RMS pixel
+        reprojection error over the inliers, each through its camera) and ``micros``.
+
+    Raises:
+        As ``solve_generalized``; InvalidOptionError also for a RANSAC option out of range;
+        NoConsensusError: no pose with enough inliers.
+    """
+
+def refine_generalized(
+    rig_from_world: _Pose,
+    points2D: _ArrayLike,
+    points3D: _ArrayLike,
+    camera_idxs: _ArrayLike,
+    cams_from_rig: Sequence[_Pose] | _ArrayLike | None = None,
+    cameras: Sequence[Camera] | None = None,
+    *,
+    rig: Rig | None = None,
+    weights: _ArrayLike | None = None,
+    options: _Options = None,
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+) -> Solution:
+    """Refines a prior pose of a multi-camera rig (tracking: the previous frame's pose) to the
+    maximum-likelihood pose of the basin it starts in: Levenberg-Marquardt on every pixel's
+    reprojection error through its own camera, from ``rig_from_world``, without the global
+    search (``refine`` for rigs; pycolmap's ``refine_generalized_absolute_pose``). From a start
+    in the basin of ``solve_generalized``'s pose, the same pose.
+
+    The arguments follow pycolmap's ``refine_generalized_absolute_pose(rig_from_world,
+    points2D, points3D, inlier_mask, camera_idxs, cams_from_rig, cameras)``, without
+    ``inlier_mask``: pass ``weights=inlier_mask.astype(float)`` (a point of weight 0 is
+    ignored exactly).
+
+    Args:
+        rig_from_world: the starting pose of the rig, ``x_rig = R @ X + t``: a ``Solution``
+            (e.g. the previous frame's), a ``(rotation, t)`` pair, a (3, 4) ``[R | t]`` or a
+            (4, 4) matrix, as ``refine``'s ``initial``.
+        points2D, points3D, camera_idxs, cams_from_rig, cameras, rig, weights: as
+            ``solve_generalized``.
+        options: a ``SolverOptions`` (or a dict of its fields), as ``refine``.
+        **keywords: ``loss``, ``covariance``, ``newton_iterations``, ``newton_step_tolerance``
+            and ``reprojection_iterations`` as keyword arguments instead, as ``refine``.
+
+    Returns:
+        Solution: the refined pose of the rig (``x_rig = R @ X + t``); ``converged`` says
+        whether the refinement reached a minimum, ``source`` is "initial".
+
+    Raises:
+        As ``solve_generalized``; InvalidOptionError (``option`` "rig_from_world") for a
+        starting pose that is not finite or not of the forms above.
+    """
+
+def solve_generalized_batch(
+    problems: Sequence[_RigProblem],
+    *,
+    rig: Rig | Sequence[Rig],
+    options: _Options = None,
+    threads: int | None = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+) -> list[Solution | PnpError]:
+    """Solves many independent rig problems in parallel (``solve_generalized`` on each), the GIL
+    released while they are solved.
+
+    Each array is copied once, with the GIL held, and the solves read the copy (as
+    ``solve_generalized`` does): what other threads write to the arrays after the call copied
+    them does not change its results.
+
+    Args:
+        problems: a sequence of ``(points2D, points3D, camera_idxs)`` or ``(points2D, points3D,
+            camera_idxs, weights)`` tuples, as ``solve_generalized``'s arguments (pixels first;
+            weights may be None).
+        rig: a ``Rig`` for every problem, or a sequence of one ``Rig`` per problem.
+        options: a ``SolverOptions`` (or a dict of its fields), as ``solve_generalized``, for
+            every problem.
+        threads: as ``solve_batch``.
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        list: one entry per problem, in order: its ``Solution`` (the rig's pose), or the
+        exception instance that ``solve_generalized`` would raise for it. Each entry equals
+        ``solve_generalized``'s, whatever the thread count.
+
+    Raises:
+        InvalidInputError: a malformed batch (not a sequence of 3- or 4-tuples, an array of the
+            wrong shape; the message names the problem's index), before anything is solved.
+        InputTypeError: an array that is not real numbers, camera indices that are not
+            integers.
+        InvalidOptionError: an option out of range, a bad ``rig`` or ``threads``.
+        TypeError: as ``solve``.
+    """
+
+def solve_generalized_ransac_batch(
+    problems: Sequence[_RigProblem],
+    *,
+    rig: Rig | Sequence[Rig],
+    ransac: _RansacArg = None,
+    options: _Options = None,
+    threads: int | None = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+) -> list[tuple[Solution, _RansacInfo] | PnpError]:
+    """Robust estimation of many independent rig problems in parallel
+    (``solve_generalized_ransac`` on each), the GIL released for the whole batch. Problem
+    ``i`` uses the seed ``problem_seed(ransac.seed, i)``, so results do not depend on the
+    thread count.
+
+    Args:
+        problems: as ``solve_generalized_batch``.
+        rig: a ``Rig`` for every problem, or a sequence of one ``Rig`` per problem.
+        ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
+        options: a ``SolverOptions`` (or a dict of its fields), as
+            ``solve_generalized_ransac``, for every problem.
+        threads: as ``solve_batch``.
+        **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+            ``solve``.
+
+    Returns:
+        list: one entry per problem, in order: ``(Solution, info)`` as
+        ``solve_generalized_ransac`` returns with ``RansacOptions(seed=problem_seed(seed,
+        i))``, or the exception instance it would raise (e.g. ``NoConsensusError``).
+
+    Raises:
+        As ``solve_generalized_batch``.
+    """
+
 __all__ = [
     "BatchResult",
     "Camera",
@@ -1015,6 +1338,7 @@ __all__ = [
     "PnpError",
     "RansacOptions",
     "Registration",
+    "Rig",
     "Solution",
     "SolverOptions",
     "UnknownIdError",
@@ -1022,12 +1346,17 @@ __all__ = [
     "problem_seed",
     "read_colmap_model",
     "refine",
+    "refine_generalized",
     "register_image",
     "register_images",
     "solve",
     "solve_all",
     "solve_batch",
     "solve_batch_arrays",
+    "solve_generalized",
+    "solve_generalized_batch",
+    "solve_generalized_ransac",
+    "solve_generalized_ransac_batch",
     "solve_ransac",
     "solve_ransac_batch",
 ]

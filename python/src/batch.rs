@@ -38,7 +38,7 @@ use eopnp::camera::Camera;
 use eopnp::ransac::problem_seed as seed_of;
 use eopnp::ransac::{Ransac, RansacSolution};
 use eopnp::Problem;
-use eopnp::{PnpError, Solution, Solver};
+use eopnp::{PnpError, Rig, Solution, Solver};
 use nalgebra::{Point2, Point3};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -51,6 +51,7 @@ use crate::convert::{contiguous_array, points2, points3, readonly, shape_str, ve
 use crate::errors::{error, option_error, pnp_error, shape_error, InvalidInputError};
 use crate::options::{options_arg, solver_arg, KEYWORDS};
 use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
+use crate::rig::{rig_error, PyRig, RigObs};
 use crate::solution::PySolution;
 use crate::solve::check_finite;
 
@@ -1189,4 +1190,306 @@ fn estimate(
 #[pyfunction]
 pub(crate) fn problem_seed(base: u64, index: usize) -> u64 {
     seed_of(base, index)
+}
+
+/// `rig=` of the rig batches: one `Rig` for every problem, or a sequence of one per problem;
+/// the batch's rigs and each problem's index into them.
+fn rigs<'py>(
+    py: Python<'py>,
+    rig: &Bound<'py, PyAny>,
+    n: usize,
+) -> PyResult<(Vec<Bound<'py, PyRig>>, Vec<usize>)> {
+    if let Ok(one) = rig.cast::<PyRig>() {
+        return Ok((vec![one.clone()], vec![0; n]));
+    }
+    let bad = || {
+        option_error(
+            py,
+            "rig",
+            format!(
+                "rig must be a Rig or a sequence of {n} Rigs (one per problem), got {}",
+                rig.get_type()
+                    .name()
+                    .map_or_else(|_| "?".into(), |s| s.to_string())
+            ),
+        )
+    };
+    let list: Vec<Bound<'py, PyAny>> = rig
+        .try_iter()
+        .map_err(|_| bad())?
+        .collect::<PyResult<_>>()?;
+    if list.len() != n {
+        return Err(option_error(
+            py,
+            "rig",
+            format!(
+                "rig: {} rigs for {n} problems (give one Rig or one per problem)",
+                list.len()
+            ),
+        ));
+    }
+    let rigs = list
+        .into_iter()
+        .map(|x| x.cast_into::<PyRig>().map_err(|_| bad()))
+        .collect::<PyResult<Vec<_>>>()?;
+    Ok((rigs, (0..n).collect()))
+}
+
+/// A problem of a rig batch: `(points2D, points3D, camera_idxs)` or `(points2D, points3D,
+/// camera_idxs, weights)`, a tuple or list; `None` for anything else.
+fn rig_parts<'py>(item: &Bound<'py, PyAny>) -> Option<[Option<Bound<'py, PyAny>>; 4]> {
+    let list: Vec<Bound<'py, PyAny>> = if let Ok(t) = item.cast::<PyTuple>() {
+        t.iter().collect()
+    } else if let Ok(l) = item.cast::<PyList>() {
+        l.iter().collect()
+    } else {
+        return None;
+    };
+    if !(list.len() == 3 || list.len() == 4) {
+        return None;
+    }
+    let mut it = list.into_iter();
+    Some([it.next(), it.next(), it.next(), it.next()])
+}
+
+/// A rig batch, checked: its problems as a list batch (each entry's `camera` is the index of
+/// its rig), each problem's camera indices (copied here, with the GIL held, as the one-problem
+/// functions copy them), and the rigs.
+struct RigBatch<'py> {
+    list: ListBatch<'py>,
+    indices: Vec<Vec<i64>>,
+    rigs: Vec<Bound<'py, PyRig>>,
+}
+
+impl<'py> RigBatch<'py> {
+    /// Checks every problem of `problems` and `rig=`, raising on the first malformed one with
+    /// its index in the message.
+    fn new(
+        py: Python<'py>,
+        problems: &Bound<'py, PyAny>,
+        rig: &Bound<'py, PyAny>,
+    ) -> PyResult<Self> {
+        let expected = "(points2D, points3D, camera_idxs) or (points2D, points3D, camera_idxs, \
+                        weights) tuple";
+        let items: Vec<Bound<'py, PyAny>> = problems
+            .try_iter()
+            .map_err(|_| {
+                problems_error(py, format!("problems: expected a sequence of {expected}s"))
+            })?
+            .collect::<PyResult<_>>()?;
+        let (rigs, which) = rigs(py, rig, items.len())?;
+        let mut entries = Vec::with_capacity(items.len());
+        let mut indices = Vec::with_capacity(items.len());
+        for (i, (item, r)) in items.iter().zip(which).enumerate() {
+            let Some([Some(p2), Some(p3), Some(idx), w]) = rig_parts(item) else {
+                return Err(problems_error(
+                    py,
+                    format!(
+                        "problems[{i}]: expected a {expected}, got {}",
+                        item.get_type().name()?
+                    ),
+                ));
+            };
+            let image = source(&p2, 2, Some(2), || {
+                points2(&p2, &format!("problems[{i}] points2D"))
+            })?;
+            let world = source(&p3, 2, Some(3), || {
+                points3(&p3, &format!("problems[{i}] points3D"))
+            })?;
+            indices.push(crate::convert::indices(
+                &idx,
+                &format!("problems[{i}] camera_idxs"),
+            )?);
+            let weights = match w.as_ref().filter(|w| !w.is_none()) {
+                Some(w) => Some(source(w, 1, None, || {
+                    vector(w, &format!("problems[{i}] weights"), false)
+                })?),
+                None => None,
+            };
+            entries.push(Entry {
+                world,
+                image,
+                weights,
+                camera: Some(r),
+            });
+        }
+        Ok(RigBatch {
+            list: ListBatch {
+                entries,
+                cameras: Vec::new(),
+            },
+            indices,
+            rigs,
+        })
+    }
+}
+
+impl Chunk<'_> {
+    /// The chunk's problems of a rig batch, as their tasks read them.
+    fn rig_problems<'a>(
+        &'a self,
+        indices: &'a [Vec<i64>],
+        rigs: &'a [&'a Rig],
+    ) -> impl Iterator<Item = RigObs<'a>> + 'a {
+        self.items.iter().enumerate().map(move |(j, it)| RigObs {
+            world: &self.world[it.world.clone()],
+            image: &self.image[it.image.clone()],
+            cameras: &indices[self.start + j],
+            weights: it.weights.clone().map(|w| &self.weights[w]),
+            rig: rigs[it.camera.expect("a rig batch's problems have a rig")],
+        })
+    }
+}
+
+/// A rig batch's serial setup and pipelined solves: `work(problem index, problem)` gives each
+/// problem's result, on the pool's threads with the GIL released.
+fn run_rig_batch<'py, T: Send>(
+    py: Python<'py>,
+    batch: &RigBatch<'py>,
+    threads: Option<i64>,
+    work: impl Fn(usize, &RigObs<'_>) -> T + Sync,
+) -> PyResult<Vec<T>> {
+    let pool = pool(py, threads)?;
+    let n = batch.list.entries.len();
+    let len = chunk_len(n, threads_of(pool.as_deref()));
+    let rigs: Vec<&Rig> = batch.rigs.iter().map(|r| &r.get().inner).collect();
+    let indices = &batch.indices;
+    let sizes = batch.list.totals(0..n);
+    let mut buffers = Buffers::take(py, sizes);
+    let mut rest = buffers.rest(sizes);
+    let mut results: Vec<Option<T>> = (0..n).map(|_| None).collect();
+    let done = pipelined(
+        py,
+        pool.as_deref(),
+        results.chunks_mut(len).collect(),
+        |k| batch.list.copy(k * len..((k + 1) * len).min(n), &mut rest),
+        |chunk: Chunk<'_>, out: &mut [Option<T>]| {
+            for (j, (slot, p)) in out
+                .iter_mut()
+                .zip(chunk.rig_problems(indices, &rigs))
+                .enumerate()
+            {
+                *slot = Some(work(chunk.start + j, &p));
+            }
+        },
+    );
+    buffers.give_back();
+    done?;
+    Ok(results
+        .into_iter()
+        .map(|r| r.expect("every chunk solved"))
+        .collect())
+}
+
+/// Solves many independent rig problems in parallel (``solve_generalized`` on each), the GIL
+/// released while they are solved.
+///
+/// Each array is copied once, with the GIL held, and the solves read the copy (as
+/// ``solve_generalized`` does): what other threads write to the arrays after the call copied
+/// them does not change its results.
+///
+/// Args:
+///     problems: a sequence of ``(points2D, points3D, camera_idxs)`` or ``(points2D, points3D,
+///         camera_idxs, weights)`` tuples, as ``solve_generalized``'s arguments (pixels first;
+///         weights may be None).
+///     rig: a ``Rig`` for every problem, or a sequence of one ``Rig`` per problem.
+///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve_generalized``, for
+///         every problem.
+///     threads: as ``solve_batch``.
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
+///
+/// Returns:
+///     list: one entry per problem, in order: its ``Solution`` (the rig's pose), or the
+///     exception instance that ``solve_generalized`` would raise for it. Each entry equals
+///     ``solve_generalized``'s, whatever the thread count.
+///
+/// Raises:
+///     InvalidInputError: a malformed batch (not a sequence of 3- or 4-tuples, an array of the
+///         wrong shape; the message names the problem's index), before anything is solved.
+///     InputTypeError: an array that is not real numbers, camera indices that are not
+///         integers.
+///     InvalidOptionError: an option out of range, a bad ``rig`` or ``threads``.
+///     TypeError: as ``solve``.
+#[pyfunction]
+#[pyo3(signature = (problems, *, rig, options = None, threads = None, **keywords))]
+pub(crate) fn solve_generalized_batch<'py>(
+    py: Python<'py>,
+    problems: &Bound<'py, PyAny>,
+    rig: &Bound<'py, PyAny>,
+    options: Option<&Bound<'py, PyAny>>,
+    threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let solver = solver_arg(py, "solve_generalized_batch", options, keywords, KEYWORDS)?;
+    let batch = RigBatch::new(py, problems, rig)?;
+    let results = run_rig_batch(py, &batch, threads, |_, p| {
+        p.solve(&solver).map(|s| PySolution::from(&s))
+    })?;
+    let out = PyList::empty(py);
+    for r in results {
+        match r {
+            Ok(s) => out.append(untracked(Bound::new(py, s)?))?,
+            Err(e) => out.append(rig_error(py, &e).into_value(py))?,
+        }
+    }
+    Ok(out)
+}
+
+/// Robust estimation of many independent rig problems in parallel
+/// (``solve_generalized_ransac`` on each), the GIL released for the whole batch. Problem
+/// ``i`` uses the seed ``problem_seed(ransac.seed, i)``, so results do not depend on the
+/// thread count.
+///
+/// Args:
+///     problems: as ``solve_generalized_batch``.
+///     rig: a ``Rig`` for every problem, or a sequence of one ``Rig`` per problem.
+///     ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
+///     options: a ``SolverOptions`` (or a dict of its fields), as
+///         ``solve_generalized_ransac``, for every problem.
+///     threads: as ``solve_batch``.
+///     **keywords: the options of ``SolverOptions`` as keyword arguments instead, as
+///         ``solve``.
+///
+/// Returns:
+///     list: one entry per problem, in order: ``(Solution, info)`` as
+///     ``solve_generalized_ransac`` returns with ``RansacOptions(seed=problem_seed(seed,
+///     i))``, or the exception instance it would raise (e.g. ``NoConsensusError``).
+///
+/// Raises:
+///     As ``solve_generalized_batch``.
+#[pyfunction]
+#[pyo3(signature = (problems, *, rig, ransac = None, options = None, threads = None,
+    **keywords))]
+pub(crate) fn solve_generalized_ransac_batch<'py>(
+    py: Python<'py>,
+    problems: &Bound<'py, PyAny>,
+    rig: &Bound<'py, PyAny>,
+    ransac: Option<&Bound<'py, PyAny>>,
+    options: Option<&Bound<'py, PyAny>>,
+    threads: Option<i64>,
+    keywords: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let solver = solver_arg(
+        py,
+        "solve_generalized_ransac_batch",
+        options,
+        keywords,
+        KEYWORDS,
+    )?;
+    let ransac = ransac_arg(py, ransac)?;
+    let batch = RigBatch::new(py, problems, rig)?;
+    let results = run_rig_batch(py, &batch, threads, |i, p| {
+        let r = ransac.seed(seed_of(ransac.seed, i));
+        p.estimate(&r, &solver)
+            .map(|(r, px)| (PySolution::from(&r.solution), r, px))
+    })?;
+    let out = PyList::empty(py);
+    for r in results {
+        match r {
+            Ok((sol, r, px)) => out.append((sol, ransac_info(py, &r, px)?))?,
+            Err(e) => out.append(rig_error(py, &e).into_value(py))?,
+        }
+    }
+    Ok(out)
 }

@@ -236,3 +236,75 @@ pub(crate) fn array2<'py>(
 pub(crate) fn array1<'py>(py: Python<'py>, data: &[f64]) -> Bound<'py, PyArray1<f64>> {
     PyArray1::from_slice(py, data)
 }
+
+/// A one-dimensional array of integers (any integer dtype; an empty sequence of any dtype), as
+/// `i64` (an unsigned value beyond `i64::MAX` saturates): a rig problem's camera indices,
+/// checked against the rig later (`rig::check`). Floats, booleans and other dtypes raise
+/// `InputTypeError`, other shapes `InvalidInputError`.
+pub(crate) fn indices(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
+    if let Ok(a) = obj.cast::<PyArrayDyn<i64>>() {
+        if a.shape().len() == 1 {
+            let ro = a.try_readonly().map_err(|e| {
+                error::<InvalidInputError>(obj.py(), "Borrow", format!("{name}: {e}"), vec![])
+            })?;
+            return Ok(ro.as_array().iter().copied().collect());
+        }
+    }
+    let py = obj.py();
+    let np = NUMPY
+        .get_or_try_init(py, || PyModule::import(py, "numpy").map(Bound::unbind))?
+        .bind(py);
+    let arr = np.call_method1("asarray", (obj,)).map_err(|e| {
+        shape_error(
+            py,
+            name,
+            format!("{name}: cannot be read as an array of integers: {e}"),
+        )
+    })?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    if shape.len() != 1 {
+        return Err(shape_error(
+            py,
+            name,
+            format!(
+                "{name}: expected an array of shape (N,), got shape {}",
+                shape_str(&shape)
+            ),
+        ));
+    }
+    if shape[0] == 0 {
+        return Ok(Vec::new());
+    }
+    let dtype = arr.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    let (target, unsigned) = match kind.as_str() {
+        "i" => ("int64", false),
+        "u" => ("uint64", true),
+        _ => {
+            return Err(dtype_error(
+                py,
+                name,
+                format!(
+                    "{name}: expected integers (camera indices), got dtype {}",
+                    dtype.str()?
+                ),
+            ))
+        }
+    };
+    let arr = arr.call_method1("astype", (np.getattr(target)?,))?;
+    let borrow = |e: numpy::BorrowError| {
+        error::<InvalidInputError>(py, "Borrow", format!("{name}: {e}"), vec![])
+    };
+    Ok(if unsigned {
+        let a = arr.cast_into::<PyArrayDyn<u64>>()?;
+        let ro = a.try_readonly().map_err(borrow)?;
+        ro.as_array()
+            .iter()
+            .map(|&v| i64::try_from(v).unwrap_or(i64::MAX))
+            .collect()
+    } else {
+        let a = arr.cast_into::<PyArrayDyn<i64>>()?;
+        let ro = a.try_readonly().map_err(borrow)?;
+        ro.as_array().iter().copied().collect()
+    })
+}

@@ -6,7 +6,8 @@
 //! ```text
 //! PnpError(Exception)                          base of every error of this package
 //! ├── InvalidInputError(PnpError, ValueError)  TooFewPoints, LengthMismatch, WeightsLength,
-//! │   │                                        NonFinite, InvalidWeight; wrong array shapes
+//! │   │                                        NonFinite, InvalidWeight, CameraIndicesLength,
+//! │   │                                        UnknownCamera; wrong array shapes
 //! │   └── InputTypeError(InvalidInputError, TypeError)   arrays that are not real numbers
 //! ├── DegenerateError(PnpError, ValueError)    Degenerate
 //! ├── NoSolutionError(PnpError, RuntimeError)  NoSolution
@@ -54,7 +55,10 @@ create_exception!(
     "Bad input (also a ``ValueError``): too few points (``got``, ``need``), mismatched lengths\n\
      (``world``, ``image``; ``weights``, ``points``), a NaN or infinite value (``index``,\n\
      ``input``: ``\"world\"``, ``\"image\"`` or ``\"weights\"``), a negative weight (``index``),\n\
-     or an array of the wrong shape (kind ``\"Shape\"``, ``argument``)."
+     an array of the wrong shape (kind ``\"Shape\"``, ``argument``); for a rig, camera indices\n\
+     not one per point (kind ``\"CameraIndicesLength\"``, ``indices``, ``points``) or naming a\n\
+     camera the rig does not have (kind ``\"UnknownCamera\"``: correspondence ``index`` is in\n\
+     ``camera``)."
 );
 create_exception!(
     eopnp,
@@ -181,6 +185,8 @@ pub(crate) fn add_to_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// A value of an exception's field.
 pub(crate) enum Field {
     Int(u64),
+    /// A signed value (a camera index as given, which may be negative).
+    Signed(i64),
     Str(String),
     None,
 }
@@ -194,6 +200,12 @@ impl From<usize> for Field {
 impl From<u32> for Field {
     fn from(v: u32) -> Self {
         Field::Int(u64::from(v))
+    }
+}
+
+impl From<i64> for Field {
+    fn from(v: i64) -> Self {
+        Field::Signed(v)
     }
 }
 
@@ -223,6 +235,7 @@ fn instance(
         for (key, value) in fields {
             let value = match value {
                 Field::Int(v) => v.into_pyobject(py)?.into_any(),
+                Field::Signed(v) => v.into_pyobject(py)?.into_any(),
                 Field::Str(v) => v.into_pyobject(py)?.into_any(),
                 Field::None => py.None().into_bound(py),
             };
@@ -313,6 +326,14 @@ pub(crate) fn pnp_error(py: Python<'_>, e: &RustPnpError) -> PyErr {
             "InvalidWeight",
             vec![("index", index.into())],
         ),
+        RustPnpError::CameraIndicesLength { indices, points } => (
+            InvalidInputError::type_object(py),
+            "CameraIndicesLength",
+            vec![("indices", indices.into()), ("points", points.into())],
+        ),
+        RustPnpError::UnknownCamera { index, camera } => {
+            return unknown_camera(py, index, i64::from(camera));
+        }
         RustPnpError::Degenerate(kind) => (
             DegenerateError::type_object(py),
             "Degenerate",
@@ -340,6 +361,19 @@ pub(crate) fn pnp_error(py: Python<'_>, e: &RustPnpError) -> PyErr {
         _ => (PnpError::type_object(py), "Other", vec![]),
     };
     instance(&class, kind, msg, fields)
+}
+
+/// `InvalidInputError` (kind `"UnknownCamera"`): correspondence `index` of a rig problem names
+/// camera `camera` (as given: possibly negative), which the rig does not have. The library's
+/// `PnpError::UnknownCamera` and the package's own check of camera indices (which also sees
+/// negative ones) give the same exception, with the library's message.
+pub(crate) fn unknown_camera(py: Python<'_>, index: usize, camera: i64) -> PyErr {
+    error::<InvalidInputError>(
+        py,
+        "UnknownCamera",
+        format!("correspondence {index} is in camera {camera}, which the rig does not have"),
+        vec![("index", index.into()), ("camera", camera.into())],
+    )
 }
 
 /// The exception of a camera error.

@@ -25,6 +25,7 @@ mod errors;
 mod options;
 mod pose;
 mod ransac;
+mod rig;
 mod solution;
 mod solve;
 
@@ -41,12 +42,19 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(batch::solve_ransac_batch, m)?)?;
     m.add_function(wrap_pyfunction!(batch::solve_batch_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(batch::problem_seed, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::solve_generalized, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::solve_generalized_ransac, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::refine_generalized, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::solve_generalized_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::solve_generalized_ransac_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::_rig_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::read_colmap_model, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::register_image, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::register_images, m)?)?;
     m.add_function(wrap_pyfunction!(solution::_solution_from_state, m)?)?;
     m.add_class::<solution::PySolution>()?;
     m.add_class::<camera::PyCamera>()?;
+    m.add_class::<rig::PyRig>()?;
     m.add_class::<ransac::PyRansacOptions>()?;
     m.add_class::<options::PySolverOptions>()?;
     m.add_class::<colmap::PyModel>()?;

@@ -18,8 +18,8 @@ const ROTATION_TOLERANCE: f64 = 1e-6;
 /// A rotation given as a `(3, 3)` matrix, a `(3,)` rotation vector (OpenCV's rvec) or a `(4,)`
 /// quaternion (w, x, y, z; normalised). A non-finite value gives a NaN quaternion (the library
 /// rejects it with its own error); a finite matrix that is not a rotation, or a zero
-/// quaternion, raises `InvalidOptionError` (`option` = `name`).
-fn rotation_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<UnitQuaternion<f64>> {
+/// quaternion, raises `InvalidOptionError` (`option`; the message names the argument `name`).
+fn rotation_arg(obj: &Bound<'_, PyAny>, option: &str, name: &str) -> PyResult<UnitQuaternion<f64>> {
     let py = obj.py();
     let arr = float_array(obj, name)?;
     let shape = arr.shape().to_vec();
@@ -38,7 +38,7 @@ fn rotation_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<UnitQuaternion<f
             if off > ROTATION_TOLERANCE || det <= 0.0 {
                 return Err(option_error(
                     py,
-                    name,
+                    option,
                     format!(
                         "{name}: the 3x3 matrix is not a rotation (max |R^T R - I| = {off:.3e}, \
                          det = {det}; at most {ROTATION_TOLERANCE:e} and > 0 accepted)"
@@ -56,7 +56,7 @@ fn rotation_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<UnitQuaternion<f
             if q.norm() == 0.0 {
                 return Err(option_error(
                     py,
-                    name,
+                    option,
                     format!("{name}: the quaternion (w, x, y, z) is zero"),
                 ));
             }
@@ -64,7 +64,7 @@ fn rotation_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<UnitQuaternion<f
         }
         _ => Err(option_error(
             py,
-            name,
+            option,
             format!(
                 "{name}: the rotation must be a (3, 3) matrix, a (3,) rotation vector or a (4,) \
                  quaternion (w, x, y, z), got shape {}",
@@ -78,6 +78,17 @@ fn rotation_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<UnitQuaternion<f
 /// (the rotation as `rotation_arg` reads it, `t` of shape (3,)), or a `(3, 4)` `[R | t]` or
 /// `(4, 4)` homogeneous matrix. Non-finite values reach the library, which rejects them.
 pub(crate) fn pose_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Isometry3<f64>> {
+    pose_arg_as(obj, name, name)
+}
+
+/// `pose_arg` for an entry of a sequence of poses: errors are `InvalidOptionError` with
+/// `option` (the argument, e.g. "cams_from_rig"), their messages name the entry, `name` (e.g.
+/// "cams_from_rig[1]").
+pub(crate) fn pose_arg_as(
+    obj: &Bound<'_, PyAny>,
+    option: &str,
+    name: &str,
+) -> PyResult<Isometry3<f64>> {
     let py = obj.py();
     if let Ok(s) = obj.cast::<PySolution>() {
         // The library's own quaternion: the solution's pose exactly.
@@ -97,12 +108,12 @@ pub(crate) fn pose_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Isometry3
         vec![]
     };
     if let [rot, t] = parts.as_slice() {
-        let q = rotation_arg(rot, name)?;
+        let q = rotation_arg(rot, option, name)?;
         let t = vector(t, name, false)?;
         let [tx, ty, tz] = t.as_slice() else {
             return Err(option_error(
                 py,
-                name,
+                option,
                 format!("{name}: t must have shape (3,), got {} values", t.len()),
             ));
         };
@@ -111,7 +122,7 @@ pub(crate) fn pose_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Isometry3
     let bad = |what: String| {
         option_error(
             py,
-            name,
+            option,
             format!(
                 "{name}: expected a Solution, a (rotation, t) pair, or a (3, 4) [R | t] or \
                  (4, 4) matrix, {what}"
@@ -139,7 +150,7 @@ pub(crate) fn pose_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Isometry3
     }
     let r: Vec<f64> = m[..3].iter().flat_map(|row| row[..3].to_vec()).collect();
     let rot = array2(py, 3, 3, &r);
-    let q = rotation_arg(rot.as_any(), name)?;
+    let q = rotation_arg(rot.as_any(), option, name)?;
     Ok(Isometry3::from_parts(
         Translation3::new(m[0][3], m[1][3], m[2][3]),
         q,

@@ -7,7 +7,9 @@ use pyo3::types::{PyDict, PyTuple};
 
 use crate::convert::{array1, array2};
 
-/// A camera pose and how it was found (``x_cam = R @ X + t``, world to camera).
+/// A camera pose and how it was found (``x_cam = R @ X + t``, world to camera); from the
+/// generalized functions (``solve_generalized``, ...), the rig's pose (``x_rig = R @ X + t``,
+/// rig_from_world).
 ///
 /// Attributes:
 ///     R: rotation matrix, shape (3, 3).
@@ -26,7 +28,8 @@ use crate::convert::{array1, array2};
 ///     degenerate: the configuration is close to degenerate; the pose may be ambiguous.
 ///     planar: the planar branch produced the starting candidate.
 ///     source: the candidate generator of the winning start ("case1", ..., "planar1",
-///         "planar2", "extra_start"; "initial" for ``refine``).
+///         "planar2", "extra_start", "p3p"; for a rig "generalized" or "gp3p"; "initial" for
+///         ``refine`` and ``refine_generalized``).
 ///     newton_iterations: damped-Newton iterations of the winning candidate (0 when skipped:
 ///         an exact fit, whose start is already the minimum of the algebraic cost).
 ///     reprojection_iterations: Levenberg-Marquardt iterations of the refinement.
@@ -71,7 +74,8 @@ pub(crate) struct PySolution {
     #[pyo3(get)]
     planar: bool,
     /// The candidate generator of the winning start ("case1", ..., "planar1", "planar2",
-    /// "extra_start"; "initial" for ``refine``).
+    /// "extra_start", "p3p"; for a rig "generalized" or "gp3p"; "initial" for ``refine`` and
+    /// ``refine_generalized``).
     #[pyo3(get)]
     source: &'static str,
     /// Damped-Newton iterations of the winning candidate (0 when skipped: an exact fit, whose
@@ -96,7 +100,7 @@ pub(crate) struct PySolution {
     cov: Option<Box<([f64; 36], f64)>>,
 }
 
-const SOURCES: [&str; 9] = [
+const SOURCES: [&str; 12] = [
     "case1",
     "case2",
     "case3",
@@ -105,6 +109,9 @@ const SOURCES: [&str; 9] = [
     "planar2",
     "extra_start",
     "initial",
+    "p3p",
+    "generalized",
+    "gp3p",
     "other",
 ];
 
@@ -118,7 +125,10 @@ fn source_name(s: CandidateSource) -> &'static str {
         CandidateSource::Planar2 => SOURCES[5],
         CandidateSource::ExtraStart => SOURCES[6],
         CandidateSource::Initial => SOURCES[7],
-        _ => SOURCES[8],
+        CandidateSource::P3p => SOURCES[8],
+        CandidateSource::Generalized => SOURCES[9],
+        CandidateSource::Gp3p => SOURCES[10],
+        _ => SOURCES[11],
     }
 }
 
@@ -374,7 +384,7 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
         .iter()
         .find(|s| **s == source)
         .copied()
-        .unwrap_or(SOURCES[8]);
+        .unwrap_or(SOURCES[11]);
     Ok(PySolution {
         r: r.try_into().expect("checked"),
         t: t.try_into().expect("checked"),
