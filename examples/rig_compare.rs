@@ -4,8 +4,8 @@
 //! (PoseLib and pycolmap on the same problems).
 //!
 //! ```sh
-//! cargo run --release --example rig_compare -- [--problems 60] [--n 200] [--levels 0,0.5,0.8]
-//!     [--seed 42] [--threshold 4] [--passes 5] [--sigma 1] [--export FILE]
+//! cargo run --release --example rig_compare -- [--problems 200] [--n 200] [--levels 0,0.5,0.8]
+//!     [--seed 42] [--threshold 4] [--passes 3] [--sigma 1] [--export FILE]
 //!     [--solve-problems 200] [--solve-passes 15] [--only ransac|solve]
 //! ```
 //!
@@ -287,12 +287,12 @@ fn fail(message: &str) -> ! {
 
 fn parse_args() -> Args {
     let mut a = Args {
-        problems: 60,
+        problems: 200,
         n: 200,
         levels: vec![0.0, 0.5, 0.8],
         seed: 42,
         threshold: 4.0,
-        passes: 5,
+        passes: 3,
         sigma: 1.0,
         export: None,
         solve_problems: 200,
@@ -583,6 +583,17 @@ fn solve_rows(a: &Args) {
             same
         );
     }
+    let worst = rows
+        .iter()
+        .zip(&us)
+        .filter(|(row, _)| row.label.starts_with("rig"))
+        .map(|(_, u)| u / us[0])
+        .fold(0.0, f64::max);
+    println!(
+        "\nTarget (issue 42): the rig solve within 2x the central default solve (of normalised \
+         points) at N = 100: {} (the slowest rig row {worst:.1}x)",
+        if worst <= 2.0 { "met" } else { "missed" }
+    );
 }
 
 fn main() {

@@ -5,8 +5,8 @@ problems, in one run.
     pip install numpy poselib pycolmap
     cargo build --release --example rig_compare
     python3 scripts/compare_rig_peers.py [--binary target/release/examples/rig_compare]
-        [--problems 60] [--n 200] [--levels 0 0.5 0.8] [--seed 42] [--threshold 4]
-        [--passes 5] [--peer-options default|eopnp] [--problems-file FILE]
+        [--problems 200] [--n 200] [--levels 0 0.5 0.8] [--seed 42] [--threshold 4]
+        [--passes 3] [--peer-options default|eopnp] [--problems-file FILE]
 
 1. Convention check: 10 noise-free rig problems (`rig_compare --sigma 0`), solved by the three
    libraries; every rotation must be within 1e-6 degrees of the truth, or the script stops
@@ -190,12 +190,12 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--binary", default=os.path.join(root, "target", "release", "examples",
                                                      "rig_compare"))
-    ap.add_argument("--problems", type=int, default=60, help="problems per outlier level")
+    ap.add_argument("--problems", type=int, default=200, help="problems per outlier level")
     ap.add_argument("--n", type=int, default=200, help="correspondences per problem")
     ap.add_argument("--levels", type=float, nargs="+", default=[0.0, 0.5, 0.8])
     ap.add_argument("--seed", type=int, default=42)
     ap.add_argument("--threshold", type=float, default=4.0)
-    ap.add_argument("--passes", type=int, default=5)
+    ap.add_argument("--passes", type=int, default=3)
     ap.add_argument("--peer-options", choices=["default", "eopnp"], default="default")
     ap.add_argument("--problems-file", help="keep the exported problems and eopnp's results here")
     a = ap.parse_args()
