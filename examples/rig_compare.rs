@@ -1,4 +1,4 @@
-//! Multi-camera rigs (issue 42): eopnp's RANSAC on rigs at several outlier levels, and the
+//! Multi-camera rigs: eopnp's RANSAC on rigs at several outlier levels, and the
 //! generalized solve at N = 100 against the central solve, on seeded synthetic problems; with
 //! `--export FILE`, the problems and eopnp's results as JSON for `scripts/compare_rig_peers.py`
 //! (PoseLib and pycolmap on the same problems).
@@ -30,7 +30,7 @@
 //! problem without its outliers (not timed). Time per problem: the median over `--passes`
 //! passes of (one pass over the level's problems) / (number of problems), one thread.
 //!
-//! Solve at N = 100 (target 2 of issue 42): `Solver::default().solve` of `--solve-problems`
+//! Solve at N = 100 (the target: within 2x the central solve): `Solver::default().solve` of `--solve-problems`
 //! problems per row at sigma 1 px, no outliers: the central solve of normalised points (the
 //! problems of `cargo bench --bench solve`, `solve/general/default/100`), the central solve of
 //! pixels through one camera of this generator, and rigs of 2, 4 and 6 cameras, all-pinhole
@@ -590,7 +590,7 @@ fn solve_rows(a: &Args) {
         .map(|(_, u)| u / us[0])
         .fold(0.0, f64::max);
     println!(
-        "\nTarget (issue 42): the rig solve within 2x the central default solve (of normalised \
+        "\nTarget: the rig solve within 2x the central default solve (of normalised \
          points) at N = 100: {} (the slowest rig row {worst:.1}x)",
         if worst <= 2.0 { "met" } else { "missed" }
     );
