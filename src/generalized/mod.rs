@@ -48,8 +48,14 @@ const SAME_MINIMUM: f64 = 1e-6;
 const IN_BASIN: f64 = 0.05;
 /// Triples of rays whose gP3P poses start the search.
 const GP3P_TRIPLES: usize = 4;
-/// The refined minima (lowest object-space cost first) refined in pixels in the default mode.
+/// At most this many minima (the order of [`search`]) are refined in pixels in the default mode:
+/// the first, and the next ones that rival it ([`PIXEL_RIVAL`]).
 const PIXEL_STARTS: usize = 3;
+/// A minimum rivals the first if it has as many points in front (more than half) and an
+/// object-space cost at most this many times the first's: at small N and high noise the pixel
+/// error's global minimum can be in its basin. Others (points behind cameras, costs orders of
+/// magnitude above) are not refined: their Levenberg-Marquardt runs are long and never win.
+const PIXEL_RIVAL: f64 = 10.0;
 
 /// A local minimum of the object-space cost (working frame).
 #[derive(Clone, Copy, Debug)]
@@ -80,7 +86,16 @@ pub(crate) fn solve(
     } else if opts.refinement == Refinement::Algebraic {
         1
     } else {
-        PIXEL_STARTS.min(minima.len())
+        let first = &minima[0];
+        let n = rays.rays.len();
+        let rival = |m: &Minimum| {
+            (2 * m.in_front > n) == (2 * first.in_front > n) && m.f <= PIXEL_RIVAL * first.f
+        };
+        1 + minima[1..]
+            .iter()
+            .take(PIXEL_STARTS - 1)
+            .take_while(|m| rival(m))
+            .count()
     };
     for m in minima.iter().take(count) {
         let (r, t) = to_original(&rays, &cost, &m.r);
