@@ -10,7 +10,7 @@
 //! pairs (`a_ij = v_i . v_j`, `b_ij = v_i . (c_i - c_j)`, `c_ij = v_j . (c_j - c_i)`,
 //! `d_ij = |c_i - c_j|^2 - |X_i - X_j|^2`). The generated kernel `gp3p_elimination`
 //! (`codegen/src/defs/gp3p.rs`) eliminates `l3` and then `l2` by resultants: its octic in `l1`
-//! has the first depths as real roots, and `l2 = -r0(l1) / r1(l1)`,
+//! has the first depths as real roots (only the positive ones are sought), and `l2 = -r0(l1) / r1(l1)`,
 //! `l3 = (q2 - q1) / (p1 - p2)` follow linearly (where those denominators vanish, from the
 //! quadrics themselves). Each depth triple is polished by Gauss-Newton on the three quadrics and
 //! kept only if it then solves them (to `1e-9` of their scale: the octic's coefficients are
@@ -29,7 +29,7 @@ use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, Point3, Vector3};
 
 use super::p3p::{triangle_frame, P3pPose};
-use super::roots::real_roots;
+use super::roots::positive_real_roots;
 use crate::kernels::gp3p_elimination;
 
 /// Maximum number of gP3P solutions (the octic's degree).
@@ -102,7 +102,7 @@ pub fn gp3p(
         return out;
     };
     let xw = (x[0] + x[1] + x[2]) / 3.0;
-    for &l1 in real_roots(f).iter() {
+    for &l1 in positive_real_roots(f).iter() {
         let Some(l) = depths(&e, l1, horner(r1, l1), horner(r0, l1)) else {
             continue;
         };

@@ -398,6 +398,16 @@ pub fn real_roots(c: &[f64]) -> Roots {
     }
 }
 
+/// The real roots of [`real_roots`] that are positive, found on `(0, bound)` only (about half
+/// the work when only positive roots matter, as for depths): the same normalisation and method.
+#[must_use]
+pub fn positive_real_roots(c: &[f64]) -> Roots {
+    match prepare(c) {
+        Some((p, _)) => isolate::solve_positive(&p),
+        None => Roots::default(),
+    }
+}
+
 /// [`real_roots`] plus the real parts of *near-real* complex pairs (docs/algorithm.md T8), e.g.
 /// `real_roots_near(c, DEFAULT_IMAG_TOL)` reproduces the prototype's rule
 /// `|Im z| <= 1e-6 (1 + |z|)`.

@@ -181,13 +181,23 @@ fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f6
 /// `start` (NaN for none) is the starting guess when `q'` has no real root: `q` is monotone
 /// and has one root, found from there (else from the split of the root bound).
 fn roots_between<P: Horner>(q: &P, crit: &[f64], bound: f64, start: f64) -> Roots {
-    let mut out = Roots::default();
     let lead = sgn(q.lead());
     let s_minf = if q.degree() & 1 == 0 { lead } else { -lead };
-    let s_pinf = lead;
-    let mut prev_x = -bound;
-    let mut prev_s = s_minf;
-    let mut prev_zero = false;
+    roots_above(q, crit, (-bound, s_minf, false), bound, start)
+}
+
+/// [`roots_between`] on `(lo, bound)`: `low` is `(lo, the sign of q at lo, whether q(lo) is
+/// zero)`; critical points at or below `lo` are ignored, a root at `lo` is not reported.
+fn roots_above<P: Horner>(
+    q: &P,
+    crit: &[f64],
+    low: (f64, f64, bool),
+    bound: f64,
+    start: f64,
+) -> Roots {
+    let mut out = Roots::default();
+    let s_pinf = sgn(q.lead());
+    let (mut prev_x, mut prev_s, mut prev_zero) = low;
     // Quadratic model at the previous critical point: q(x) ~ f + f2 (x - c)^2 / 2, whose root
     // c +- sqrt(2 |f / f2|) is the starting guess on either side (exact for a parabola).
     let mut prev_reach = f64::NAN;
@@ -226,6 +236,40 @@ fn roots_between<P: Horner>(q: &P, crit: &[f64], bound: f64, start: f64) -> Root
         out.push(bracket(q, prev_x, bound, prev_s, x0));
     }
     out
+}
+
+/// The positive real roots of a prepared polynomial (ascending): the derivative sequence on
+/// `(0, bound)` only, each level's roots bracketed between its derivative's positive roots.
+pub(super) fn solve_positive(p: &Poly) -> Roots {
+    let n = p.n;
+    let mut cur = Roots::default();
+    if n == 0 {
+        return cur;
+    }
+    let bound = p.root_bound();
+    let mut d = [*p; MAX_DEGREE];
+    for k in 1..n {
+        d[k] = d[k - 1].derivative();
+    }
+    let lin = &d[n - 1];
+    let r = -lin.c[0] / lin.c[1];
+    if r > 0.0 && r < bound {
+        cur.push(r);
+    }
+    for k in (0..n - 1).rev() {
+        let crit = cur;
+        // q(0) is the constant coefficient, exactly.
+        let c0 = d[k].c[0];
+        cur = roots_above(
+            &d[k],
+            crit.as_slice(),
+            (0.0, sgn(c0), c0 == 0.0),
+            bound,
+            f64::NAN,
+        );
+    }
+    cur.sort_dedup();
+    cur
 }
 
 /// The full solver on a prepared polynomial. `imag_tol > 0` adds near-real roots.
