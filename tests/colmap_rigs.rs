@@ -1,15 +1,18 @@
 //! COLMAP models with rigs and frames (COLMAP 3.12 and later): the bundled synthetic model
 //! (`data/colmap-rig`, text, and `data/colmap-rig-bin`, binary, both written by pycolmap:
 //! `scripts/make_rig_model.py`), round trips through the writer, malformed rig and frame files
-//! (located errors, never a panic).
+//! (located errors), and frame registration.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use eopnp::colmap::{
-    parse_model_with_rigs, read_model, write_model, Location, Model, ModelError, ModelErrorKind,
-    ModelFormat, Overwrite, Pose, ReadOptions, SensorId, SensorType, WriteOptions,
+    parse_model_with_rigs, read_model, register_frame, register_image, write_model, Location,
+    Model, ModelError, ModelErrorKind, ModelFormat, Overwrite, Pose, ReadOptions, RegisterError,
+    Registrar, SensorId, SensorType, WriteOptions,
 };
+use eopnp::ransac::Ransac;
+use eopnp::{Refinement, Solver};
 
 /// An edit of a model, of a line of a text file, of the bytes of a binary file.
 type ModelEdit = Box<dyn Fn(&mut Model)>;
@@ -519,6 +522,101 @@ fn malformed_binary_rig_files_report_file_and_offset() {
         assert_eq!(e.location, Location::Offset(offset), "{want}: {e}");
         assert!(e.reason.contains(want), "want {want:?}, got {e}");
     }
+}
+
+/// Noise-free synthetic frames: each frame's rig pose from its three images' correspondences
+/// is the model's to rounding, plain and with RANSAC, and a registrar gives what
+/// `register_frame` gives.
+#[test]
+fn frames_register_to_the_model_poses() {
+    let m = rig_model();
+    let solver = Solver::default();
+    let ransac = Ransac::default().seed(3);
+    let mut registrar = Registrar::new(&m);
+    for id in m.frames.keys() {
+        let plain = register_frame(&m, *id, &solver, None).unwrap();
+        assert_eq!(plain.image_ids.len(), 3);
+        assert_eq!(plain.n, 3 * 40);
+        assert_eq!(plain.inliers, plain.n);
+        assert!(
+            plain.rotation_error_deg < 1e-8,
+            "frame {id}: {}",
+            plain.rotation_error_deg
+        );
+        assert!(
+            plain.translation_error_pct < 1e-8,
+            "frame {id}: {}",
+            plain.translation_error_pct
+        );
+        assert!(
+            plain.rmse_px < 1e-8 && plain.model_rmse_px < 1e-8,
+            "frame {id}"
+        );
+        let robust = register_frame(&m, *id, &solver, Some(&ransac)).unwrap();
+        assert_eq!(robust.inliers, robust.n);
+        assert!(robust.ransac.is_some());
+        assert!(
+            robust.rotation_error_deg < 1e-8,
+            "frame {id}: {}",
+            robust.rotation_error_deg
+        );
+        let again = registrar.register_frame(*id, &solver, None).unwrap();
+        assert_eq!(again.solution.rotation, plain.solution.rotation);
+        assert_eq!(again.solution.translation, plain.solution.translation);
+        let algebraic =
+            register_frame(&m, *id, &solver.refinement(Refinement::Algebraic), None).unwrap();
+        assert!(
+            algebraic.rotation_error_deg < 1e-6,
+            "frame {id}: {}",
+            algebraic.rotation_error_deg
+        );
+    }
+    // Each image alone registers too (the model's image poses are the composed ones).
+    for id in m.images.keys() {
+        let reg = register_image(&m, *id, &solver, None).unwrap();
+        assert!(
+            reg.rotation_error_deg < 1e-8,
+            "image {id}: {}",
+            reg.rotation_error_deg
+        );
+    }
+}
+
+#[test]
+fn frame_registration_errors_are_typed() {
+    let m = rig_model();
+    let s = Solver::default();
+    assert_eq!(
+        register_frame(&m, 99, &s, None).unwrap_err(),
+        RegisterError::UnknownFrame(99)
+    );
+    let mut bad = m.clone();
+    bad.frames.get_mut(&1).unwrap().rig_id = 5;
+    assert_eq!(
+        register_frame(&bad, 1, &s, None).unwrap_err(),
+        RegisterError::UnknownRig(5)
+    );
+    let mut bad = m.clone();
+    bad.rigs.get_mut(&1).unwrap().sensors[1].1 = None;
+    assert_eq!(
+        register_frame(&bad, 2, &s, None).unwrap_err(),
+        RegisterError::NoSensorPose {
+            rig_id: 1,
+            camera_id: 3
+        }
+    );
+    let mut bad = m.clone();
+    bad.frames.get_mut(&4).unwrap().data_ids.clear();
+    assert_eq!(
+        register_frame(&bad, 4, &s, None).unwrap_err(),
+        RegisterError::EmptyFrame(4)
+    );
+    let mut bad = m;
+    bad.images.remove(&2);
+    assert_eq!(
+        register_frame(&bad, 1, &s, None).unwrap_err(),
+        RegisterError::UnknownImage(2)
+    );
 }
 
 /// The bundled model's five files in `format`, in the order of `parse_model_with_rigs`.

@@ -26,9 +26,11 @@
 //!   `cam_from_world = cam_from_rig * rig_from_world`; COLMAP still stores that pose in the
 //!   images file, and this crate keeps it as read.
 //!
-//! The readers check what ties the files together (every frame's rig, every rig's camera,
-//! every frame's image, every image in one frame) and locate an error in the file, line or
-//! offset of the record it is about.
+//! [`register_frame`] re-estimates a frame's `rig_from_world` from the correspondences of all
+//! its images at once (one [`crate::Rig`] pose, [`crate::Problem::rig`]) and compares it with
+//! the model's. The readers check what ties the files together (every frame's rig, every
+//! rig's camera, every frame's image, every image in one frame) and locate an error in the
+//! file, line or offset of the record it is about.
 //!
 //! Every reader is bounded and panic-free on any input: it streams (text token by token, binary
 //! record by record), a count field can only claim as many records as the remaining bytes can
@@ -114,7 +116,7 @@ pub use options::{Limit, ReadOptions};
 pub use pose::Pose;
 #[cfg(test)]
 pub(crate) use register::pixel_rmse;
-pub use register::{register_image, Registrar, Registration};
+pub use register::{register_frame, register_image, FrameRegistration, Registrar, Registration};
 use rigs::Culprit;
 pub use rigs::{DataId, Frame, SensorId, SensorRig, SensorType};
 #[cfg(feature = "internals")]

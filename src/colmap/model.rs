@@ -330,7 +330,7 @@ impl std::error::Error for ModelError {}
 /// The images of a model and where each was read (for the cross-reference errors).
 pub(crate) type Images = (BTreeMap<u32, Image>, BTreeMap<u32, Location>);
 
-/// Errors of [`super::register_image`].
+/// Errors of [`super::register_image`] and [`super::register_frame`].
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum RegisterError {
@@ -338,6 +338,20 @@ pub enum RegisterError {
     UnknownImage(u32),
     /// The image's camera is missing from the model.
     UnknownCamera(u32),
+    /// No frame with this id in the model.
+    UnknownFrame(u32),
+    /// The frame's rig is missing from the model.
+    UnknownRig(u32),
+    /// A camera of the frame has no known pose in its rig (it is not one of the rig's sensors,
+    /// or its `sensor_from_rig` is unknown).
+    NoSensorPose {
+        /// The rig.
+        rig_id: u32,
+        /// The camera.
+        camera_id: u32,
+    },
+    /// The frame has no images (only data of other sensors).
+    EmptyFrame(u32),
     /// The solver failed.
     Solver(PnpError),
 }
@@ -347,6 +361,14 @@ impl fmt::Display for RegisterError {
         match self {
             RegisterError::UnknownImage(i) => write!(f, "no image with id {i} in the model"),
             RegisterError::UnknownCamera(c) => write!(f, "no camera with id {c} in the model"),
+            RegisterError::UnknownFrame(i) => write!(f, "no frame with id {i} in the model"),
+            RegisterError::UnknownRig(r) => write!(f, "no rig with id {r} in the model"),
+            RegisterError::NoSensorPose { rig_id, camera_id } => write!(
+                f,
+                "camera {camera_id} has no known pose in rig {rig_id} (not one of its sensors, \
+                 or its sensor_from_rig is unknown)"
+            ),
+            RegisterError::EmptyFrame(i) => write!(f, "frame {i} has no images"),
             RegisterError::Solver(e) => write!(f, "{e}"),
         }
     }

@@ -104,7 +104,8 @@ impl std::fmt::Display for SensorId {
 
 /// A rig of COLMAP's rigs file (pycolmap's `Rig`): sensors fixed to one body, one of them the
 /// reference, whose pose in the rig is the identity. [`SensorRig::sensor_from_rig`] gives a
-/// sensor's pose.
+/// sensor's pose; a frame's registration ([`super::register_frame`]) builds the solver's
+/// [`crate::Rig`] from the poses of the frame's cameras.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, PartialEq)]
 pub struct SensorRig {
