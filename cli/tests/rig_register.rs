@@ -291,7 +291,13 @@ fn write_replaces_frame_poses_and_composes_image_poses() {
         ]);
         assert!(o.status.success());
         let table = String::from_utf8_lossy(&o.stdout);
-        assert!(table.contains("5 of 6 frame poses replaced by the re-estimated ones, and the poses of their 15 images"), "{table}");
+        assert!(
+            table.contains(
+                "5 of 6 frame poses replaced by the re-estimated ones, and the poses of their 15 \
+                 images"
+            ),
+            "{table}"
+        );
         assert!(
             table.contains("keeping the input model's poses: frame 5."),
             "{table}"

@@ -25,7 +25,7 @@ impl Pose {
         }
     }
 
-    /// The pose of a rotation `q` (normalised when it is stored) and translation `t`.
+    /// The pose of an isometry: its unit quaternion and its translation.
     #[must_use]
     pub fn from_isometry(pose: &Isometry3<f64>) -> Self {
         let q = pose.rotation.quaternion();
@@ -35,7 +35,8 @@ impl Pose {
         }
     }
 
-    /// The rotation matrix of the normalised quaternion, in closed form (as [`super::Image::pose`]).
+    /// The rotation matrix of the normalised quaternion, in closed form (as
+    /// [`super::Image::pose`]).
     #[must_use]
     pub fn rotation(&self) -> Matrix3<f64> {
         quaternion_to_matrix(self.q)

@@ -189,18 +189,66 @@ impl Registrar<'_> {
 /// builds the table of the model's 3D points once.
 ///
 /// ```
-/// use eopnp::colmap::{read_model, register_frame, ReadOptions};
+/// use eopnp::camera::Camera;
+/// use eopnp::colmap::{
+///     register_frame, DataId, Frame, Image, Model, Point3D, Pose, SensorId, SensorRig,
+/// };
 /// use eopnp::Solver;
+/// use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion};
 ///
-/// // The bundled model with rigs (COLMAP's synthetic data, noise-free): two rigs of three
-/// // cameras, three frames each.
-/// let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-rig");
-/// let model = read_model(dir, &ReadOptions::default())?;
-/// for id in model.frames.keys() {
-///     let reg = register_frame(&model, *id, &Solver::default(), None)?;
-///     assert_eq!(reg.image_ids.len(), 3);
-///     assert!(reg.rotation_error_deg < 1e-8, "frame {id}: {}", reg.rotation_error_deg);
+/// // A stereo rig: camera 1 is the reference (the rig's frame), camera 2 sits 0.2 units to
+/// // its right; one frame, whose two images see twelve 3D points.
+/// let right = Isometry3::from_parts(
+///     Translation3::new(-0.2, 0.0, 0.0),
+///     UnitQuaternion::identity(),
+/// );
+/// let rig_from_world = Isometry3::from_parts(
+///     Translation3::new(0.1, -0.2, 6.0),
+///     UnitQuaternion::from_euler_angles(0.1, -0.2, 0.3),
+/// );
+/// let mut model = Model::default();
+/// let points: Vec<Point3<f64>> = (0..12u32)
+///     .map(|i| {
+///         let i = f64::from(i);
+///         Point3::new(i % 3.0 - 1.0, (i % 4.0) * 0.5 - 0.7, (i % 5.0) * 0.3)
+///     })
+///     .collect();
+/// for (k, xyz) in points.iter().enumerate() {
+///     let id = k as u64 + 1;
+///     model.points.insert(id, Point3D { id, xyz: *xyz, rgb: [0; 3], error: 0.0, track: vec![] });
 /// }
+/// for (id, cam_from_rig) in [(1, Isometry3::identity()), (2, right)] {
+///     model.cameras.insert(id, Camera::pinhole(800.0, 800.0, 320.0, 240.0)?);
+///     let pose = cam_from_rig * rig_from_world;
+///     let points2d = points
+///         .iter()
+///         .enumerate()
+///         .map(|(k, x)| {
+///             let p = pose * x;
+///             let pixel = Point2::new(800.0 * p.x / p.z + 320.0, 800.0 * p.y / p.z + 240.0);
+///             (pixel, Some(k as u64 + 1))
+///         })
+///         .collect();
+///     let Pose { q, t } = Pose::from_isometry(&pose);
+///     let name = format!("cam{id}.png");
+///     model.images.insert(id, Image { id, q, t, camera_id: id, name, points2d });
+/// }
+/// let (cam1, cam2) = (SensorId::camera(1), SensorId::camera(2));
+/// model.rigs.insert(1, SensorRig {
+///     id: 1,
+///     ref_sensor: Some(cam1),
+///     sensors: vec![(cam2, Some(Pose::from_isometry(&right)))],
+/// });
+/// model.frames.insert(1, Frame {
+///     id: 1,
+///     rig_id: 1,
+///     rig_from_world: Pose::from_isometry(&rig_from_world),
+///     data_ids: vec![DataId { sensor: cam1, id: 1 }, DataId { sensor: cam2, id: 2 }],
+/// });
+///
+/// let reg = register_frame(&model, 1, &Solver::default(), None)?;
+/// assert_eq!((reg.image_ids.as_slice(), reg.n), (&[1, 2][..], 24));
+/// assert!(reg.rotation_error_deg < 1e-9 && reg.rmse_px < 1e-6);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 ///
