@@ -101,3 +101,26 @@ fn colmap_model_and_registration_round_trip() {
     assert_eq!(back.ransac, reg.ransac);
     assert_eq!(back.rotation_error_deg, reg.rotation_error_deg);
 }
+
+#[test]
+fn colmap_rig_model_and_frame_registration_round_trip() {
+    use eopnp::colmap::{read_model, register_frame, FrameRegistration, Model, ReadOptions};
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/data/colmap-rig");
+    let model = read_model(dir, &ReadOptions::default()).unwrap();
+    assert_eq!((model.rigs.len(), model.frames.len()), (2, 6));
+    let back: Model = round_trip(&model);
+    assert_eq!(back, model);
+    // A model serialized before rigs existed (no `rigs`, `frames` keys) reads as one without.
+    let mut value = serde_json::to_value(&model).unwrap();
+    let object = value.as_object_mut().unwrap();
+    object.remove("rigs");
+    object.remove("frames");
+    let old: Model = serde_json::from_value(value).unwrap();
+    assert!(old.rigs.is_empty() && old.frames.is_empty());
+    assert_eq!(old.images, model.images);
+    let reg = register_frame(&model, 1, &Solver::default(), Some(&Ransac::default())).unwrap();
+    let back: FrameRegistration = round_trip(&reg);
+    assert_eq!(back.solution, reg.solution);
+    assert_eq!(back.image_ids, reg.image_ids);
+    assert_eq!(back.ransac, reg.ransac);
+}

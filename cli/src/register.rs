@@ -1,4 +1,7 @@
-//! `eopnp register`: re-estimate every image's pose of a COLMAP model.
+//! `eopnp register`: re-estimate every image's pose of a COLMAP model, or on a model with rigs
+//! every frame's rig pose (`register/frames.rs`).
+
+mod frames;
 
 use std::fmt::Write as _;
 use std::io::IsTerminal;
@@ -258,8 +261,19 @@ fn write_output(
         }
     }
     let format = out.format.unwrap_or(input_format);
+    write_model_to(&new, out, format)?;
+    Ok(Written {
+        dir: out.dir.clone(),
+        format,
+        replaced,
+        kept,
+    })
+}
+
+/// `model` written atomically to `out` in `format`; refusals are input errors (exit code 2).
+fn write_model_to(model: &Model, out: &Output, format: ModelFormat) -> Result<(), Failure> {
     colmap::write_model(
-        &new,
+        model,
         &out.dir,
         &colmap::WriteOptions::default().format(format),
     )
@@ -274,12 +288,6 @@ fn write_output(
             | K::InvalidInput => Failure::input(message),
             _ => Failure::solver(message),
         }
-    })?;
-    Ok(Written {
-        dir: out.dir.clone(),
-        format,
-        replaced,
-        kept,
     })
 }
 
@@ -388,13 +396,29 @@ pub(crate) fn run(
     if let Some(out) = out {
         check_output(dir, &out.dir)?;
     }
+    let mode = match (opts.algebraic, opts.ransac) {
+        (true, false) => "algebraic",
+        (false, false) => "reprojection",
+        (true, true) => "ransac+algebraic",
+        (false, true) => "ransac+reprojection",
+    };
+    let has_rigs = !(model.rigs.is_empty() && model.frames.is_empty());
+    if has_rigs && !opts.per_image {
+        if opts.outliers.is_some() || opts.export_problems.is_some() {
+            return Err(Failure::input(
+                "--outliers and --export-problems work image by image: on a model with rigs, \
+                 add --per-image",
+            ));
+        }
+        return frames::run(dir, format, &model, opts, mode, out);
+    }
     if let Some(path) = &opts.export_problems {
         check_export(dir, path)?;
         write_file_atomically(path, export_problems(&model, opts).as_bytes())
             .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
     }
 
-    let bar = progress_bar(model.images.len() as u64);
+    let bar = progress_bar(model.images.len() as u64, "images");
     let started = Instant::now();
     let mut rows: Vec<Row> = Vec::with_capacity(model.images.len());
     let mut registrar = Registrar::new(&model);
@@ -408,12 +432,6 @@ pub(crate) fn run(
     }
     bar.finish_and_clear();
 
-    let mode = match (opts.algebraic, opts.ransac) {
-        (true, false) => "algebraic",
-        (false, false) => "reprojection",
-        (true, true) => "ransac+algebraic",
-        (false, true) => "ransac+reprojection",
-    };
     let written = out
         .map(|o| write_output(&model, format, &rows, o))
         .transpose()?;
@@ -433,11 +451,11 @@ pub(crate) fn run(
     Ok(())
 }
 
-fn progress_bar(len: u64) -> ProgressBar {
+/// The progress bar of registering `len` images or frames (`what`), hidden until shown.
+fn progress_bar(len: u64, what: &str) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::hidden());
-    if let Ok(style) =
-        ProgressStyle::with_template("{spinner} registering images {pos}/{len} [{bar:30}] {eta}")
-    {
+    let template = format!("{{spinner}} registering {what} {{pos}}/{{len}} [{{bar:30}}] {{eta}}");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
         bar.set_style(style.progress_chars("=> "));
     }
     bar

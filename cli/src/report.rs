@@ -78,7 +78,7 @@ pub(super) fn format_name(format: colmap::ModelFormat) -> &'static str {
     }
 }
 
-fn extra_json(e: &Extra) -> serde_json::Value {
+pub(super) fn extra_json(e: &Extra) -> serde_json::Value {
     json!({
         "true_correspondences": e.true_correspondences,
         "true_inliers": e.true_inliers,
@@ -159,7 +159,7 @@ pub(super) fn to_json(
 }
 
 /// The indented second line of an image in robust mode.
-fn extra_line(e: &Extra) -> String {
+pub(super) fn extra_line(e: &Extra) -> String {
     let mut s = String::new();
     if let (Some(st), Some(ti)) = (&e.stats, e.true_inliers) {
         let _ = write!(

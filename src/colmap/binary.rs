@@ -1,7 +1,8 @@
-//! The binary format (`cameras.bin`, `images.bin`, `points3D.bin`; little-endian, COLMAP's
-//! `reconstruction_io` layout): the readers, streaming record by record and bounded by the
-//! bytes present (every count is checked against the bytes left before anything is allocated
-//! for it), and the encoder the writer (`write.rs`) uses.
+//! The binary format (`cameras.bin`, `images.bin`, `points3D.bin`, and `rigs.bin`,
+//! `frames.bin` in `binary/rigs.rs`; little-endian, COLMAP's `reconstruction_io` layout): the
+//! readers, streaming record by record and bounded by the bytes present (every count is
+//! checked against the bytes left before anything is allocated for it), and the encoder the
+//! writer (`write.rs`) uses.
 
 use std::collections::BTreeMap;
 use std::io::{self, BufRead};
@@ -9,11 +10,14 @@ use std::path::Path;
 
 use nalgebra::{Point2, Point3, Vector3};
 
-use super::model::{
-    check_quaternion, Image, Images, Location, Model, ModelError, ModelErrorKind, Point3D,
-};
+use super::model::{Image, Images, Location, Model, ModelError, ModelErrorKind, Point3D};
 use super::options::{Limit, ReadOptions, MAX_FIELD_BYTES};
+use super::pose::check_quaternion;
 use crate::camera::{Camera, CameraError, CameraModel};
+
+mod rigs;
+
+pub(super) use rigs::{encode_rigs_binary, parse_frames_bin, parse_rigs_bin};
 
 // Binary format (little-endian; COLMAP's reconstruction_io / read_write_model.py layout).
 

@@ -1,5 +1,5 @@
-//! The reconstruction as read: images (pose, camera, observations), 3D points and cameras, and
-//! the errors of reading it.
+//! The reconstruction as read: images (pose, camera, observations), 3D points and cameras (and
+//! rigs and frames, in `rigs.rs`), and the errors of reading it.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::options::Limit;
+use super::pose::quaternion_to_matrix;
+use super::rigs::{Frame, SensorRig};
 use crate::camera::Camera;
 use crate::PnpError;
 
@@ -56,6 +58,11 @@ pub struct Point3D {
 }
 
 /// A COLMAP sparse reconstruction.
+///
+/// Its rigs and frames are those of COLMAP 3.12 and later (`rigs.txt` and `frames.txt`, or
+/// `.bin`): both empty for a model without those files, which reads and writes as before. A
+/// model with rigs has every image in exactly one frame (the [module documentation](super)
+/// explains them).
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Model {
@@ -65,6 +72,12 @@ pub struct Model {
     pub images: BTreeMap<u32, Image>,
     /// 3D points by id.
     pub points: BTreeMap<u64, Point3D>,
+    /// Rigs by id (empty for a model without rig files).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub rigs: BTreeMap<u32, SensorRig>,
+    /// Frames by id (empty for a model without rig files).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub frames: BTreeMap<u32, Frame>,
 }
 
 impl Model {
@@ -236,25 +249,6 @@ fn gather_with(
     }
 }
 
-/// Rotation matrix of a quaternion `(w, x, y, z)` (normalised first), closed form.
-/// A zero or non-finite quaternion gives a NaN matrix ([`super::read_model`] rejects those).
-#[must_use]
-pub(crate) fn quaternion_to_matrix(q: [f64; 4]) -> Matrix3<f64> {
-    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
-    let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
-    Matrix3::new(
-        1.0 - 2.0 * (y * y + z * z),
-        2.0 * (x * y - w * z),
-        2.0 * (x * z + w * y),
-        2.0 * (x * y + w * z),
-        1.0 - 2.0 * (x * x + z * z),
-        2.0 * (y * z - w * x),
-        2.0 * (x * z - w * y),
-        2.0 * (y * z + w * x),
-        1.0 - 2.0 * (x * x + y * y),
-    )
-}
-
 /// Where in a file an error is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Location {
@@ -336,20 +330,7 @@ impl std::error::Error for ModelError {}
 /// The images of a model and where each was read (for the cross-reference errors).
 pub(crate) type Images = (BTreeMap<u32, Image>, BTreeMap<u32, Location>);
 
-/// A quaternion must be finite and non-zero.
-pub(crate) fn check_quaternion(q: &[f64; 4]) -> Result<(), String> {
-    let n2: f64 = q.iter().map(|x| x * x).sum();
-    if n2.is_finite() && n2 > 1e-12 {
-        Ok(())
-    } else {
-        Err(format!(
-            "quaternion ({}, {}, {}, {}) is zero or not finite",
-            q[0], q[1], q[2], q[3]
-        ))
-    }
-}
-
-/// Errors of [`super::register_image`].
+/// Errors of [`super::register_image`] and [`super::register_frame`].
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum RegisterError {
@@ -357,6 +338,20 @@ pub enum RegisterError {
     UnknownImage(u32),
     /// The image's camera is missing from the model.
     UnknownCamera(u32),
+    /// No frame with this id in the model.
+    UnknownFrame(u32),
+    /// The frame's rig is missing from the model.
+    UnknownRig(u32),
+    /// A camera of the frame has no known pose in its rig (it is not one of the rig's sensors,
+    /// or its `sensor_from_rig` is unknown).
+    NoSensorPose {
+        /// The rig.
+        rig_id: u32,
+        /// The camera.
+        camera_id: u32,
+    },
+    /// The frame has no images (only data of other sensors).
+    EmptyFrame(u32),
     /// The solver failed.
     Solver(PnpError),
 }
@@ -366,6 +361,14 @@ impl fmt::Display for RegisterError {
         match self {
             RegisterError::UnknownImage(i) => write!(f, "no image with id {i} in the model"),
             RegisterError::UnknownCamera(c) => write!(f, "no camera with id {c} in the model"),
+            RegisterError::UnknownFrame(i) => write!(f, "no frame with id {i} in the model"),
+            RegisterError::UnknownRig(r) => write!(f, "no rig with id {r} in the model"),
+            RegisterError::NoSensorPose { rig_id, camera_id } => write!(
+                f,
+                "camera {camera_id} has no known pose in rig {rig_id} (not one of its sensors, \
+                 or its sensor_from_rig is unknown)"
+            ),
+            RegisterError::EmptyFrame(i) => write!(f, "frame {i} has no images"),
             RegisterError::Solver(e) => write!(f, "{e}"),
         }
     }

@@ -1,5 +1,5 @@
 //! Registration: an image's pose re-estimated from its 2D-3D correspondences alone, plain or
-//! robust, and compared with the model's.
+//! robust, and compared with the model's; a frame's rig pose in `register/frame.rs`.
 
 use core::ops::ControlFlow;
 use std::time::Instant;
@@ -11,6 +11,10 @@ use crate::camera::{Camera, Project, ProjectionJob};
 use crate::numeric::lanes::{dispatched, lane_sum, unweighted_blocks, Block, LANES};
 use crate::ransac::{Ransac, RansacStats};
 use crate::{Problem, Refinement, Solution, Solver};
+
+mod frame;
+
+pub use frame::{register_frame, FrameRegistration};
 
 /// The result of [`register_image`].
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -58,19 +62,31 @@ pub(crate) fn pixel_rmse(
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
 ) -> f64 {
-    // The camera unpacked and its model dispatched once, not per point.
-    let (sum, count) = cam.projector().with_projection(Rmse {
-        world,
-        pixels,
-        keep,
-        r,
-        t,
-    });
+    let (sum, count) = pixel_squares(cam, world, pixels, keep, r, t);
     if count == 0 {
         f64::NAN
     } else {
         (sum / count as f64).sqrt()
     }
+}
+
+/// [`pixel_rmse`]'s sum of squared pixel residuals and their number.
+fn pixel_squares(
+    cam: &Camera,
+    world: &[Point3<f64>],
+    pixels: &[Point2<f64>],
+    keep: Option<&[bool]>,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> (f64, usize) {
+    // The camera unpacked and its model dispatched once, not per point.
+    cam.projector().with_projection(Rmse {
+        world,
+        pixels,
+        keep,
+        r,
+        t,
+    })
 }
 
 /// [`pixel_rmse`]'s pass, for one lens model: the sum of the squared pixel residuals and their
@@ -149,10 +165,11 @@ fn squared_residuals_body<P: Project, const KEEP: bool>(
     (lane_sum(&sum), count.iter().sum())
 }
 
-/// Registers images of one model ([`Registrar::register`]): the model's 3D points are looked
-/// up in a table indexed by id, built once, and each image's correspondences are gathered
-/// into buffers that keep their capacity from image to image. [`register_image`] is one
-/// image with a registrar of its own.
+/// Registers images of one model ([`Registrar::register`]), or frames of a model with rigs
+/// ([`Registrar::register_frame`]): the model's 3D points are looked up in a table indexed by
+/// id, built once, and each image's correspondences are gathered into buffers that keep
+/// their capacity from image to image. [`register_image`] and [`register_frame`] are one
+/// image or frame with a registrar of its own.
 ///
 /// See the [module documentation](super) for a runnable example.
 #[derive(Debug)]
@@ -161,6 +178,8 @@ pub struct Registrar<'m> {
     points: PointLookup<'m>,
     world: Vec<Point3<f64>>,
     pixels: Vec<Point2<f64>>,
+    /// Each correspondence's camera in a frame's rig ([`Registrar::register_frame`]).
+    which: Vec<u32>,
 }
 
 impl<'m> Registrar<'m> {
@@ -180,6 +199,7 @@ impl<'m> Registrar<'m> {
             points: PointLookup::new(model, 4 * model.points.len(), many),
             world: Vec::new(),
             pixels: Vec::new(),
+            which: Vec::new(),
         }
     }
 

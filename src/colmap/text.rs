@@ -1,8 +1,8 @@
-//! The text format (`cameras.txt`, `images.txt`, `points3D.txt`): one record per line, `#`
-//! comments; every error names the file and the 1-based line. Read as a stream of tokens: the
-//! memory is what is returned plus one field (never a whole file or a whole line), so lines
-//! need no length limit of their own. The encoder the writer (`write.rs`) uses is in
-//! `text/encode.rs`.
+//! The text format (`cameras.txt`, `images.txt`, `points3D.txt`, and `rigs.txt`, `frames.txt`
+//! in `text/rigs.rs`): one record per line, `#` comments; every error names the file and the
+//! 1-based line. Read as a stream of tokens: the memory is what is returned plus one field
+//! (never a whole file or a whole line), so lines need no length limit of their own. The
+//! encoder the writer (`write.rs`) uses is in `text/encode.rs`.
 
 use std::collections::BTreeMap;
 use std::io::{self, BufRead};
@@ -10,17 +10,18 @@ use std::path::Path;
 
 use nalgebra::{Point2, Point3, Vector3};
 
-use super::model::{
-    check_quaternion, Image, Images, Location, ModelError, ModelErrorKind, Point3D,
-};
+use super::model::{Image, Images, Location, ModelError, ModelErrorKind, Point3D};
 use super::options::{Limit, ReadOptions, MAX_FIELD_BYTES};
+use super::pose::check_quaternion;
 use crate::camera::{Camera, CameraModel};
 
 mod encode;
+mod rigs;
 
 #[cfg(test)]
 pub(super) use encode::push_f64;
 pub(super) use encode::{encode_text, text_name_ok};
+pub(super) use rigs::{encode_rigs_text, parse_frames_text, parse_rigs_text, Records};
 
 /// ASCII whitespace as C's `isspace` (COLMAP's reader) and `char::is_whitespace` both see it.
 fn is_space(b: u8) -> bool {

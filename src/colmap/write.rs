@@ -17,10 +17,12 @@ use std::io::{self, ErrorKind, Write as _};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::binary::{encode_binary, MAX_NAME};
-use super::model::{check_quaternion, Model};
-use super::text::{encode_text, text_name_ok};
-use super::{ModelFormat, BIN_FILES};
+use super::binary::{encode_binary, encode_rigs_binary, MAX_NAME};
+use super::model::Model;
+use super::pose::check_quaternion;
+use super::rigs::check_rigs;
+use super::text::{encode_rigs_text, encode_text, text_name_ok};
+use super::{ModelFormat, BIN_FILES, BIN_RIG_FILES, TEXT_RIG_FILES};
 use crate::camera::Camera;
 
 /// What [`write_model`] may do to an existing, non-empty directory ([`WriteOptions::overwrite`]).
@@ -88,6 +90,15 @@ impl ModelFormat {
         match self {
             ModelFormat::Text => super::TEXT_FILES,
             ModelFormat::Binary => BIN_FILES,
+        }
+    }
+
+    /// The two file names of a model with rigs (COLMAP 3.12 and later): rigs, frames.
+    #[must_use]
+    pub fn rig_file_names(self) -> [&'static str; 2] {
+        match self {
+            ModelFormat::Text => TEXT_RIG_FILES,
+            ModelFormat::Binary => BIN_RIG_FILES,
         }
     }
 }
@@ -184,28 +195,88 @@ fn validate(model: &Model, format: ModelFormat) -> io::Result<()> {
             return bad(format!("3D point {key}: coordinates are not finite"));
         }
     }
+    check_rigs(model, has_rigs(model)).or_else(|(_, reason)| bad(reason))?;
+    for rig in model.rigs.values() {
+        if rig.sensors.len() >= u32::MAX as usize {
+            return bad(format!("rig {}: too many sensors for the format", rig.id));
+        }
+    }
+    for frame in model.frames.values() {
+        if u32::try_from(frame.data_ids.len()).is_err() {
+            return bad(format!(
+                "frame {}: too many data ids for the format",
+                frame.id
+            ));
+        }
+    }
     Ok(())
 }
 
+/// Whether the model has rig files to write: it has rigs or frames.
+fn has_rigs(model: &Model) -> bool {
+    !model.rigs.is_empty() || !model.frames.is_empty()
+}
+
 /// The contents of the model's three files (cameras, images, 3D points, in the order of
-/// [`ModelFormat::file_names`]) in `format`, as [`write_model`] writes them. Text numbers are
-/// in Rust's shortest round-trip form, so parsing the result gives `model` back exactly (every
-/// `f64` bit for bit, except that a NaN ERROR of a 3D point reads back as the canonical NaN in
+/// [`ModelFormat::file_names`]) in `format`, as [`write_model`] writes them, for a model
+/// without rigs ([`encode_model_files`] encodes any model). Text numbers are in Rust's
+/// shortest round-trip form, so parsing the result gives `model` back exactly (every `f64`
+/// bit for bit, except that a NaN ERROR of a 3D point reads back as the canonical NaN in
 /// text). Feature `internals` (for the fuzz harness): not a stable API.
 ///
 /// # Errors
-/// [`ErrorKind::InvalidInput`] if the model would not read back identically: a non-finite or
-/// zero quaternion, a non-finite translation, pixel or 3D point, a missing camera or observed
-/// 3D point, a map key that differs from the record's id, a camera model without a COLMAP id
+/// [`ErrorKind::InvalidInput`] for a model with rigs or frames, and if the model would not
+/// read back identically: a non-finite or zero quaternion, a non-finite translation, pixel or
+/// 3D point, a missing camera or observed 3D point, a map key that differs from the record's
+/// id, a camera model without a COLMAP id
 /// ([`crate::camera::CameraModel::OpenCvThinPrismTilted`]); text: an image name that is empty,
 /// spans lines or has leading or trailing whitespace; binary: a name with a NUL byte or longer
 /// than 64 KiB, an observed 3D point id above `i64::MAX`.
+#[cfg(feature = "internals")]
 pub fn encode_model(model: &Model, format: ModelFormat) -> io::Result<[Vec<u8>; 3]> {
+    if has_rigs(model) {
+        return Err(invalid(
+            format,
+            "the model has rigs or frames: encode it with encode_model_files".to_string(),
+        ));
+    }
+    let mut files = encode_all(model, format)?
+        .into_iter()
+        .map(|(_, bytes)| bytes);
+    let mut next = || files.next().unwrap_or_default();
+    Ok([next(), next(), next()])
+}
+
+/// The files of the model as [`write_model`] writes them, each with its name: the three of
+/// [`ModelFormat::file_names`], then for a model with rigs or frames the two of
+/// [`ModelFormat::rig_file_names`]. Feature `internals` (for the fuzz harness): not a stable
+/// API.
+///
+/// # Errors
+/// As [`write_model`]'s [`ErrorKind::InvalidInput`].
+#[cfg(feature = "internals")]
+pub fn encode_model_files(
+    model: &Model,
+    format: ModelFormat,
+) -> io::Result<Vec<(&'static str, Vec<u8>)>> {
+    encode_all(model, format)
+}
+
+fn encode_all(model: &Model, format: ModelFormat) -> io::Result<Vec<(&'static str, Vec<u8>)>> {
     validate(model, format)?;
-    Ok(match format {
+    let files = match format {
         ModelFormat::Text => encode_text(model),
         ModelFormat::Binary => encode_binary(model),
-    })
+    };
+    let mut named: Vec<_> = format.file_names().into_iter().zip(files).collect();
+    if has_rigs(model) {
+        let rig_files = match format {
+            ModelFormat::Text => encode_rigs_text(model),
+            ModelFormat::Binary => encode_rigs_binary(model),
+        };
+        named.extend(format.rig_file_names().into_iter().zip(rig_files));
+    }
+    Ok(named)
 }
 
 /// Writes `model` to the directory `dir`, atomically, in the format of `options`
@@ -216,18 +287,23 @@ pub fn encode_model(model: &Model, format: ModelFormat) -> io::Result<[Vec<u8>; 
 ///   directory renamed to `dir`: all or nothing, even across a crash.
 /// - `dir` is an empty directory: each file is written to `.<file>.tmp-<pid>-<n>` in `dir`,
 ///   fsynced and renamed into place; on any error the files already renamed and the
-///   temporaries are removed (`dir` is empty again). A crash during the three renames can
-///   leave part of the model.
+///   temporaries are removed (`dir` is empty again). A crash during the renames can leave
+///   part of the model.
 /// - `dir` exists and is not empty: refused, unless [`WriteOptions::overwrite`] is
-///   [`Overwrite::Files`]: then the three files of the format are replaced one by one, each
-///   atomically (a hard-link backup of each existing file is taken first); on any error the
-///   directory is restored (old files back in place, temporaries and backups removed); a crash
-///   during the three renames can leave a mix of old and new files (and dot-named
-///   `.tmp-`/`.bak-` files, which no reader takes for a model).
+///   [`Overwrite::Files`]: then the files of the format are replaced one by one, each
+///   atomically (a hard-link backup of each existing file is taken first), and for a model
+///   without rigs the format's rig files, if any, are removed (a stale `rigs.txt` would
+///   otherwise be read with the new model); on any error the directory is restored (old
+///   files back in place, temporaries and backups removed); a crash during the renames can
+///   leave a mix of old and new files (and dot-named `.tmp-`/`.bak-` files, which no reader
+///   takes for a model).
 ///
-/// The model is checked and encoded in memory first, so an unrepresentable model fails before
-/// anything is created. Reading `dir` back ([`super::read_model`]) gives `model` exactly
-/// (every `f64` bit for bit: text numbers are written in Rust's shortest round-trip form).
+/// The files are the three of [`ModelFormat::file_names`] and, for a model with rigs or
+/// frames ([`Model::rigs`], [`Model::frames`]), the two of [`ModelFormat::rig_file_names`] in
+/// COLMAP 3.12's layout. The model is checked and encoded in memory first, so an
+/// unrepresentable model fails before anything is created. Reading `dir` back
+/// ([`super::read_model`]) gives `model` exactly (every `f64` bit for bit: text numbers are
+/// written in Rust's shortest round-trip form).
 ///
 /// # Errors
 /// [`ErrorKind::InvalidInput`] if the model would not read back identically (a non-finite or
@@ -235,8 +311,10 @@ pub fn encode_model(model: &Model, format: ModelFormat) -> io::Result<[Vec<u8>; 
 /// 3D point, a map key that differs from the record's id, a camera model without a COLMAP id
 /// ([`crate::camera::CameraModel::OpenCvThinPrismTilted`]); text: an image name that is empty,
 /// spans lines or has leading or trailing whitespace; binary: a name with a NUL byte or longer
-/// than 64 KiB, an observed 3D point id above `i64::MAX`), or for a `dir` without a final name
-/// (`/`, `..`); [`ErrorKind::DirectoryNotEmpty`] if `dir` exists and is not empty (with
+/// than 64 KiB, an observed 3D point id above `i64::MAX`; rigs and frames that do not read
+/// back: a frame's rig, a sensor's camera or a datum's image missing, an image in no frame or
+/// in two, a pose that is not finite), or for a `dir` without a final name (`/`, `..`);
+/// [`ErrorKind::DirectoryNotEmpty`] if `dir` exists and is not empty (with
 /// [`Overwrite::Never`]); [`ErrorKind::AlreadyExists`] for text over a complete binary model
 /// (with [`Overwrite::Files`]); [`ErrorKind::NotADirectory`] if `dir` or its parent is not a
 /// directory; [`ErrorKind::NotFound`] if the parent does not exist; any I/O error of the
@@ -245,15 +323,22 @@ pub fn encode_model(model: &Model, format: ModelFormat) -> io::Result<[Vec<u8>; 
 pub fn write_model(model: &Model, dir: impl AsRef<Path>, options: &WriteOptions) -> io::Result<()> {
     let (format, overwrite) = (options.format, options.overwrite);
     let dir = dir.as_ref();
-    let contents = encode_model(model, format)?;
-    let names = format.file_names();
+    let files = encode_all(model, format)?;
     match fs::metadata(dir) {
-        Ok(m) if m.is_dir() => write_into_existing(dir, names, &contents, format, overwrite),
+        Ok(m) if m.is_dir() => {
+            // Rig files of the format that the model does not have: removed if present.
+            let stale: &[&str] = if has_rigs(model) {
+                &[]
+            } else {
+                &format.rig_file_names()
+            };
+            write_into_existing(dir, &files, stale, format, overwrite)
+        }
         Ok(_) => Err(io::Error::new(
             ErrorKind::NotADirectory,
             format!("{}: exists and is not a directory", dir.display()),
         )),
-        Err(e) if e.kind() == ErrorKind::NotFound => write_new_dir(dir, names, &contents),
+        Err(e) if e.kind() == ErrorKind::NotFound => write_new_dir(dir, &files),
         Err(e) => Err(context(dir, e)),
     }
 }
@@ -297,7 +382,7 @@ fn sync_dir(dir: &Path) {
 }
 
 /// `dir` does not exist: write into a fresh sibling directory and rename it to `dir`.
-fn write_new_dir(dir: &Path, names: [&str; 3], contents: &[Vec<u8>; 3]) -> io::Result<()> {
+fn write_new_dir(dir: &Path, files: &[(&str, Vec<u8>)]) -> io::Result<()> {
     let Some(name) = dir.file_name() else {
         return Err(io::Error::new(
             ErrorKind::InvalidInput,
@@ -332,7 +417,7 @@ fn write_new_dir(dir: &Path, names: [&str; 3], contents: &[Vec<u8>; 3]) -> io::R
     let tmp = parent.join(format!(".{}.tmp-{}", name.to_string_lossy(), unique()));
     fs::create_dir(&tmp).map_err(|e| context(&tmp, e))?;
     let result = (|| {
-        for (n, bytes) in names.iter().zip(contents) {
+        for (n, bytes) in files {
             write_synced(&tmp.join(n), bytes)?;
         }
         sync_dir(&tmp);
@@ -365,11 +450,12 @@ fn write_new_dir(dir: &Path, names: [&str; 3], contents: &[Vec<u8>; 3]) -> io::R
     }
 }
 
-/// `dir` exists: temporaries in `dir`, fsynced, renamed over the final names, with rollback.
+/// `dir` exists: temporaries in `dir`, fsynced, renamed over the final names, and the `stale`
+/// files removed, with rollback.
 fn write_into_existing(
     dir: &Path,
-    names: [&str; 3],
-    contents: &[Vec<u8>; 3],
+    files: &[(&str, Vec<u8>)],
+    stale: &[&str],
     format: ModelFormat,
     overwrite: Overwrite,
 ) -> io::Result<()> {
@@ -403,9 +489,22 @@ fn write_into_existing(
         }
     }
     let suffix = unique();
-    let targets = names.map(|n| dir.join(n));
-    let temps = names.map(|n| dir.join(format!(".{n}.tmp-{suffix}")));
-    let backups = names.map(|n| dir.join(format!(".{n}.bak-{suffix}")));
+    // The files written, then the stale ones (which have no temporary).
+    let names: Vec<&str> = files
+        .iter()
+        .map(|f| f.0)
+        .chain(stale.iter().copied())
+        .collect();
+    let written = files.len();
+    let targets: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
+    let temps: Vec<PathBuf> = names[..written]
+        .iter()
+        .map(|n| dir.join(format!(".{n}.tmp-{suffix}")))
+        .collect();
+    let backups: Vec<PathBuf> = names
+        .iter()
+        .map(|n| dir.join(format!(".{n}.bak-{suffix}")))
+        .collect();
     let remove_all = |paths: &[PathBuf]| {
         for p in paths {
             let _ = fs::remove_file(p);
@@ -413,15 +512,15 @@ fn write_into_existing(
     };
 
     // 1. The new files, fsynced, under temporary names.
-    for k in 0..3 {
-        if let Err(e) = write_synced(&temps[k], &contents[k]) {
+    for (k, (_, bytes)) in files.iter().enumerate() {
+        if let Err(e) = write_synced(&temps[k], bytes) {
             remove_all(&temps[..=k]);
             return Err(e);
         }
     }
-    // 2. Hard-link backups of the files about to be replaced.
-    let mut backed_up = [false; 3];
-    for k in 0..3 {
+    // 2. Hard-link backups of the files about to be replaced or removed.
+    let mut backed_up = vec![false; names.len()];
+    for k in 0..names.len() {
         match fs::symlink_metadata(&targets[k]) {
             Err(e) if e.kind() == ErrorKind::NotFound => continue,
             _ => {}
@@ -433,13 +532,20 @@ fn write_into_existing(
         }
         backed_up[k] = true;
     }
-    // 3. The renames; on failure put back what was there.
-    for k in 0..3 {
-        if let Err(e) = fs::rename(&temps[k], &targets[k]) {
+    // 3. The renames and removals; on failure put back what was there.
+    for k in 0..names.len() {
+        let result = if k < written {
+            fs::rename(&temps[k], &targets[k])
+        } else if backed_up[k] {
+            fs::remove_file(&targets[k])
+        } else {
+            Ok(())
+        };
+        if let Err(e) = result {
             for j in 0..k {
                 if backed_up[j] {
                     let _ = fs::rename(&backups[j], &targets[j]);
-                } else {
+                } else if j < written {
                     let _ = fs::remove_file(&targets[j]);
                 }
             }

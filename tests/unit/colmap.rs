@@ -1,5 +1,5 @@
 use super::binary::{parse_cameras_bin, parse_images_bin, parse_points_bin};
-use super::model::quaternion_to_matrix;
+use super::pose::quaternion_to_matrix;
 use super::*;
 use nalgebra::Matrix3;
 
