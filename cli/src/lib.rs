@@ -76,14 +76,15 @@ reprojection RMSE in pixels.";
 pub(crate) struct RegisterArgs {
     /// COLMAP model directory: cameras, images and points3D in text (.txt) or binary (.bin)
     /// format (binary is used if both are present), and for a model with rigs (COLMAP 3.12
-    /// and later) rigs and frames: then every frame is registered as one rig pose (see
-    /// --per-image).
+    /// and later) rigs and frames: if a frame holds several images, every frame is registered
+    /// as one rig pose (see --per-image).
     model_dir: PathBuf,
     #[command(flatten)]
     opts: RegisterOptions,
     /// Write the model with every image's pose replaced by the re-estimated one (images that
-    /// fail keep their pose, and the output says which; on a model with rigs every frame's
-    /// pose, and its images' poses composed from it) to the directory OUT, which must not
+    /// fail keep their pose, and the output says which; with frames of several images every
+    /// frame's pose, and its images' poses composed from it; with frames of one image each,
+    /// each registered image's frame too) to the directory OUT, which must not
     /// exist (its parent must) or be empty, and must not be the input's directory. Written
     /// atomically: into a temporary directory next to OUT, fsynced, then renamed to OUT (into an
     /// existing empty OUT: temporary files renamed into place); on any failure nothing is left.
@@ -138,8 +139,9 @@ pub(crate) struct RegisterOptions {
     /// points with tracks longer than 1,000,000 are refused.
     #[arg(long, value_name = "SIZE", value_parser = parse_size)]
     max_input_size: Option<u64>,
-    /// On a model with rigs, register every image on its own, as on a model without rigs,
-    /// instead of every frame as one rig pose.
+    /// On a model whose frames hold several images, register every image on its own, as on a
+    /// model without rigs, instead of every frame as one rig pose (not with --write: the
+    /// frames' poses would disagree with their images').
     #[arg(long)]
     per_image: bool,
 }

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::experiment::{self, ImageProblem, Outliers};
-use eopnp::colmap::{self, Limit, Model, ModelErrorKind, ModelFormat, RegisterError, Registrar};
+use eopnp::colmap::{
+    self, Limit, Model, ModelErrorKind, ModelFormat, Pose, RegisterError, Registrar, SensorId,
+};
 use eopnp::ransac::Ransac;
 use eopnp::Problem;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -249,6 +251,7 @@ fn write_output(
     let mut new = model.clone();
     let mut kept = Vec::new();
     let mut replaced = 0;
+    let mut replaced_ids = std::collections::BTreeSet::new();
     for (id, _, result, _) in rows {
         match (result, new.images.get_mut(id)) {
             (Ok(reg), Some(img)) => {
@@ -256,8 +259,31 @@ fn write_output(
                 img.q = [q.w, q.i, q.j, q.k];
                 img.t = reg.solution.translation;
                 replaced += 1;
+                replaced_ids.insert(*id);
             }
             _ => kept.push(*id),
+        }
+    }
+    // Each registered image's frame (of this image alone: frames of several are refused
+    // above) gets the pose that gives the image's: `rig_from_world = cam_from_rig^-1 *
+    // cam_from_world`.
+    for frame in new.frames.values_mut() {
+        let mut ids = frame.image_ids();
+        let (Some(id), None) = (ids.next(), ids.next()) else {
+            continue;
+        };
+        drop(ids);
+        if !replaced_ids.contains(&id) {
+            continue;
+        }
+        let (Some(img), Some(rig)) = (new.images.get(&id), new.rigs.get(&frame.rig_id)) else {
+            continue;
+        };
+        if let Some(cam_from_rig) = rig.sensor_from_rig(SensorId::camera(img.camera_id)) {
+            let cam_from_world = Pose { q: img.q, t: img.t };
+            frame.rig_from_world = Pose::from_isometry(
+                &(cam_from_rig.isometry().inverse() * cam_from_world.isometry()),
+            );
         }
     }
     let format = out.format.unwrap_or(input_format);
@@ -402,15 +428,24 @@ pub(crate) fn run(
         (true, true) => "ransac+algebraic",
         (false, true) => "ransac+reprojection",
     };
-    let has_rigs = !(model.rigs.is_empty() && model.frames.is_empty());
-    if has_rigs && !opts.per_image {
+    // Frames of several images are registered as rig poses; a model whose frames each hold one
+    // image (what COLMAP 3.12 and later write for a model without rigs) image by image.
+    let multi_image_frames = model.frames.values().any(|f| f.image_ids().count() > 1);
+    if multi_image_frames && !opts.per_image {
         if opts.outliers.is_some() || opts.export_problems.is_some() {
             return Err(Failure::input(
-                "--outliers and --export-problems work image by image: on a model with rigs, \
-                 add --per-image",
+                "--outliers and --export-problems work image by image: on a model whose \
+                 frames hold several images, add --per-image",
             ));
         }
         return frames::run(dir, format, &model, opts, mode, out);
+    }
+    if multi_image_frames && out.is_some() {
+        return Err(Failure::input(
+            "--per-image with --write on a model whose frames hold several images would leave \
+             the frames' poses inconsistent with their images' (COLMAP derives the images' \
+             poses from the frames'): write without --per-image",
+        ));
     }
     if let Some(path) = &opts.export_problems {
         check_export(dir, path)?;

@@ -344,3 +344,82 @@ fn per_image_and_the_image_by_image_options() {
     assert_eq!(v["images"].as_array().unwrap().len(), 6);
     let _ = std::fs::remove_dir_all(&base);
 }
+
+/// A model whose frames each hold one image (what COLMAP 3.12 and later write for a model
+/// without rigs: a one-camera rig per camera, a frame per image) is registered image by image;
+/// `--write` gives every registered image's frame the pose that gives the image's. `--per-image`
+/// with `--write` on a model of multi-image frames is refused (it would leave the frames' poses
+/// inconsistent with their images').
+#[test]
+fn one_image_frames_are_registered_image_by_image() {
+    use eopnp::colmap::{DataId, Frame, Pose, SensorRig};
+    let boxes = concat!(env!("CARGO_MANIFEST_DIR"), "/../data/colmap-boxes");
+    let mut model = read_model(boxes, &ReadOptions::default()).unwrap();
+    for (&id, _) in &model.cameras {
+        model.rigs.insert(
+            id,
+            SensorRig {
+                id,
+                ref_sensor: Some(SensorId::camera(id)),
+                sensors: Vec::new(),
+            },
+        );
+    }
+    for (&id, img) in &model.images {
+        model.frames.insert(
+            id,
+            Frame {
+                id,
+                rig_id: img.camera_id,
+                rig_from_world: Pose { q: img.q, t: img.t },
+                data_ids: vec![DataId {
+                    sensor: SensorId::camera(img.camera_id),
+                    id: u64::from(id),
+                }],
+            },
+        );
+    }
+    let base = scratch("one-image-frames");
+    let input = base.join("in");
+    write_model(&model, &input, &WriteOptions::default()).unwrap();
+    let v = json_of(&eopnp(&["register", input.to_str().unwrap(), "--json"]));
+    assert!(v.get("registered").is_none() && v.get("frames").is_none());
+    assert_eq!(v["images"].as_array().unwrap().len(), model.images.len());
+    let out = base.join("out");
+    let o = eopnp(&[
+        "register",
+        input.to_str().unwrap(),
+        "--write",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let written = read_model(&out, &ReadOptions::default()).unwrap();
+    let mut moved = 0;
+    for (id, img) in &written.images {
+        let frame = &written.frames[id];
+        let (r, t) = (frame.rig_from_world.rotation(), frame.rig_from_world.t);
+        let image = Pose { q: img.q, t: img.t };
+        assert!(
+            pose_diff(&r, &t, &image.rotation(), &image.t) <= 1e-12,
+            "frame {id}: {r} {t} vs the image's {} {}",
+            image.rotation(),
+            image.t
+        );
+        let before = &model.frames[id].rig_from_world;
+        moved += usize::from(pose_diff(&r, &t, &before.rotation(), &before.t) > 1e-9);
+    }
+    assert!(moved > 0, "no frame pose was replaced");
+    // Multi-image frames: --per-image --write is refused, nothing written.
+    let refused = base.join("refused");
+    let o = eopnp(&[
+        "register",
+        TEXT_MODEL,
+        "--per-image",
+        "--write",
+        refused.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("inconsistent"));
+    assert!(!refused.exists());
+    let _ = std::fs::remove_dir_all(&base);
+}
