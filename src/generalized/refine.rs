@@ -63,6 +63,65 @@ fn residual(
     Some((e, j))
 }
 
+/// The normal equations of the pose's pixel error, `J^T W J` and `J^T W e`, `W` the weights
+/// times the loss's IRLS weights: every observation's [`residual`] and Jacobian in closed form,
+/// `J = [q x a_r, a_r]` per row `r` of `A = J_pi d(x/z, y/z)/dp R_c` (`q = R X`), the 21
+/// entries of the symmetric `J^T W J` summed directly.
+#[allow(clippy::too_many_arguments)]
+fn normal_equations(
+    rays: &Rays,
+    rig: &Rig,
+    world: &[Point3<f64>],
+    pixels: &[nalgebra::Point2<f64>],
+    loss: Loss,
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+) -> (Matrix6<f64>, Vector6<f64>) {
+    let mut h = [0.0; 21];
+    let mut g = [0.0; 6];
+    for ry in &rays.rays {
+        let (rk, tk) = rig.pose(ry.camera);
+        let q = r * world[ry.index].coords;
+        let p = rk * (q + t) + tk;
+        if !(p.z != 0.0) {
+            continue;
+        }
+        let iz = 1.0 / p.z;
+        let (x, y) = (p.x * iz, p.y * iz);
+        let ((u, v), jp) = rays.projectors[ry.camera].project_with_jacobian(x, y);
+        let obs = pixels[ry.index];
+        let (e0, e1) = (u - obs.x, v - obs.y);
+        let w = ry.weight * loss.eval(e0 * e0 + e1 * e1).1;
+        // Rows of J_pi d(x/z, y/z)/dp, then times R_c (a^T R_c = (R_c^T a)^T).
+        let b0 = Vector3::new(jp[0] * iz, jp[1] * iz, -(jp[0] * x + jp[1] * y) * iz);
+        let b1 = Vector3::new(jp[2] * iz, jp[3] * iz, -(jp[2] * x + jp[3] * y) * iz);
+        let a0 = rk.tr_mul(&b0);
+        let a1 = rk.tr_mul(&b1);
+        let (c0, c1) = (q.cross(&a0), q.cross(&a1));
+        let j0 = [c0.x, c0.y, c0.z, a0.x, a0.y, a0.z];
+        let j1 = [c1.x, c1.y, c1.z, a1.x, a1.y, a1.z];
+        let mut k = 0;
+        for i in 0..6 {
+            let (wi0, wi1) = (w * j0[i], w * j1[i]);
+            g[i] += wi0 * e0 + wi1 * e1;
+            for jj in i..6 {
+                h[k] += wi0 * j0[jj] + wi1 * j1[jj];
+                k += 1;
+            }
+        }
+    }
+    let mut jtj = Matrix6::zeros();
+    let mut k = 0;
+    for i in 0..6 {
+        for jj in i..6 {
+            jtj[(i, jj)] = h[k];
+            jtj[(jj, i)] = h[k];
+            k += 1;
+        }
+    }
+    (jtj, Vector6::from_column_slice(&g))
+}
+
 /// The squared pixel error of ray `k` at the pose (`x_rig = R X + t`), infinite behind its
 /// camera.
 pub(crate) fn pixel_error2(
@@ -164,16 +223,7 @@ pub(crate) fn refine(
     let mut converged = false;
     while iterations < max_iterations && cost.is_finite() {
         iterations += 1;
-        let mut jtj = Matrix6::zeros();
-        let mut jte = Vector6::zeros();
-        for (k, ry) in rays.rays.iter().enumerate() {
-            let Some((e, j)) = residual(rays, rig, world, pixels, k, &r, &t) else {
-                continue;
-            };
-            let w = ry.weight * loss.eval(e.norm_squared()).1;
-            jtj += j.transpose() * j * w;
-            jte += j.transpose() * e * w;
-        }
+        let (jtj, jte) = normal_equations(rays, rig, world, pixels, loss, &r, &t);
         let gmax = jte.amax();
         if gmax <= 1e-13 * (jtj.trace() * cost.max(1e-300)).sqrt() {
             converged = true;
