@@ -30,7 +30,7 @@ pub(crate) fn inject_outliers(
 ) -> Vec<bool> {
     let n = world.len();
     let mut truth = vec![true; n];
-    if cloud.is_empty() || !(fraction > 0.0) {
+    if cloud.is_empty() || fraction.is_nan() || fraction <= 0.0 {
         return truth;
     }
     let k = ((fraction.min(1.0) * n as f64).round() as usize).min(n);

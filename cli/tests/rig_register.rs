@@ -355,7 +355,7 @@ fn one_image_frames_are_registered_image_by_image() {
     use eopnp::colmap::{DataId, Frame, Pose, SensorRig};
     let boxes = concat!(env!("CARGO_MANIFEST_DIR"), "/../data/colmap-boxes");
     let mut model = read_model(boxes, &ReadOptions::default()).unwrap();
-    for (&id, _) in &model.cameras {
+    for &id in model.cameras.keys() {
         model.rigs.insert(
             id,
             SensorRig {
