@@ -20,6 +20,8 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> rig = eopnp.Rig([cam0, cam1], [cam0_from_rig, cam1_from_rig])  # x_cam = R_k @ x_rig + t_k
 >>> sol = eopnp.solve_generalized(pixels, world, camera_idxs, rig=rig)  # x_rig = R @ X + t
 >>> sol, info = eopnp.solve_generalized_ransac(pixels, world, camera_idxs, cams_from_rig, cams)
+>>> model = eopnp.read_colmap_model("sparse/0")             # COLMAP; with rigs (3.12+):
+>>> freg = eopnp.register_frame(model, model.frame_ids[0])  # freg.solution: rig_from_world
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
 read as float64 (copied, with the GIL held); results are new float64 arrays. Errors raise the
@@ -133,7 +135,8 @@ class SolverOptions:
     that solves (``solve``, ``solve_all``, ``refine``, ``solve_ransac``, ``solve_batch``,
     ``solve_ransac_batch``, ``solve_batch_arrays``, ``register_image``, ``register_images``, and
     for rigs ``solve_generalized``, ``solve_generalized_ransac``, ``refine_generalized``,
-    ``solve_generalized_batch``, ``solve_generalized_ransac_batch``).
+    ``solve_generalized_batch``, ``solve_generalized_ransac_batch``, ``register_frame``,
+    ``register_frames``).
     Those functions also take each option as a keyword argument (not together with
     ``options=``).
 
