@@ -20,6 +20,8 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> rig = eopnp.Rig([cam0, cam1], [cam0_from_rig, cam1_from_rig])  # x_cam = R_k @ x_rig + t_k
 >>> sol = eopnp.solve_generalized(pixels, world, camera_idxs, rig=rig)  # x_rig = R @ X + t
 >>> sol, info = eopnp.solve_generalized_ransac(pixels, world, camera_idxs, cams_from_rig, cams)
+>>> model = eopnp.read_colmap_model("sparse/0")             # COLMAP; with rigs (3.12+):
+>>> freg = eopnp.register_frame(model, model.frame_ids[0])  # freg.solution: rig_from_world
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
 read as float64 (copied, with the GIL held); results are new float64 arrays. Errors raise the
@@ -32,6 +34,8 @@ from ._eopnp import (
     Camera,
     CameraError,
     DegenerateError,
+    Frame,
+    FrameRegistration,
     Image,
     InputTypeError,
     InvalidInputError,
@@ -44,6 +48,7 @@ from ._eopnp import (
     RansacOptions,
     Registration,
     Rig,
+    SensorRig,
     Solution,
     SolverOptions,
     UnknownIdError,
@@ -52,6 +57,8 @@ from ._eopnp import (
     read_colmap_model,
     refine,
     refine_generalized,
+    register_frame,
+    register_frames,
     register_image,
     register_images,
     solve,
@@ -71,6 +78,8 @@ __all__ = [
     "Camera",
     "CameraError",
     "DegenerateError",
+    "Frame",
+    "FrameRegistration",
     "Image",
     "InputTypeError",
     "InvalidInputError",
@@ -83,6 +92,7 @@ __all__ = [
     "RansacOptions",
     "Registration",
     "Rig",
+    "SensorRig",
     "Solution",
     "SolverOptions",
     "UnknownIdError",
@@ -91,6 +101,8 @@ __all__ = [
     "read_colmap_model",
     "refine",
     "refine_generalized",
+    "register_frame",
+    "register_frames",
     "register_image",
     "register_images",
     "solve",

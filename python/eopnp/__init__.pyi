@@ -20,6 +20,8 @@ the reprojection error (the maximum-likelihood pose), from the Rust crate ``eopn
 >>> rig = eopnp.Rig([cam0, cam1], [cam0_from_rig, cam1_from_rig])  # x_cam = R_k @ x_rig + t_k
 >>> sol = eopnp.solve_generalized(pixels, world, camera_idxs, rig=rig)  # x_rig = R @ X + t
 >>> sol, info = eopnp.solve_generalized_ransac(pixels, world, camera_idxs, cams_from_rig, cams)
+>>> model = eopnp.read_colmap_model("sparse/0")             # COLMAP; with rigs (3.12+):
+>>> freg = eopnp.register_frame(model, model.frame_ids[0])  # freg.solution: rig_from_world
 
 Arrays: any array-like of real numbers (float or integer dtype, any layout) is accepted and
 read as float64 (copied, with the GIL held); results are new float64 arrays. Errors raise the
@@ -88,7 +90,7 @@ class InvalidInputError(PnpError, ValueError):
     an array of the wrong shape (kind ``"Shape"``, ``argument``); for a rig, camera indices
     not one per point (kind ``"CameraIndicesLength"``, ``indices``, ``points``) or naming a
     camera the rig does not have (kind ``"UnknownCamera"``: correspondence ``index`` is in
-    ``camera``).
+    ``camera``); a COLMAP frame without images (kind ``"EmptyFrame"``, ``id``).
     """
 class InputTypeError(InvalidInputError, TypeError):
     """An input that is not an array of real numbers (also a ``TypeError``; kind ``"DType"``,
@@ -121,8 +123,10 @@ class ModelError(PnpError):
     ``reason``.
     """
 class UnknownIdError(PnpError, LookupError):
-    """No image (kind ``"UnknownImage"``) or camera (``"UnknownCamera"``) with this ``id`` in
-    the model (also a ``LookupError``).
+    """No image (kind ``"UnknownImage"``), camera (``"UnknownCamera"``), frame
+    (``"UnknownFrame"``) or rig (``"UnknownRig"``) with this ``id`` in the model, or a
+    frame's camera without a known pose in its rig (``"NoSensorPose"``: ``rig_id``,
+    ``camera_id``, and ``id`` the camera's) (also a ``LookupError``).
     """
 
 @final
@@ -131,7 +135,8 @@ class SolverOptions:
     that solves (``solve``, ``solve_all``, ``refine``, ``solve_ransac``, ``solve_batch``,
     ``solve_ransac_batch``, ``solve_batch_arrays``, ``register_image``, ``register_images``, and
     for rigs ``solve_generalized``, ``solve_generalized_ransac``, ``refine_generalized``,
-    ``solve_generalized_batch``, ``solve_generalized_ransac_batch``).
+    ``solve_generalized_batch``, ``solve_generalized_ransac_batch``, ``register_frame``,
+    ``register_frames``).
     Those functions also take each option as a keyword argument (not together with
     ``options=``).
 
@@ -496,6 +501,51 @@ class Image:
         """The observations' 3D point ids, -1 for an untriangulated observation, shape (K,)."""
 
 @final
+class Frame:
+    """A frame of a COLMAP model with rigs: the images one rig took at once, and the rig's pose
+    then (``rig_from_world``: ``x_rig = R(q) X + t``).
+    """
+
+    @property
+    def id(self) -> int:
+        """Frame id."""
+    @property
+    def rig_id(self) -> int:
+        """Id of the frame's rig (in ``Model.rigs``)."""
+    @property
+    def image_ids(self) -> list[int]:
+        """The frame's images' ids, in the frame's order (data of other sensors left out)."""
+    @property
+    def q(self) -> _F64Array:
+        """The rig's pose (rig_from_world): its quaternion (w, x, y, z) as stored, shape (4,)."""
+    @property
+    def t(self) -> _F64Array:
+        """The rig's pose: its translation, shape (3,)."""
+    @property
+    def R(self) -> _F64Array:
+        """The rig's pose: its rotation matrix (from the normalised quaternion), shape (3, 3)."""
+
+@final
+class SensorRig:
+    """A rig of a COLMAP model with rigs: cameras fixed to one body, each with its pose in the rig
+    (``cam_from_rig``: ``x_cam = R x_rig + t``); the reference camera's is the identity. Only
+    the rig's cameras are shown (COLMAP's other sensors, IMUs, are left out).
+    """
+
+    @property
+    def id(self) -> int:
+        """Rig id."""
+    @property
+    def ref_camera_id(self) -> int | None:
+        """The reference camera's id, or None if the reference sensor is not a camera."""
+    @property
+    def cams_from_rig(self) -> dict[int, _F64Array | None]:
+        """The rig's cameras by id, the reference first: each camera's ``[R | t]``
+        (cam_from_rig), shape (3, 4), or None if the model does not know it (a new dict on
+        each access).
+        """
+
+@final
 class Model:
     """A COLMAP sparse reconstruction, as read by ``read_colmap_model`` (read-only).
 
@@ -512,6 +562,19 @@ class Model:
     def image_ids(self) -> list[int]:
         """The image ids, ascending."""
     @property
+    def frames(self) -> dict[int, Frame]:
+        """Frames by id (a new dict of new ``Frame`` objects on each access): empty unless the
+        model has rigs (COLMAP 3.12 and later).
+        """
+    @property
+    def frame_ids(self) -> list[int]:
+        """The frame ids, ascending."""
+    @property
+    def rigs(self) -> dict[int, SensorRig]:
+        """Rigs by id (a new dict of new ``SensorRig`` objects on each access): empty unless the
+        model has rigs.
+        """
+    @property
     def num_points3D(self) -> int:
         """Number of 3D points."""
     @property
@@ -522,6 +585,8 @@ class Model:
         """The 3D points' coordinates in the order of ``point3D_ids``, shape (M, 3)."""
     def image(self, image_id: int) -> Image:
         """The image with this id. Raises ``UnknownIdError`` if there is none."""
+    def frame(self, frame_id: int) -> Frame:
+        """The frame with this id. Raises ``UnknownIdError`` if there is none."""
     def camera_of(self, image_id: int) -> Camera:
         """The camera of an image. Raises ``UnknownIdError``."""
     def correspondences(self, image_id: int) -> tuple[_F64Array, _F64Array]:
@@ -590,6 +655,89 @@ class Registration:
     @property
     def micros(self) -> float:
         """Wall time of undistortion plus solve, microseconds."""
+
+@final
+class FrameRegistration:
+    """The result of ``register_frame``: a frame's rig pose, as ``Registration`` is an image's
+    camera pose. Picklable.
+
+    Attributes:
+        frame_id, rig_id: the frame and its rig.
+        image_ids: the frame's images, in the frame's order.
+        n: their 2D-3D correspondences, all images together.
+        inliers: correspondences the pose was fitted to (all that could be undistorted, or
+            RANSAC's inliers).
+        skipped: observations whose pixel could not be undistorted.
+        solution: the estimated rig pose, rig_from_world ``x_rig = R @ X + t`` (``Solution``).
+        ransac: RANSAC's statistics (dict, as ``Registration.ransac``), or None without RANSAC.
+        rotation_error_deg: rotation difference to the model's rig_from_world, degrees.
+        translation_error_pct: translation difference, percent of the model's ``|t|``.
+        rmse_px: RMS pixel reprojection error of the estimated pose over the fitted points, each
+            through its own camera.
+        model_rmse_px: the same for the model's frame pose.
+        micros: wall time of undistortion plus solve, microseconds.
+        model_rig_from_world: the model's frame pose ``[R | t]``, shape (3, 4).
+        cams_from_world: each image's camera pose from the estimate, ``[R_k | t_k]`` =
+            cam_from_rig composed with ``solution``, in the order of ``image_ids``, shape
+            (K, 3, 4).
+    """
+
+    @property
+    def frame_id(self) -> int:
+        """The frame's id."""
+    @property
+    def rig_id(self) -> int:
+        """The frame's rig's id."""
+    @property
+    def image_ids(self) -> list[int]:
+        """The frame's images, in the frame's order: camera ``k`` of the solved rig is image
+        ``image_ids[k]``'s camera.
+        """
+    @property
+    def n(self) -> int:
+        """The 2D-3D correspondences of the frame's images."""
+    @property
+    def inliers(self) -> int:
+        """Correspondences the pose was fitted to (all that could be undistorted, or RANSAC's
+        inliers).
+        """
+    @property
+    def skipped(self) -> int:
+        """Observations whose pixel could not be undistorted."""
+    @property
+    def solution(self) -> Solution:
+        """The estimated rig pose, rig_from_world (``x_rig = R @ X + t``)."""
+    @property
+    def ransac(self) -> dict[str, Any] | None:
+        """RANSAC's statistics (iterations, hypotheses, local_fits, final_fits, inliers,
+        inlier_ratio, micros), or None without RANSAC.
+        """
+    @property
+    def rotation_error_deg(self) -> float:
+        """Rotation difference to the model's rig_from_world, degrees."""
+    @property
+    def translation_error_pct(self) -> float:
+        """Translation difference, percent of the model's ``|t|``."""
+    @property
+    def rmse_px(self) -> float:
+        """RMS pixel reprojection error of the estimated pose over the fitted points, each through
+        its own camera.
+        """
+    @property
+    def model_rmse_px(self) -> float:
+        """The same for the model's frame pose."""
+    @property
+    def micros(self) -> float:
+        """Wall time of undistortion plus solve, microseconds."""
+    @property
+    def model_rig_from_world(self) -> _F64Array:
+        """The model's frame pose (rig_from_world) ``[R | t]``, shape (3, 4)."""
+    @property
+    def cams_from_world(self) -> _F64Array:
+        """Each image's camera pose from the estimated rig pose, ``[R_k | t_k]`` (its
+        cam_from_rig composed with ``solution``: ``x_cam = R_k @ X + t_k``), in the order of
+        ``image_ids``, shape (K, 3, 4).
+        """
 
 def solve(
     world: _ArrayLike,
@@ -931,9 +1079,10 @@ def solve_ransac(
     """
 
 def read_colmap_model(path: str | os.PathLike[str]) -> Model:
-    """Reads a COLMAP sparse model directory: ``cameras``, ``images`` and ``points3D``, in the text
-    (``.txt``) or binary (``.bin``) format (binary preferred when both are present), and checks
-    its cross-references.
+    """Reads a COLMAP sparse model directory: ``cameras``, ``images`` and ``points3D``, and
+    ``rigs`` and ``frames`` when present (COLMAP 3.12 and later), in the text (``.txt``) or
+    binary (``.bin``) format (binary preferred when both are present), and checks its
+    cross-references.
 
     Raises:
         ModelError: a missing or malformed file, with the file, line or byte offset and reason.
@@ -1008,6 +1157,81 @@ def register_images(
         list: one entry per id, in order: its ``Registration``, or the exception
         ``register_image`` would raise for it (an instance, not raised). Equal to
         ``register_image`` one by one but the times, whatever ``threads``.
+
+    Raises:
+        InvalidOptionError: an option out of range or a bad ``threads``.
+        TypeError: as ``solve``.
+    """
+
+def register_frame(
+    model: Model,
+    frame_id: int,
+    *,
+    ransac: _RansacArg | bool = None,
+    options: _Options = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+) -> FrameRegistration:
+    """Re-estimates the pose of a frame's rig from the 2D-3D correspondences of all its images at
+    once and compares it with the model's frame pose (rig_from_world): the frame's images are
+    the cameras of a rig, each with its cam_from_rig from ``Model.rigs``, as
+    ``solve_generalized`` (``solve_generalized_ransac`` with RANSAC) solves it, every
+    observation through its own camera, distortion included.
+
+    Args:
+        model: a ``Model`` from ``read_colmap_model`` of a model with rigs (COLMAP 3.12+).
+        frame_id: the frame (``Model.frame_ids``).
+        ransac: None or False: on every correspondence; True (default options), a
+            ``RansacOptions`` or a dict of its fields: robust, as ``register_image``.
+        options, **keywords: the solver's options, as ``register_image``.
+
+    Returns:
+        FrameRegistration: the rig pose, its errors against the model's, RANSAC's statistics,
+        each image's camera pose.
+
+    Raises:
+        UnknownIdError: no such frame (kind ``"UnknownFrame"``), or its rig, an image or a
+            camera is missing, or a camera has no known pose in the rig (``"NoSensorPose"``).
+        InvalidInputError: a frame without images (``"EmptyFrame"``); and as
+            ``register_image``: InvalidInputError, DegenerateError, NoConsensusError, ... on
+            the frame's correspondences.
+    """
+
+def register_frames(
+    model: Model,
+    frame_ids: Iterable[int] | None = None,
+    *,
+    ransac: _RansacArg | bool = None,
+    options: _Options = None,
+    threads: int | None = None,
+    refinement: _Refinement = "ml",
+    planar: _Planar = "auto",
+    newton_iterations: int | None = None,
+    newton_step_tolerance: float | None = None,
+    reprojection_iterations: int | None = None,
+    exhaustive: bool = False,
+    loss: _Loss = None,
+    covariance: _Covariance = None,
+) -> list[FrameRegistration | PnpError]:
+    """Registers many frames of a model (``register_frame`` on each), in parallel, the GIL
+    released for the whole call, as ``register_images``.
+
+    Args:
+        model: a ``Model`` from ``read_colmap_model``.
+        frame_ids: the frames (any iterable of ids), or None for every frame in id order.
+        ransac, options, **keywords: as ``register_frame``.
+        threads: None (rayon's global pool) or the number of threads, as ``solve_batch``.
+
+    Returns:
+        list: one entry per id, in order: its ``FrameRegistration``, or the exception
+        ``register_frame`` would raise for it (an instance, not raised). Equal to
+        ``register_frame`` one by one but the times, whatever ``threads``.
 
     Raises:
         InvalidOptionError: an option out of range or a bad ``threads``.
@@ -1327,6 +1551,8 @@ __all__ = [
     "Camera",
     "CameraError",
     "DegenerateError",
+    "Frame",
+    "FrameRegistration",
     "Image",
     "InputTypeError",
     "InvalidInputError",
@@ -1339,6 +1565,7 @@ __all__ = [
     "RansacOptions",
     "Registration",
     "Rig",
+    "SensorRig",
     "Solution",
     "SolverOptions",
     "UnknownIdError",
@@ -1347,6 +1574,8 @@ __all__ = [
     "read_colmap_model",
     "refine",
     "refine_generalized",
+    "register_frame",
+    "register_frames",
     "register_image",
     "register_images",
     "solve",

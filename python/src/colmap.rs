@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use eopnp::colmap::{self, Image, Model, Registrar, Registration};
-use eopnp::ransac::Ransac;
+use eopnp::ransac::{Ransac, RansacStats};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -16,6 +16,7 @@ use crate::batch::in_pool;
 use crate::camera::PyCamera;
 use crate::convert::{array1, array2};
 use crate::errors::{model_error, register_error};
+use crate::frames::{PyFrame, PySensorRig};
 use crate::options::{solver_arg, KEYWORDS};
 use crate::ransac::ransac_arg;
 use crate::solution::PySolution;
@@ -25,7 +26,7 @@ use crate::solution::PySolution;
 /// Poses are COLMAP's: world to camera, ``x_cam = R(q) X + t``.
 #[pyclass(frozen, module = "eopnp", name = "Model")]
 pub(crate) struct PyModel {
-    inner: Arc<Model>,
+    pub(crate) inner: Arc<Model>,
 }
 
 /// An image of a COLMAP model: its pose, camera and 2D observations.
@@ -69,6 +70,34 @@ impl PyModel {
         self.inner.images.keys().copied().collect()
     }
 
+    /// Frames by id (a new dict of new ``Frame`` objects on each access): empty unless the
+    /// model has rigs (COLMAP 3.12 and later).
+    #[getter]
+    fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (id, f) in &self.inner.frames {
+            d.set_item(*id, PyFrame { inner: f.clone() })?;
+        }
+        Ok(d)
+    }
+
+    /// The frame ids, ascending.
+    #[getter]
+    fn frame_ids(&self) -> Vec<u32> {
+        self.inner.frames.keys().copied().collect()
+    }
+
+    /// Rigs by id (a new dict of new ``SensorRig`` objects on each access): empty unless the
+    /// model has rigs.
+    #[getter]
+    fn rigs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (id, r) in &self.inner.rigs {
+            d.set_item(*id, PySensorRig { inner: r.clone() })?;
+        }
+        Ok(d)
+    }
+
     /// Number of 3D points.
     #[getter]
     #[allow(non_snake_case)]
@@ -100,6 +129,17 @@ impl PyModel {
     fn image(&self, py: Python<'_>, image_id: u32) -> PyResult<PyImage> {
         let inner = image_by_id(py, &self.inner, image_id)?.clone();
         Ok(PyImage { inner })
+    }
+
+    /// The frame with this id. Raises ``UnknownIdError`` if there is none.
+    fn frame(&self, py: Python<'_>, frame_id: u32) -> PyResult<PyFrame> {
+        let inner = self
+            .inner
+            .frames
+            .get(&frame_id)
+            .ok_or_else(|| register_error(py, &colmap::RegisterError::UnknownFrame(frame_id)))?
+            .clone();
+        Ok(PyFrame { inner })
     }
 
     /// The camera of an image. Raises ``UnknownIdError``.
@@ -222,9 +262,10 @@ impl PyImage {
     }
 }
 
-/// Reads a COLMAP sparse model directory: ``cameras``, ``images`` and ``points3D``, in the text
-/// (``.txt``) or binary (``.bin``) format (binary preferred when both are present), and checks
-/// its cross-references.
+/// Reads a COLMAP sparse model directory: ``cameras``, ``images`` and ``points3D``, and
+/// ``rigs`` and ``frames`` when present (COLMAP 3.12 and later), in the text (``.txt``) or
+/// binary (``.bin``) format (binary preferred when both are present), and checks its
+/// cross-references.
 ///
 /// Raises:
 ///     ModelError: a missing or malformed file, with the file, line or byte offset and reason.
@@ -350,7 +391,7 @@ pub(crate) fn register_image(
 
 /// The RANSAC options of ``register_image``'s ``ransac``: None or False (plain), True
 /// (defaults), a ``RansacOptions`` or a dict.
-fn registration_ransac(
+pub(crate) fn registration_ransac(
     py: Python<'_>,
     ransac: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Option<Ransac>> {
@@ -367,22 +408,22 @@ fn registration_ransac(
     })
 }
 
+/// RANSAC's statistics as ``Registration.ransac``'s dict.
+pub(crate) fn ransac_stats(py: Python<'_>, s: &RansacStats) -> PyResult<Py<PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("iterations", s.iterations)?;
+    d.set_item("hypotheses", s.hypotheses)?;
+    d.set_item("local_fits", s.local_fits)?;
+    d.set_item("final_fits", s.final_fits)?;
+    d.set_item("inliers", s.inliers)?;
+    d.set_item("inlier_ratio", s.inlier_ratio)?;
+    d.set_item("micros", s.micros)?;
+    Ok(d.unbind())
+}
+
 /// A ``Registration`` of `reg`.
 fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
-    let stats = match reg.ransac {
-        None => None,
-        Some(s) => {
-            let d = PyDict::new(py);
-            d.set_item("iterations", s.iterations)?;
-            d.set_item("hypotheses", s.hypotheses)?;
-            d.set_item("local_fits", s.local_fits)?;
-            d.set_item("final_fits", s.final_fits)?;
-            d.set_item("inliers", s.inliers)?;
-            d.set_item("inlier_ratio", s.inlier_ratio)?;
-            d.set_item("micros", s.micros)?;
-            Some(d.unbind())
-        }
-    };
+    let stats = reg.ransac.map(|s| ransac_stats(py, &s)).transpose()?;
     Ok(PyRegistration {
         image_id: reg.image_id,
         name: reg.name,

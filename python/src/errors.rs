@@ -7,7 +7,7 @@
 //! PnpError(Exception)                          base of every error of this package
 //! ├── InvalidInputError(PnpError, ValueError)  TooFewPoints, LengthMismatch, WeightsLength,
 //! │   │                                        NonFinite, InvalidWeight, CameraIndicesLength,
-//! │   │                                        UnknownCamera; wrong array shapes
+//! │   │                                        UnknownCamera, EmptyFrame; wrong array shapes
 //! │   └── InputTypeError(InvalidInputError, TypeError)   arrays that are not real numbers
 //! ├── DegenerateError(PnpError, ValueError)    Degenerate
 //! ├── NoSolutionError(PnpError, RuntimeError)  NoSolution
@@ -15,7 +15,8 @@
 //! ├── NoConsensusError(PnpError, RuntimeError) NoConsensus
 //! ├── CameraError(PnpError, ValueError)        an invalid camera
 //! ├── ModelError(PnpError)                     a COLMAP model that cannot be read
-//! └── UnknownIdError(PnpError, LookupError)    no such image or camera in a COLMAP model
+//! └── UnknownIdError(PnpError, LookupError)    no such image, camera, frame or rig in a
+//!                                              COLMAP model; NoSensorPose
 //! ```
 //!
 //! `create_exception!` takes one base class: each class is created with its base in this
@@ -58,7 +59,7 @@ create_exception!(
      an array of the wrong shape (kind ``\"Shape\"``, ``argument``); for a rig, camera indices\n\
      not one per point (kind ``\"CameraIndicesLength\"``, ``indices``, ``points``) or naming a\n\
      camera the rig does not have (kind ``\"UnknownCamera\"``: correspondence ``index`` is in\n\
-     ``camera``)."
+     ``camera``); a COLMAP frame without images (kind ``\"EmptyFrame\"``, ``id``)."
 );
 create_exception!(
     eopnp,
@@ -115,8 +116,10 @@ create_exception!(
     eopnp,
     UnknownIdError,
     PnpError,
-    "No image (kind ``\"UnknownImage\"``) or camera (``\"UnknownCamera\"``) with this ``id`` in\n\
-     the model (also a ``LookupError``)."
+    "No image (kind ``\"UnknownImage\"``), camera (``\"UnknownCamera\"``), frame\n\
+     (``\"UnknownFrame\"``) or rig (``\"UnknownRig\"``) with this ``id`` in the model, or a\n\
+     frame's camera without a known pose in its rig (``\"NoSensorPose\"``: ``rig_id``,\n\
+     ``camera_id``, and ``id`` the camera's) (also a ``LookupError``)."
 );
 
 /// Adds the exception classes to the module, each with its builtin second base (see the
@@ -427,6 +430,28 @@ pub(crate) fn register_error(py: Python<'_>, e: &RegisterError) -> PyErr {
             e.to_string(),
             vec![("id", (*id).into())],
         ),
+        RegisterError::UnknownFrame(id) => error::<UnknownIdError>(
+            py,
+            "UnknownFrame",
+            e.to_string(),
+            vec![("id", (*id).into())],
+        ),
+        RegisterError::UnknownRig(id) => {
+            error::<UnknownIdError>(py, "UnknownRig", e.to_string(), vec![("id", (*id).into())])
+        }
+        RegisterError::NoSensorPose { rig_id, camera_id } => error::<UnknownIdError>(
+            py,
+            "NoSensorPose",
+            e.to_string(),
+            vec![
+                ("id", (*camera_id).into()),
+                ("rig_id", (*rig_id).into()),
+                ("camera_id", (*camera_id).into()),
+            ],
+        ),
+        RegisterError::EmptyFrame(id) => {
+            error::<InvalidInputError>(py, "EmptyFrame", e.to_string(), vec![("id", (*id).into())])
+        }
         _ => error::<PnpError>(py, "Other", e.to_string(), vec![]),
     }
 }

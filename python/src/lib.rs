@@ -22,6 +22,7 @@ mod camera;
 mod colmap;
 mod convert;
 mod errors;
+mod frames;
 mod options;
 mod pose;
 mod ransac;
@@ -51,6 +52,9 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(colmap::read_colmap_model, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::register_image, m)?)?;
     m.add_function(wrap_pyfunction!(colmap::register_images, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::register_frame, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::register_frames, m)?)?;
+    m.add_function(wrap_pyfunction!(frames::_frame_registration_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(solution::_solution_from_state, m)?)?;
     m.add_class::<solution::PySolution>()?;
     m.add_class::<camera::PyCamera>()?;
@@ -60,5 +64,8 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<colmap::PyModel>()?;
     m.add_class::<colmap::PyImage>()?;
     m.add_class::<colmap::PyRegistration>()?;
+    m.add_class::<frames::PyFrame>()?;
+    m.add_class::<frames::PySensorRig>()?;
+    m.add_class::<frames::PyFrameRegistration>()?;
     Ok(())
 }

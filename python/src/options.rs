@@ -48,7 +48,8 @@ enum Noise {
 /// that solves (``solve``, ``solve_all``, ``refine``, ``solve_ransac``, ``solve_batch``,
 /// ``solve_ransac_batch``, ``solve_batch_arrays``, ``register_image``, ``register_images``, and
 /// for rigs ``solve_generalized``, ``solve_generalized_ransac``, ``refine_generalized``,
-/// ``solve_generalized_batch``, ``solve_generalized_ransac_batch``).
+/// ``solve_generalized_batch``, ``solve_generalized_ransac_batch``, ``register_frame``,
+/// ``register_frames``).
 /// Those functions also take each option as a keyword argument (not together with
 /// ``options=``).
 ///
