@@ -8,7 +8,7 @@ use eopnp::colmap::{self, Image, Model, Registrar, Registration};
 use eopnp::ransac::{Ransac, RansacStats};
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyDict, PyList, PyTuple};
 use rayon::prelude::*;
 
 use crate::batch::in_pool;
@@ -345,6 +345,59 @@ impl PyRegistration {
              rmse_px={:.4})",
             self.image_id, self.name, self.n, self.inliers, self.rotation_error_deg, self.rmse_px
         )
+    }
+
+    /// Pickling: the fields (the solution and RANSAC's dict pickle themselves).
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let rebuild = py
+            .import("eopnp._eopnp")?
+            .getattr("_registration_from_state")?;
+        let state: RegistrationState = (
+            (self.image_id, self.name.clone()),
+            (self.n, self.inliers, self.skipped),
+            self.solution.clone_ref(py),
+            self.ransac.as_ref().map(|d| d.clone_ref(py)),
+            (
+                self.rotation_error_deg,
+                self.translation_error_pct,
+                self.rmse_px,
+                self.model_rmse_px,
+                self.micros,
+            ),
+        );
+        Ok((rebuild, PyTuple::new(py, [state.into_pyobject(py)?])?))
+    }
+}
+
+type RegistrationState = (
+    (u32, String),
+    (usize, usize, usize),
+    Py<PySolution>,
+    Option<Py<PyDict>>,
+    (f64, f64, f64, f64, f64),
+);
+
+/// Rebuilds a `Registration` from `__reduce__`'s state (private; for pickle).
+#[pyfunction]
+pub(crate) fn _registration_from_state(state: RegistrationState) -> PyRegistration {
+    let ((image_id, name), (n, inliers, skipped), solution, ransac, errors) = state;
+    let (rotation_error_deg, translation_error_pct, rmse_px, model_rmse_px, micros) = errors;
+    PyRegistration {
+        image_id,
+        name,
+        n,
+        inliers,
+        skipped,
+        solution,
+        ransac,
+        rotation_error_deg,
+        translation_error_pct,
+        rmse_px,
+        model_rmse_px,
+        micros,
     }
 }
 

@@ -55,6 +55,7 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frames::register_frame, m)?)?;
     m.add_function(wrap_pyfunction!(frames::register_frames, m)?)?;
     m.add_function(wrap_pyfunction!(frames::_frame_registration_from_state, m)?)?;
+    m.add_function(wrap_pyfunction!(colmap::_registration_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(solution::_solution_from_state, m)?)?;
     m.add_class::<solution::PySolution>()?;
     m.add_class::<camera::PyCamera>()?;

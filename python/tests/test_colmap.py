@@ -139,3 +139,17 @@ def test_register_covariance(model):
     assert eopnp.register_image(model, 2).solution.covariance is None
     with pytest.raises(eopnp.InvalidOptionError, match="covariance"):
         eopnp.register_image(model, 2, covariance=0.0)
+
+
+@pytest.mark.parametrize("ransac", [None, True])
+def test_registration_pickles(model, ransac):
+    import pickle
+
+    reg = eopnp.register_image(model, 1, ransac=ransac, covariance="estimated")
+    back = pickle.loads(pickle.dumps(reg))
+    assert type(back) is eopnp.Registration
+    assert back.solution == reg.solution and back.solution.covariance is not None
+    for field in ("image_id", "name", "n", "inliers", "skipped", "ransac", "rotation_error_deg",
+                  "translation_error_pct", "rmse_px", "model_rmse_px", "micros"):
+        assert getattr(back, field) == getattr(reg, field), field
+    assert repr(back) == repr(reg)
