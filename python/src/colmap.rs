@@ -16,7 +16,7 @@ use crate::batch::in_pool;
 use crate::camera::PyCamera;
 use crate::convert::{array1, array2};
 use crate::errors::{model_error, register_error};
-use crate::frames::{PyFrame, PySensorRig};
+use crate::model_rigs::{PyFrame, PySensorRig};
 use crate::options::{solver_arg, KEYWORDS};
 use crate::ransac::ransac_arg;
 use crate::solution::PySolution;

@@ -23,6 +23,7 @@ mod colmap;
 mod convert;
 mod errors;
 mod frames;
+mod model_rigs;
 mod options;
 mod pose;
 mod ransac;
@@ -65,8 +66,8 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<colmap::PyModel>()?;
     m.add_class::<colmap::PyImage>()?;
     m.add_class::<colmap::PyRegistration>()?;
-    m.add_class::<frames::PyFrame>()?;
-    m.add_class::<frames::PySensorRig>()?;
+    m.add_class::<model_rigs::PyFrame>()?;
+    m.add_class::<model_rigs::PySensorRig>()?;
     m.add_class::<frames::PyFrameRegistration>()?;
     Ok(())
 }
