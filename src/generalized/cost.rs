@@ -37,16 +37,8 @@ pub(crate) struct Cost {
     g9: [f64; 9],
 }
 
-/// `K` of a point: `K r = R x` for row-major `r = vec(R)`.
-fn k_matrix(x: &Vector3<f64>) -> SMatrix<f64, 3, 9> {
-    let mut k = SMatrix::<f64, 3, 9>::zeros();
-    for a in 0..3 {
-        for b in 0..3 {
-            k[(a, 3 * a + b)] = x[b];
-        }
-    }
-    k
-}
+/// The index in `[xx, xy, xz, yy, yz, zz]` of the product `x_i x_j`, `i <= j`.
+const SYM3: [[usize; 3]; 3] = [[0, 1, 2], [1, 3, 4], [2, 4, 5]];
 
 impl Cost {
     /// Accumulates the moments of the rays `(x_i, c_i, v_i, w_i)` (world point, centre, unit
@@ -61,17 +53,55 @@ impl Cost {
         let mut q = Vector3::zeros();
         let mut p = V9::zeros();
         let mut s0 = 0.0;
+        // With `K r = R x`, `K[a, 3a + b] = x_b`: `K^T Q K` is the Kronecker product
+        // `Q (x) x x^T` (block `(a, b)` is `Q_ab x x^T`), `Q K` has `(Q K)[c, 3b + j] =
+        // Q_cb x_j` and `K^T Q c` has entries `x_i (Q c)_a`: the upper triangle of `S` summed
+        // from the 6 + 6 products, no 9 x 9 matrix product.
+        let mut s45 = [0.0; 45];
         for (x, c, v, w) in rays {
             let qm = (Matrix3::identity() - v * v.transpose()) * w;
-            let km = k_matrix(&x);
-            let qk = qm * km;
             let qc = qm * c;
+            let xx = [
+                x.x * x.x,
+                x.x * x.y,
+                x.x * x.z,
+                x.y * x.y,
+                x.y * x.z,
+                x.z * x.z,
+            ];
+            let mut n = 0;
+            for i in 0..9 {
+                let (a, ii) = (i / 3, i % 3);
+                for j in i..9 {
+                    let (b, jj) = (j / 3, j % 3);
+                    let (lo, hi) = if ii <= jj { (ii, jj) } else { (jj, ii) };
+                    s45[n] += qm[(a, b)] * xx[SYM3[lo][hi]];
+                    n += 1;
+                }
+            }
+            for cc in 0..3 {
+                for b in 0..3 {
+                    for jj in 0..3 {
+                        gm[(cc, 3 * b + jj)] += qm[(cc, b)] * x[jj];
+                    }
+                }
+            }
+            for a in 0..3 {
+                for ii in 0..3 {
+                    p[3 * a + ii] += x[ii] * qc[a];
+                }
+            }
             h += qm;
-            gm += qk;
-            s += km.transpose() * qk;
             q += qc;
-            p += km.transpose() * qc;
             s0 += c.dot(&qc);
+        }
+        let mut n = 0;
+        for i in 0..9 {
+            for j in i..9 {
+                s[(i, j)] = s45[n];
+                s[(j, i)] = s45[n];
+                n += 1;
+            }
         }
         let h_inv = h.try_inverse()?;
         let hg = h_inv * gm;
@@ -198,3 +228,7 @@ pub(crate) fn vec9(r: &Matrix3<f64>) -> V9 {
 fn row_major(r: &Matrix3<f64>) -> [f64; 9] {
     std::array::from_fn(|i| r[(i / 3, i % 3)])
 }
+
+#[cfg(test)]
+#[path = "../../tests/unit/generalized/cost.rs"]
+mod tests;

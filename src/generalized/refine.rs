@@ -202,7 +202,8 @@ struct Evaluated {
 /// iterations: the normal equations `(J^T W J + lambda diag(J^T W J)) delta = -J^T W e`, `W`
 /// the weights times the loss's IRLS weights at the current residuals; a step is kept if it lowers the cost and moves no observation across
 /// its camera's plane (`lambda / 10`), otherwise `lambda x 10`; stops when the step is below
-/// `xtol` (relative), the gradient below `gtol`, or `lambda` above 1e16.
+/// `xtol` (relative), the gradient below `gtol`, the Gauss-Newton step's predicted decrease below
+/// `1e-14` of the cost, or `lambda` above 1e16.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     rays: &Rays,
@@ -228,6 +229,20 @@ pub(crate) fn refine(
         if gmax <= 1e-13 * (jtj.trace() * cost.max(1e-300)).sqrt() {
             converged = true;
             break;
+        }
+        // The Gauss-Newton step's predicted decrease of `sum w |e|^2`, `-(2 d^T J^T W e +
+        // d^T J^T W J d)`: at the rounding level of the cost no step can lower it (the trials
+        // would only raise lambda to its limit, a pass each): a minimum.
+        let mut floor = jtj;
+        for i in 0..6 {
+            floor[(i, i)] += 1e-12 * jtj.trace() / 6.0;
+        }
+        if let Some(ch) = floor.cholesky() {
+            let d = -ch.solve(&jte);
+            if -(2.0 * d.dot(&jte) + d.dot(&(jtj * d))) <= 1e-14 * cost {
+                converged = true;
+                break;
+            }
         }
         let mut stepped = false;
         while lambda <= 1e16 {
