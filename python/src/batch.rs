@@ -937,7 +937,16 @@ pub(crate) fn solve_batch_arrays<'py>(
     let t_out = output(py, &[b, 3]);
     let cost_out = output(py, &[b]);
     let rmse_out = output(py, &[b]);
-    let ok_out = PyArray1::<bool>::zeros(py, b, false);
+    // Not `zeros`: numpy's zeroed allocation (calloc) releases the GIL for a large array, which
+    // would let other threads write the inputs before they are copied (found by
+    // tests/test_batch_copies.py). Zeroed here, with the GIL held.
+    // SAFETY: a new array of `b` bools; its bytes are set to 0 (false) before any reference to
+    // them is made.
+    let ok_out = unsafe {
+        let a = PyArray1::<bool>::new(py, b, false);
+        std::ptr::write_bytes(a.data(), 0, b);
+        a
+    };
     let cov_out = want_cov.then(|| (output(py, &[b, 6, 6]), output(py, &[b])));
     // SAFETY: new arrays, referenced by nothing else until they are returned.
     let (r, t, cost, rmse, ok, cov) = unsafe {
