@@ -9,9 +9,9 @@ use rand_pcg::Pcg64;
 
 fn random_rotation(rng: &mut Pcg64) -> Matrix3<f64> {
     let s = Vector3::new(
-        rng.gen_range(-2.0..2.0),
-        rng.gen_range(-2.0..2.0),
-        rng.gen_range(-2.0..2.0),
+        rng.random_range(-2.0..2.0),
+        rng.random_range(-2.0..2.0),
+        rng.random_range(-2.0..2.0),
     );
     cgr_to_rotation(&s)
 }
@@ -21,26 +21,26 @@ fn moments_equal_the_direct_sum() {
     let mut rng = Pcg64::seed_from_u64(7);
     let mut worst: f64 = 0.0;
     for _ in 0..500 {
-        let n = rng.gen_range(4..40);
+        let n = rng.random_range(4..40);
         let rays: Vec<(Vector3<f64>, Vector3<f64>, Vector3<f64>, f64)> = (0..n)
             .map(|_| {
                 let x = Vector3::new(
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
                 );
                 let c = Vector3::new(
-                    rng.gen_range(-0.5..0.5),
-                    rng.gen_range(-0.5..0.5),
-                    rng.gen_range(-0.5..0.5),
+                    rng.random_range(-0.5..0.5),
+                    rng.random_range(-0.5..0.5),
+                    rng.random_range(-0.5..0.5),
                 );
                 let v = Vector3::new(
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
-                    rng.gen_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
                 )
                 .normalize();
-                (x, c, v, rng.gen_range(0.1..2.0))
+                (x, c, v, rng.random_range(0.1..2.0))
             })
             .collect();
         let cost = Cost::new(rays.iter().copied()).expect("rays in general position");
