@@ -7,6 +7,9 @@ use super::*;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
+/// A ray's world point, centre, unit direction and weight.
+type Ray = (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64);
+
 fn random_rotation(rng: &mut Pcg64) -> Matrix3<f64> {
     let s = Vector3::new(
         rng.random_range(-2.0..2.0),
@@ -22,7 +25,7 @@ fn moments_equal_the_direct_sum() {
     let mut worst: f64 = 0.0;
     for _ in 0..500 {
         let n = rng.random_range(4..40);
-        let rays: Vec<(Vector3<f64>, Vector3<f64>, Vector3<f64>, f64)> = (0..n)
+        let rays: Vec<Ray> = (0..n)
             .map(|_| {
                 let x = Vector3::new(
                     rng.random_range(-1.0..1.0),
