@@ -61,6 +61,16 @@ codegen_version=${codegen_pkgid##*[#@]}
 cli_pkgid=$(cargo pkgid --offline -p eopnp-cli)
 cli_version=${cli_pkgid##*[#@]}
 
+# Cargo unpacks the temporary registry's crates into $CARGO_HOME/registry/src/-<hash>/ (the
+# hash of the registry's path) and reuses an unpacked copy it finds there: a second check from
+# a checkout at the same path would verify eopnp-cli against the eopnp of the first. Those
+# copies of this workspace's own crates are removed first (only the temporary registries'
+# directories, whose names start with "-"; crates.io's are left alone).
+cargo_home=${CARGO_HOME:-$HOME/.cargo}
+for crate in "eopnp-codegen-$codegen_version" "eopnp-$version" "eopnp-cli-$cli_version"; do
+  rm -rf "$cargo_home"/registry/src/-*/"$crate"
+done
+
 echo "== cargo package -p eopnp-codegen -p eopnp -p eopnp-cli (verified)"
 cargo package "${package_flags[@]}" -p eopnp-codegen -p eopnp -p eopnp-cli
 for crate in "eopnp-codegen-$codegen_version" "eopnp-$version" "eopnp-cli-$cli_version"; do
