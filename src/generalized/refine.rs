@@ -3,11 +3,11 @@
 //! with the solver's robust loss by iteratively reweighted steps, and the pose covariance from
 //! the same normal equations.
 
-use nalgebra::{Matrix2x3, Matrix3, Matrix6, SMatrix, Vector2, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 use super::rays::Rays;
 use crate::covariance::{NoiseModel, PoseCovariance};
-use crate::numeric::rotation::{exp_so3, skew};
+use crate::numeric::rotation::exp_so3;
 use crate::pipeline::Loss;
 use crate::rig::Rig;
 use nalgebra::Point3;
@@ -28,43 +28,12 @@ pub(crate) struct Refined {
     pub converged: bool,
 }
 
-/// The residual (pixels) of ray `k` at the pose and its Jacobian with respect to
-/// `(omega, delta t)` (`R <- Exp(omega) R`, `t <- t + delta t`), or `None` at depth 0. A point
-/// behind its camera projects through `(x / z, y / z)` like the others (the central `refine`'s
-/// residual): its error keeps a wrong pose from fitting the other points alone.
-fn residual(
-    rays: &Rays,
-    rig: &Rig,
-    world: &[Point3<f64>],
-    pixels: &[nalgebra::Point2<f64>],
-    ray: usize,
-    r: &Matrix3<f64>,
-    t: &Vector3<f64>,
-) -> Option<(Vector2<f64>, SMatrix<f64, 2, 6>)> {
-    let ry = &rays.rays[ray];
-    let (rk, tk) = rig.pose(ry.camera);
-    let rx = r * world[ry.index].coords;
-    let p = rk * (rx + t) + tk;
-    if !(p.z != 0.0) {
-        return None;
-    }
-    let (x, y) = (p.x / p.z, p.y / p.z);
-    let ((u, v), jp) = rays.projectors[ry.camera].project_with_jacobian(x, y);
-    let obs = pixels[ry.index];
-    let e = Vector2::new(u - obs.x, v - obs.y);
-    let iz = 1.0 / p.z;
-    let dxy = Matrix2x3::new(iz, 0.0, -x * iz, 0.0, iz, -y * iz);
-    let jp = nalgebra::Matrix2::new(jp[0], jp[1], jp[2], jp[3]);
-    let a = jp * dxy * rk;
-    let mut j = SMatrix::<f64, 2, 6>::zeros();
-    j.fixed_view_mut::<2, 3>(0, 0)
-        .copy_from(&(a * (-skew(&rx))));
-    j.fixed_view_mut::<2, 3>(0, 3).copy_from(&a);
-    Some((e, j))
-}
-
 /// The normal equations of the pose's pixel error, `J^T W J` and `J^T W e`, `W` the weights
-/// times the loss's IRLS weights: every observation's [`residual`] and Jacobian in closed form,
+/// times the loss's IRLS weights: every observation's pixel residual (a point behind its camera
+/// projects through `(x / z, y / z)` like the others, the central `refine`'s residual: its
+/// error keeps a wrong pose from fitting the other points alone; one at depth 0 is left out)
+/// and its Jacobian in `(omega, delta t)` (`R <- Exp(omega) R`, `t <- t + delta t`) in closed
+/// form,
 /// `J = [q x a_r, a_r]` per row `r` of `A = J_pi d(x/z, y/z)/dp R_c` (`q = R X`), the 21
 /// entries of the symmetric `J^T W J` summed directly.
 #[allow(clippy::too_many_arguments)]
@@ -145,7 +114,7 @@ pub(crate) fn pixel_error2(
 }
 
 /// `sum w rho(|e|^2)` and `sum w |e|^2` at the pose (infinite if a point is at depth 0; one
-/// behind its camera projects through `(x / z, y / z)`, as in [`residual`]) and the number of
+/// behind its camera projects through `(x / z, y / z)`, as in [`normal_equations`]) and the number of
 /// observations in front of their camera; with a `reference` pose, also whether any observation
 /// is on the other side of its camera than at the reference (a step may not move a point
 /// across a camera's plane: the central `refine`'s rule).
@@ -303,14 +272,14 @@ pub(crate) fn covariance(
     t: &Vector3<f64>,
     noise: NoiseModel,
 ) -> Option<PoseCovariance> {
-    let mut jtj = Matrix6::zeros();
-    let (mut sq, mut n) = (0.0, 0usize);
-    for (k, ry) in rays.rays.iter().enumerate() {
-        let (e, j) = residual(rays, rig, world, pixels, k, r, t)?;
-        jtj += j.transpose() * j * ry.weight;
-        sq += ry.weight * e.norm_squared();
-        n += 1;
+    // The squared loss: `J^T W J` with the weights alone; the sums of [`evaluate`] (infinite
+    // if a point is at depth 0: no covariance).
+    let (jtj, _) = normal_equations(rays, rig, world, pixels, Loss::Squared, r, t);
+    let sums = evaluate(rays, rig, world, pixels, Loss::Squared, r, t, None);
+    if !sums.cost.is_finite() {
+        return None;
     }
+    let (sq, n) = (sums.squared, rays.rays.len());
     let sigma = match noise {
         NoiseModel::Sigma(s) => s,
         NoiseModel::Estimated => {
