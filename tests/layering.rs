@@ -363,6 +363,7 @@ fn stages_are_called_only_by_the_driver() {
         "refine",
         "options",
         "refine_pixels",
+        "refine_rig",
         "output",
         "bench_hooks",
     ];

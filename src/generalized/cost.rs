@@ -47,20 +47,27 @@ impl Cost {
     pub(crate) fn new(
         rays: impl Iterator<Item = (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64)>,
     ) -> Option<Cost> {
-        let mut h = Matrix3::zeros();
-        let mut gm = SMatrix::<f64, 3, 9>::zeros();
-        let mut s = M9::zeros();
+        // Per ray, with `Q = w (I - v v^T)` (its 6 distinct entries `qs`) and `xx` the 6
+        // distinct products `x_i x_j`: `K^T Q K` is the Kronecker product `Q (x) x x^T` (block
+        // `(a, b)` is `Q_ab x x^T`), so the upper triangle of `S` is the 6 x 6 products
+        // `qs[ab] xx[ij]` (`SQ`); `Q K` has `(Q K)[c, 3b + j] = Q_cb x_j` (the 6 x 3 products
+        // `qs[cb] x_j`, `GQ`); `K^T Q c` has entries `x_i (Q c)_a`. Straight-line sums into
+        // fixed arrays: no 9 x 9 product, no index arithmetic per ray.
+        let mut sq = [[0.0f64; 6]; 6];
+        let mut gq = [[0.0f64; 3]; 6];
+        let mut pa = [[0.0f64; 3]; 3];
+        let mut hs = [0.0f64; 6];
         let mut q = Vector3::zeros();
-        let mut p = V9::zeros();
         let mut s0 = 0.0;
-        // With `K r = R x`, `K[a, 3a + b] = x_b`: `K^T Q K` is the Kronecker product
-        // `Q (x) x x^T` (block `(a, b)` is `Q_ab x x^T`), `Q K` has `(Q K)[c, 3b + j] =
-        // Q_cb x_j` and `K^T Q c` has entries `x_i (Q c)_a`: the upper triangle of `S` summed
-        // from the 6 + 6 products, no 9 x 9 matrix product.
-        let mut s45 = [0.0; 45];
         for (x, c, v, w) in rays {
-            let qm = (Matrix3::identity() - v * v.transpose()) * w;
-            let qc = qm * c;
+            let qs = [
+                w * (1.0 - v.x * v.x),
+                -w * v.x * v.y,
+                -w * v.x * v.z,
+                w * (1.0 - v.y * v.y),
+                -w * v.y * v.z,
+                w * (1.0 - v.z * v.z),
+            ];
             let xx = [
                 x.x * x.x,
                 x.x * x.y,
@@ -69,38 +76,47 @@ impl Cost {
                 x.y * x.z,
                 x.z * x.z,
             ];
-            let mut n = 0;
-            for i in 0..9 {
-                let (a, ii) = (i / 3, i % 3);
-                for j in i..9 {
-                    let (b, jj) = (j / 3, j % 3);
-                    let (lo, hi) = if ii <= jj { (ii, jj) } else { (jj, ii) };
-                    s45[n] += qm[(a, b)] * xx[SYM3[lo][hi]];
-                    n += 1;
+            let xs = [x.x, x.y, x.z];
+            for a in 0..6 {
+                for b in 0..6 {
+                    sq[a][b] += qs[a] * xx[b];
                 }
-            }
-            for cc in 0..3 {
-                for b in 0..3 {
-                    for jj in 0..3 {
-                        gm[(cc, 3 * b + jj)] += qm[(cc, b)] * x[jj];
-                    }
+                for j in 0..3 {
+                    gq[a][j] += qs[a] * xs[j];
                 }
+                hs[a] += qs[a];
             }
+            let qc = [
+                qs[0] * c.x + qs[1] * c.y + qs[2] * c.z,
+                qs[1] * c.x + qs[3] * c.y + qs[4] * c.z,
+                qs[2] * c.x + qs[4] * c.y + qs[5] * c.z,
+            ];
             for a in 0..3 {
-                for ii in 0..3 {
-                    p[3 * a + ii] += x[ii] * qc[a];
+                for i in 0..3 {
+                    pa[a][i] += xs[i] * qc[a];
                 }
             }
-            h += qm;
-            q += qc;
-            s0 += c.dot(&qc);
+            q += Vector3::new(qc[0], qc[1], qc[2]);
+            s0 += c.x * qc[0] + c.y * qc[1] + c.z * qc[2];
         }
-        let mut n = 0;
+        let h = Matrix3::new(hs[0], hs[1], hs[2], hs[1], hs[3], hs[4], hs[2], hs[4], hs[5]);
+        let mut gm = SMatrix::<f64, 3, 9>::zeros();
+        for cc in 0..3 {
+            for b in 0..3 {
+                for jj in 0..3 {
+                    gm[(cc, 3 * b + jj)] = gq[SYM3[cc.min(b)][cc.max(b)]][jj];
+                }
+            }
+        }
+        let p = V9::from_fn(|i, _| pa[i / 3][i % 3]);
+        let mut s = M9::zeros();
         for i in 0..9 {
+            let (a, ii) = (i / 3, i % 3);
             for j in i..9 {
-                s[(i, j)] = s45[n];
-                s[(j, i)] = s45[n];
-                n += 1;
+                let (b, jj) = (j / 3, j % 3);
+                let v = sq[SYM3[a.min(b)][a.max(b)]][SYM3[ii.min(jj)][ii.max(jj)]];
+                s[(i, j)] = v;
+                s[(j, i)] = v;
             }
         }
         let h_inv = h.try_inverse()?;
@@ -176,7 +192,13 @@ impl Cost {
         let floor = 1e-13 * self.scale;
         while iterations < max_iterations {
             iterations += 1;
-            let shift = (-min_eigenvalue_sym3(&h)).max(0.0);
+            // shift = max(0, -lambda_min(H)); a successful factorisation of H proves
+            // lambda_min > 0 (shift 0): the eigenvalue only for an indefinite H (as `newton`).
+            let shift = if ldl3(&h).is_some() {
+                0.0
+            } else {
+                (-min_eigenvalue_sym3(&h)).max(0.0)
+            };
             let mut accepted = false;
             for _ in 0..30 {
                 let lambda = mu * self.scale + shift;

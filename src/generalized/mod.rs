@@ -26,8 +26,11 @@ use nalgebra::{Matrix3, Point3, SMatrix, Vector3};
 use crate::covariance::NoiseModel;
 use crate::error::PnpError;
 use crate::numeric::gp3p::gp3p;
+use crate::numeric::linalg::smallest_eigenvector;
 use crate::numeric::rotation::nearest_rotation;
-use crate::pipeline::{CandidateSource, Loss, Refinement, Solution, Solutions, MAX_CANDIDATES};
+use crate::pipeline::{
+    CandidateSource, Loss, Refinement, Solution, Solutions, EXACT_FIT, MAX_CANDIDATES,
+};
 use cost::{Cost, V9};
 
 /// What a rig solve needs of the solver's options.
@@ -242,11 +245,14 @@ fn starts(
     hom.fixed_view_mut::<1, 9>(9, 0)
         .copy_from(&cost.g.transpose());
     hom[(9, 9)] = cost.k;
-    let eig = hom.symmetric_eigen();
-    let mut order: Vec<usize> = (0..10).collect();
-    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    for &i in order.iter().take(2) {
-        let z = eig.eigenvectors.column(i);
+    // The smallest eigenvectors by inverse iteration (as the central `nullspace`'s fast path),
+    // the full decomposition if the shifted factorisation fails.
+    let z = smallest_eigenvector(&hom, cost.scale + cost.k).or_else(|| {
+        let eig = hom.symmetric_eigen();
+        let i = eig.eigenvalues.imin();
+        Some(eig.eigenvectors.column(i).into_owned())
+    });
+    if let Some(z) = z {
         if z[9].abs() > 1e-9 * z.norm() {
             let r = V9::from_fn(|k, _| z[k] / z[9]);
             if let Some(rot) = nearest_rotation(&Matrix3::from_fn(|a, b| r[3 * a + b])) {
@@ -254,15 +260,17 @@ fn starts(
             }
         }
     }
-    let eig9 = cost.m.symmetric_eigen();
-    let i9 = (0..9)
-        .min_by(|&a, &b| eig9.eigenvalues[a].total_cmp(&eig9.eigenvalues[b]))
-        .unwrap_or(0);
-    let e = eig9.eigenvectors.column(i9);
-    for sign in [1.0, -1.0] {
-        let a = Matrix3::from_fn(|i, j| sign * e[3 * i + j]);
-        if let Some(rot) = nearest_rotation(&a) {
-            out.push((rot, CandidateSource::Case1));
+    let e = smallest_eigenvector(&cost.m, cost.scale).or_else(|| {
+        let eig = cost.m.symmetric_eigen();
+        let i = eig.eigenvalues.imin();
+        Some(eig.eigenvectors.column(i).into_owned())
+    });
+    if let Some(e) = e {
+        for sign in [1.0, -1.0] {
+            let a = Matrix3::from_fn(|i, j| sign * e[3 * i + j]);
+            if let Some(rot) = nearest_rotation(&a) {
+                out.push((rot, CandidateSource::Case1));
+            }
         }
     }
     if rays.rays.len() > GP3P_MAX_RAYS && !exhaustive {
@@ -340,6 +348,7 @@ fn finish(
         r,
         t,
         iterations,
+        m.f <= EXACT_FIT * cost.scale,
     );
     let (r, t, cost_px, squared, weight_sum, front) =
         (e.r, e.t, e.cost, e.squared, e.weight_sum, e.in_front);

@@ -36,6 +36,7 @@ pub(crate) struct Ray {
 /// The rays of a problem and what the later stages need of it.
 #[derive(Clone)]
 pub(crate) struct Rays {
+    /// Grouped by camera (in the input's order within each camera).
     pub rays: Vec<Ray>,
     /// The projectors of the rig's cameras, by index.
     pub projectors: Vec<Projector>,
@@ -139,27 +140,60 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
         }
     }
     let projectors: Vec<Projector> = input.rig.cameras().iter().map(|c| c.projector()).collect();
+    // The correspondences grouped by camera (in their order within each camera), each
+    // camera's pixels undistorted in bulk with its model dispatched once.
+    let n_cams = projectors.len();
+    let mut start = vec![0usize; n_cams + 1];
+    for &c in input.cameras {
+        start[c as usize + 1] += 1;
+    }
+    for k in 0..n_cams {
+        start[k + 1] += start[k];
+    }
+    let mut order = vec![0usize; n];
+    let mut next = start.clone();
+    for (i, &c) in input.cameras.iter().enumerate() {
+        order[next[c as usize]] = i;
+        next[c as usize] += 1;
+    }
     let mut rays = Vec::with_capacity(n);
     let mut skipped = 0;
-    for i in 0..n {
-        let weight = input.weights.map_or(1.0, |w| w[i]);
-        let k = input.cameras[i] as usize;
-        let Ok((m, _)) = projectors[k].undistort(input.pixels[i]) else {
-            skipped += 1;
-            continue;
-        };
-        if !(weight > 0.0) {
+    let mut pixels: Vec<Point2<f64>> = Vec::new();
+    let mut points: Vec<Point2<f64>> = Vec::new();
+    let mut ok: Vec<bool> = Vec::new();
+    for k in 0..n_cams {
+        let idx = &order[start[k]..start[k + 1]];
+        if idx.is_empty() {
             continue;
         }
+        pixels.clear();
+        pixels.extend(idx.iter().map(|&i| input.pixels[i]));
+        points.clear();
+        points.resize(idx.len(), Point2::origin());
+        ok.clear();
+        ok.resize(idx.len(), true);
+        projectors[k].undistort_into(&pixels, &mut points, None, |j| ok[j] = false);
         let (rk, _) = input.rig.pose(k);
-        let direction = (rk.transpose() * Vector3::new(m.x, m.y, 1.0)).normalize();
-        rays.push(Ray {
-            index: i,
-            camera: k,
-            weight,
-            centre: input.rig.centre(k).coords,
-            direction,
-        });
+        let centre = input.rig.centre(k).coords;
+        for (j, &i) in idx.iter().enumerate() {
+            if !ok[j] {
+                skipped += 1;
+                continue;
+            }
+            let weight = input.weights.map_or(1.0, |w| w[i]);
+            if !(weight > 0.0) {
+                continue;
+            }
+            let m = points[j];
+            let direction = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0)).normalize();
+            rays.push(Ray {
+                index: i,
+                camera: k,
+                weight,
+                centre,
+                direction,
+            });
+        }
     }
     if rays.len() < 4 {
         return Err(PnpError::TooFewPoints {

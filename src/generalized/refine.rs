@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 use super::rays::Rays;
 use crate::covariance::{NoiseModel, PoseCovariance};
-use crate::numeric::rotation::exp_so3;
+use crate::pipeline::refine_rig::{refine_rig, RigCamera, RigPixels};
 use crate::pipeline::Loss;
 use crate::rig::Rig;
 use nalgebra::Point3;
@@ -168,11 +168,11 @@ struct Evaluated {
 }
 
 /// Levenberg-Marquardt from `(r, t)` (the original frame), at most `max_iterations`
-/// iterations: the normal equations `(J^T W J + lambda diag(J^T W J)) delta = -J^T W e`, `W`
-/// the weights times the loss's IRLS weights at the current residuals; a step is kept if it lowers the cost and moves no observation across
-/// its camera's plane (`lambda / 10`), otherwise `lambda x 10`; stops when the step is below
-/// `xtol` (relative), the gradient below `gtol`, the Gauss-Newton step's predicted decrease below
-/// `1e-14` of the cost, or `lambda` above 1e16.
+/// iterations: the central pixel refinement's iteration and pass, per camera
+/// ([`crate::pipeline::refine_rig`]), on the rays' observations grouped by camera; then the
+/// costs, the squared error and the points in front at the returned pose ([`evaluate`]).
+/// `exact_start`: the start is an exact fit (the object-space cost at its rounding level), from
+/// which the last Gauss-Newton step is applied ([`crate::pipeline::ReprojOptions`]).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     rays: &Rays,
@@ -183,78 +183,61 @@ pub(crate) fn refine(
     r0: &Matrix3<f64>,
     t0: &Vector3<f64>,
     max_iterations: u32,
+    exact_start: bool,
 ) -> Refined {
-    let (mut r, mut t) = (*r0, *t0);
-    let start = evaluate(rays, rig, world, pixels, loss, &r, &t, None);
-    let (mut cost, mut squared, mut front) = (start.cost, start.squared, start.front);
     let weight_sum: f64 = rays.rays.iter().map(|x| x.weight).sum();
-    let mut lambda = 1e-6;
-    let mut iterations = 0;
-    let mut converged = false;
-    while iterations < max_iterations && cost.is_finite() {
-        iterations += 1;
-        let (jtj, jte) = normal_equations(rays, rig, world, pixels, loss, &r, &t);
-        let gmax = jte.amax();
-        if gmax <= 1e-13 * (jtj.trace() * cost.max(1e-300)).sqrt() {
-            converged = true;
-            break;
+    let (mut r, mut t, mut iterations, mut converged) = (*r0, *t0, 0, false);
+    if max_iterations > 0 {
+        let n = rays.rays.len();
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by_key(|&k| rays.rays[k].camera);
+        let xs: Vec<Point3<f64>> = order.iter().map(|&k| world[rays.rays[k].index]).collect();
+        let ms: Vec<nalgebra::Point2<f64>> =
+            order.iter().map(|&k| pixels[rays.rays[k].index]).collect();
+        let weighted = rays.rays.iter().any(|x| x.weight != 1.0);
+        let ws: Vec<f64> = if weighted {
+            order.iter().map(|&k| rays.rays[k].weight).collect()
+        } else {
+            Vec::new()
+        };
+        let mut cameras: Vec<RigCamera> = Vec::new();
+        let mut start = 0;
+        while start < n {
+            let cam = rays.rays[order[start]].camera;
+            let end = start
+                + order[start..]
+                    .iter()
+                    .take_while(|&&k| rays.rays[k].camera == cam)
+                    .count();
+            let (rk, tk) = rig.pose(cam);
+            cameras.push(RigCamera {
+                projector: rays.projectors[cam],
+                rotation: *rk,
+                translation: *tk,
+                range: start..end,
+            });
+            start = end;
         }
-        // The Gauss-Newton step's predicted decrease of `sum w |e|^2`, `-(2 d^T J^T W e +
-        // d^T J^T W J d)`: at the rounding level of the cost no step can lower it (the trials
-        // would only raise lambda to its limit, a pass each): a minimum.
-        let mut floor = jtj;
-        for i in 0..6 {
-            floor[(i, i)] += 1e-12 * jtj.trace() / 6.0;
-        }
-        if let Some(ch) = floor.cholesky() {
-            let d = -ch.solve(&jte);
-            if -(2.0 * d.dot(&jte) + d.dot(&(jtj * d))) <= 1e-14 * cost {
-                converged = true;
-                break;
-            }
-        }
-        let mut stepped = false;
-        while lambda <= 1e16 {
-            let mut a = jtj;
-            for i in 0..6 {
-                a[(i, i)] += lambda * jtj[(i, i)].max(1e-12 * jtj.trace() / 6.0);
-            }
-            let Some(ch) = a.cholesky() else {
-                lambda *= 10.0;
-                continue;
-            };
-            let d = -ch.solve(&jte);
-            let rn = exp_so3(&Vector3::new(d[0], d[1], d[2])) * r;
-            let tn = t + Vector3::new(d[3], d[4], d[5]);
-            let next = evaluate(rays, rig, world, pixels, loss, &rn, &tn, Some((&r, &t)));
-            if !next.flipped && next.cost < cost {
-                let small = d.norm() <= 1e-10 * (1.0 + t.norm());
-                (r, t, cost, squared, front) = (rn, tn, next.cost, next.squared, next.front);
-                lambda = (lambda / 10.0).max(1e-15);
-                stepped = true;
-                if small {
-                    converged = true;
-                }
-                break;
-            }
-            lambda *= 10.0;
-        }
-        if !stepped {
-            // No step lowers the cost any more: a minimum to rounding.
-            converged = true;
-            break;
-        }
-        if converged {
-            break;
+        let px = RigPixels {
+            world: &xs,
+            pixels: &ms,
+            weights: weighted.then_some(&ws[..]),
+            cameras: &cameras,
+            loss,
+        };
+        let out = refine_rig(&px, r0, t0, max_iterations, exact_start);
+        if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
+            (r, t, iterations, converged) = (out.r, out.t, out.iterations, out.converged);
         }
     }
+    let e = evaluate(rays, rig, world, pixels, loss, &r, &t, None);
     Refined {
         r,
         t,
-        cost,
-        squared,
+        cost: e.cost,
+        squared: e.squared,
         weight_sum,
-        in_front: front,
+        in_front: e.front,
         iterations,
         converged,
     }

@@ -39,6 +39,7 @@ pub(crate) mod output;
 pub(crate) mod planar;
 pub(crate) mod refine;
 pub(crate) mod refine_pixels;
+pub(crate) mod refine_rig;
 pub(crate) mod search;
 pub(crate) mod select;
 
@@ -68,7 +69,7 @@ use select::Minimum;
 const NEWTON_TOLERANCE_BEFORE_REFINE: f64 = 1e-6;
 /// An exact fit: the case-1 start's `f` at most this times `trace(M)`. Noise-free input gives
 /// about 1e-16 (the rounding of M), sigma = 0.001 px about 1e-11 (N = 10).
-const EXACT_FIT: f64 = 1e-14;
+pub(crate) const EXACT_FIT: f64 = 1e-14;
 /// Planarity thresholds (the `branch` stage).
 const NONPLANAR_MIN_RATIO: f64 = 1e-6;
 const PLANAR_MAX_RATIO: f64 = 1e-3;

@@ -358,27 +358,31 @@ pub(crate) fn refine_reprojection_until(
             wy: opts.row_weights.1,
         },
     };
-    levenberg_marquardt_until(&prob, fr, r_work, t_work, opts, abandon)
+    levenberg_marquardt_until(&prob, &fr.rw, fr.d, r_work, t_work, opts, abandon)
 }
 
-/// The Levenberg-Marquardt iteration of `refine` (and `refine_pixels`) on the residuals of `prob`,
-/// from the working-frame pose `(r_work, t_work)`: the damping rule, the depth-sign guard, the
-/// reuse of `J^T W J` and the unverified final step of the module docs.
+/// The Levenberg-Marquardt iteration of `refine` (and `refine_pixels`, `refine_rig`) on the
+/// residuals of `prob`, from the working-frame pose `(r_work, t_work)` of the working frame
+/// `P_i = rw (X_i - c) / d`: the damping rule, the depth-sign guard, the reuse of `J^T W J` and
+/// the unverified final step of the module docs.
 pub(super) fn levenberg_marquardt<P: Residuals>(
     prob: &P,
-    fr: &WorkingFrame,
+    rw: &Matrix3<f64>,
+    d: f64,
     r_work: &Matrix3<f64>,
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
 ) -> ReprojOutcome {
-    levenberg_marquardt_until(prob, fr, r_work, t_work, opts, &mut |_| false)
+    levenberg_marquardt_until(prob, rw, d, r_work, t_work, opts, &mut |_| false)
 }
 
 /// [`levenberg_marquardt`], stopped ([`ReprojStop::Abandoned`]) at the first [`Checkpoint`]
 /// for which `abandon` is true.
+#[allow(clippy::too_many_arguments)]
 fn levenberg_marquardt_until<P: Residuals>(
     prob: &P,
-    fr: &WorkingFrame,
+    rw: &Matrix3<f64>,
+    d: f64,
     r_work: &Matrix3<f64>,
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
@@ -386,7 +390,7 @@ fn levenberg_marquardt_until<P: Residuals>(
 ) -> ReprojOutcome {
     let mut r = *r_work;
     let mut t = *t_work;
-    let mut cur = Composed::new(&r, &fr.rw, fr.d, &t);
+    let mut cur = Composed::new(&r, rw, d, &t);
     let skipped = ReprojOutcome {
         r,
         t,
@@ -451,7 +455,7 @@ fn levenberg_marquardt_until<P: Residuals>(
         }
         let r_new = exp_so3(&w) * r;
         let t_new = t + Vector3::new(delta[3], delta[4], delta[5]);
-        let cand = Composed::new(&r_new, &fr.rw, fr.d, &t_new);
+        let cand = Composed::new(&r_new, rw, d, &t_new);
 
         // Predicted decrease of the linear model, -(2 g.delta + delta.H.delta), which is
         // lam |delta|^2 - g.delta since (H + lam I) delta = -g: two terms that are both

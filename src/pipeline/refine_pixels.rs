@@ -71,9 +71,9 @@ pub(crate) struct PixelOutcome {
 
 /// `refine_pixels`' metric ([`Metric`]): the pixel residual through the projection `P`, with the
 /// loss when `ROBUST` (the squared loss otherwise, `rho' = 1` compiled in).
-struct CameraMetric<P, const ROBUST: bool> {
-    projection: P,
-    loss: Loss,
+pub(super) struct CameraMetric<P, const ROBUST: bool> {
+    pub(super) projection: P,
+    pub(super) loss: Loss,
 }
 
 impl<P: Project, const ROBUST: bool> Metric for CameraMetric<P, ROBUST> {
@@ -128,14 +128,14 @@ impl ProjectionJob for Job<'_> {
                 projection,
                 loss: Loss::Squared,
             });
-            let out = levenberg_marquardt(&squared, fr, self.r_work, self.t_work, self.opts);
+            let out = levenberg_marquardt(&squared, &fr.rw, fr.d, self.r_work, self.t_work, self.opts);
             return (out, out.e, 1.0);
         }
         let robust = self.problem(CameraMetric::<P, true> {
             projection,
             loss: self.px.loss,
         });
-        let out = levenberg_marquardt(&robust, fr, self.r_work, self.t_work, self.opts);
+        let out = levenberg_marquardt(&robust, &fr.rw, fr.d, self.r_work, self.t_work, self.opts);
         // The plain squared error at the pose (for the RMS residual), scaled.
         let pose = Composed::new(&out.r, &fr.rw, fr.d, &out.t);
         let (e, scale) = self.scaled_squared_error(projection, &pose);

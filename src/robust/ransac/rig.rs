@@ -268,6 +268,7 @@ fn fit(
         r,
         t,
         super::FINAL_STEPS.max(20),
+        false,
     );
     (e.cost.is_finite() && e.r.iter().all(|x| x.is_finite())).then_some((e.r, e.t))
 }
