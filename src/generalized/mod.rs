@@ -7,7 +7,7 @@
 //! | rays | [`rays`] | checks the problem, undistorts each pixel through its camera into a ray of the rig frame (centre, direction), the working frame |
 //! | cost | [`cost`] | the O(N) moments of the generalized object-space cost, `t` eliminated: `f(R) = r^T M r + 2 g^T r + k`; Newton on SO(3) with the generated local models |
 //! | search | this file | the starts (the null vector of the homogenised cost, the quadratic part's, gP3P poses of spread triples), Newton from each, the minimum with the most points in front |
-//! | refine | [`refine`] | Levenberg-Marquardt on the pixel error of every observation through its own camera; the covariance |
+//! | refine | [`refine`] | Levenberg-Marquardt on the pixel error of every observation through its own camera ([`crate::pipeline::refine_rig`]); the covariance |
 //!
 //! A problem whose observations are all in one camera is not solved here: the solver hands it
 //! to the central pipeline in that camera and composes the pose with the camera's pose in the
