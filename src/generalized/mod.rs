@@ -27,7 +27,7 @@ use crate::covariance::NoiseModel;
 use crate::error::PnpError;
 use crate::numeric::gp3p::gp3p;
 use crate::numeric::linalg::smallest_eigenvector;
-use crate::numeric::rotation::nearest_rotation;
+use crate::numeric::rotation::{candidate_to_rotation, nearest_rotation};
 use crate::pipeline::{
     CandidateSource, Loss, Refinement, Solution, Solutions, EXACT_FIT, MAX_CANDIDATES,
 };
@@ -266,11 +266,10 @@ fn starts(
         Some(eig.eigenvectors.column(i).into_owned())
     });
     if let Some(e) = e {
-        for sign in [1.0, -1.0] {
-            let a = Matrix3::from_fn(|i, j| sign * e[3 * i + j]);
-            if let Some(rot) = nearest_rotation(&a) {
-                out.push((rot, CandidateSource::Case1));
-            }
+        // The sign with a positive determinant (`vec(R)` has det 1), as `nullspace`'s case 1.
+        let v: [f64; 9] = std::array::from_fn(|i| e[i]);
+        if let Some(rot) = candidate_to_rotation(&v) {
+            out.push((rot, CandidateSource::Case1));
         }
     }
     if rays.rays.len() > GP3P_MAX_RAYS && !exhaustive {
