@@ -15,6 +15,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use crate::kernels::{so3_local_affine, so3_local_model};
+use crate::numeric::lanes::{dispatched, lane_sum, LANES};
 use crate::numeric::mat3::{ldl3, ldl3_solve, min_eigenvalue_sym3};
 use crate::numeric::rotation::cgr_to_rotation;
 
@@ -41,64 +42,28 @@ pub(crate) struct Cost {
 const SYM3: [[usize; 3]; 3] = [[0, 1, 2], [1, 3, 4], [2, 4, 5]];
 
 impl Cost {
-    /// Accumulates the moments of the rays `(x_i, c_i, v_i, w_i)` (world point, centre, unit
-    /// direction, weight; working frame) and eliminates `t`. `None` if `H` is singular (all
-    /// rays parallel).
+    /// Accumulates the moments of the rays `ray(0..n)`, each `(x_i, c_i, v_i, w_i)` (world
+    /// point, centre, unit direction, weight; working frame), and eliminates `t`. `None` if `H`
+    /// is singular (all rays parallel).
+    ///
+    /// Per ray, with `Q = w (I - v v^T)` (its 6 distinct entries `qs`) and `xx` the 6 distinct
+    /// products `x_i x_j`: `K^T Q K` is the Kronecker product `Q (x) x x^T` (block `(a, b)` is
+    /// `Q_ab x x^T`), so the upper triangle of `S` is made of the 6 x 6 products `qs[ab] xx[ij]`;
+    /// `Q K` has `(Q K)[c, 3b + j] = Q_cb x_j` (the 6 x 3 products `qs[cb] x_j`); `K^T Q c` has
+    /// entries `x_i (Q c)_a` ([`ray_sums`]). No 9 x 9 product per ray.
     pub(crate) fn new(
-        rays: impl Iterator<Item = (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64)>,
+        n: usize,
+        ray: impl Fn(usize) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64),
     ) -> Option<Cost> {
-        // Per ray, with `Q = w (I - v v^T)` (its 6 distinct entries `qs`) and `xx` the 6
-        // distinct products `x_i x_j`: `K^T Q K` is the Kronecker product `Q (x) x x^T` (block
-        // `(a, b)` is `Q_ab x x^T`), so the upper triangle of `S` is the 6 x 6 products
-        // `qs[ab] xx[ij]` (`SQ`); `Q K` has `(Q K)[c, 3b + j] = Q_cb x_j` (the 6 x 3 products
-        // `qs[cb] x_j`, `GQ`); `K^T Q c` has entries `x_i (Q c)_a`. Straight-line sums into
-        // fixed arrays: no 9 x 9 product, no index arithmetic per ray.
-        let mut sq = [[0.0f64; 6]; 6];
-        let mut gq = [[0.0f64; 3]; 6];
-        let mut pa = [[0.0f64; 3]; 3];
-        let mut hs = [0.0f64; 6];
-        let mut q = Vector3::zeros();
-        let mut s0 = 0.0;
-        for (x, c, v, w) in rays {
-            let qs = [
-                w * (1.0 - v.x * v.x),
-                -w * v.x * v.y,
-                -w * v.x * v.z,
-                w * (1.0 - v.y * v.y),
-                -w * v.y * v.z,
-                w * (1.0 - v.z * v.z),
-            ];
-            let xx = [
-                x.x * x.x,
-                x.x * x.y,
-                x.x * x.z,
-                x.y * x.y,
-                x.y * x.z,
-                x.z * x.z,
-            ];
-            let xs = [x.x, x.y, x.z];
-            for a in 0..6 {
-                for b in 0..6 {
-                    sq[a][b] += qs[a] * xx[b];
-                }
-                for j in 0..3 {
-                    gq[a][j] += qs[a] * xs[j];
-                }
-                hs[a] += qs[a];
-            }
-            let qc = [
-                qs[0] * c.x + qs[1] * c.y + qs[2] * c.z,
-                qs[1] * c.x + qs[3] * c.y + qs[4] * c.z,
-                qs[2] * c.x + qs[4] * c.y + qs[5] * c.z,
-            ];
-            for a in 0..3 {
-                for i in 0..3 {
-                    pa[a][i] += xs[i] * qc[a];
-                }
-            }
-            q += Vector3::new(qc[0], qc[1], qc[2]);
-            s0 += c.x * qc[0] + c.y * qc[1] + c.z * qc[2];
-        }
+        let sums = ray_sums(n, &ray);
+        let sq: [[f64; 6]; 6] = std::array::from_fn(|a| std::array::from_fn(|b| sums[6 * a + b]));
+        let gq: [[f64; 3]; 6] =
+            std::array::from_fn(|a| std::array::from_fn(|j| sums[SQ_END + 3 * a + j]));
+        let pa: [[f64; 3]; 3] =
+            std::array::from_fn(|a| std::array::from_fn(|i| sums[GQ_END + 3 * a + i]));
+        let hs: [f64; 6] = std::array::from_fn(|a| sums[PA_END + a]);
+        let q = Vector3::new(sums[HS_END], sums[HS_END + 1], sums[HS_END + 2]);
+        let s0 = sums[HS_END + 3];
         let h = Matrix3::new(hs[0], hs[1], hs[2], hs[1], hs[3], hs[4], hs[2], hs[4], hs[5]);
         let mut gm = SMatrix::<f64, 3, 9>::zeros();
         for cc in 0..3 {
@@ -240,6 +205,105 @@ impl Cost {
         }
         (r, f.max(0.0), iterations)
     }
+}
+
+/// The layout of [`ray_sums`]' output: `sq` (36, `qs[a] xx[b]`), `gq` (18, `qs[a] x_j`), `pa`
+/// (9, `x_i (Q c)_a`), `hs` (6, `qs[a]`), `q` (3, `Q c`), `s0` (1, `c^T Q c`).
+const SQ_END: usize = 36;
+const GQ_END: usize = SQ_END + 18;
+const PA_END: usize = GQ_END + 9;
+const HS_END: usize = PA_END + 6;
+const NSUMS: usize = HS_END + 4;
+
+dispatched! {
+/// The per-ray sums of [`Cost::new`] over the rays `ray(0..n)`, vectorised across rays: blocks of
+/// [`LANES`] rays, lane `l` of every sum accumulating rays `l, l + LANES, ...` (a last partial
+/// block padded with weight 0, which adds nothing), the lanes added at the end. Built for the
+/// processor ([`crate::numeric::lanes::dispatched`]).
+fn ray_sums[F: Fn(usize) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64)][F](
+        n: usize,
+        ray: &F,
+    ) -> [f64; NSUMS] = ray_sums_body;
+}
+
+// Index loops over the lanes are what the compiler vectorises.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn ray_sums_body<F: Fn(usize) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64)>(
+    n: usize,
+    ray: &F,
+) -> [f64; NSUMS] {
+    let mut acc = [[0.0f64; LANES]; NSUMS];
+    let mut i = 0;
+    while i < n {
+        let (mut x, mut c, mut v, mut w) = (
+            [[0.0f64; LANES]; 3],
+            [[0.0f64; LANES]; 3],
+            [[0.0f64; LANES]; 3],
+            [0.0f64; LANES],
+        );
+        for l in 0..LANES.min(n - i) {
+            let (xi, ci, vi, wi) = ray(i + l);
+            for k in 0..3 {
+                x[k][l] = xi[k];
+                c[k][l] = ci[k];
+                v[k][l] = vi[k];
+            }
+            w[l] = wi;
+        }
+        let mut qs = [[0.0f64; LANES]; 6];
+        let mut xx = [[0.0f64; LANES]; 6];
+        for l in 0..LANES {
+            qs[0][l] = w[l] * (1.0 - v[0][l] * v[0][l]);
+            qs[1][l] = -w[l] * v[0][l] * v[1][l];
+            qs[2][l] = -w[l] * v[0][l] * v[2][l];
+            qs[3][l] = w[l] * (1.0 - v[1][l] * v[1][l]);
+            qs[4][l] = -w[l] * v[1][l] * v[2][l];
+            qs[5][l] = w[l] * (1.0 - v[2][l] * v[2][l]);
+            xx[0][l] = x[0][l] * x[0][l];
+            xx[1][l] = x[0][l] * x[1][l];
+            xx[2][l] = x[0][l] * x[2][l];
+            xx[3][l] = x[1][l] * x[1][l];
+            xx[4][l] = x[1][l] * x[2][l];
+            xx[5][l] = x[2][l] * x[2][l];
+        }
+        for a in 0..6 {
+            for b in 0..6 {
+                for l in 0..LANES {
+                    acc[6 * a + b][l] += qs[a][l] * xx[b][l];
+                }
+            }
+            for j in 0..3 {
+                for l in 0..LANES {
+                    acc[SQ_END + 3 * a + j][l] += qs[a][l] * x[j][l];
+                }
+            }
+            for l in 0..LANES {
+                acc[PA_END + a][l] += qs[a][l];
+            }
+        }
+        let mut qc = [[0.0f64; LANES]; 3];
+        for l in 0..LANES {
+            qc[0][l] = qs[0][l] * c[0][l] + qs[1][l] * c[1][l] + qs[2][l] * c[2][l];
+            qc[1][l] = qs[1][l] * c[0][l] + qs[3][l] * c[1][l] + qs[4][l] * c[2][l];
+            qc[2][l] = qs[2][l] * c[0][l] + qs[4][l] * c[1][l] + qs[5][l] * c[2][l];
+        }
+        for a in 0..3 {
+            for k in 0..3 {
+                for l in 0..LANES {
+                    acc[GQ_END + 3 * a + k][l] += x[k][l] * qc[a][l];
+                }
+            }
+            for l in 0..LANES {
+                acc[HS_END + a][l] += qc[a][l];
+            }
+        }
+        for l in 0..LANES {
+            acc[HS_END + 3][l] += c[0][l] * qc[0][l] + c[1][l] * qc[1][l] + c[2][l] * qc[2][l];
+        }
+        i += LANES;
+    }
+    std::array::from_fn(|k| lane_sum(&acc[k]))
 }
 
 /// `vec(R)`, row-major.

@@ -173,7 +173,7 @@ fn working(
 }
 
 fn working_cost(rays: &Rays, input: &RigInput<'_>) -> Option<Cost> {
-    Cost::new((0..rays.rays.len()).map(|k| working(rays, input, k)))
+    Cost::new(rays.rays.len(), |k| working(rays, input, k))
 }
 
 /// The pose in the caller's frame of the working frame's rotation `r` (the translation the

@@ -170,7 +170,8 @@ struct Evaluated {
 /// Levenberg-Marquardt from `(r, t)` (the original frame), at most `max_iterations`
 /// iterations: the central pixel refinement's iteration and pass, per camera
 /// ([`crate::pipeline::refine_rig`]), on the rays' observations grouped by camera; then the
-/// costs, the squared error and the points in front at the returned pose ([`evaluate`]).
+/// costs, the squared error and the points in front at the returned pose (the iteration's own
+/// with the squared loss, otherwise [`evaluate`]).
 /// `exact_start`: the start is an exact fit (the object-space cost at its rounding level), from
 /// which the last Gauss-Newton step is applied ([`crate::pipeline::ReprojOptions`]).
 #[allow(clippy::too_many_arguments)]
@@ -228,6 +229,19 @@ pub(crate) fn refine(
         let out = refine_rig(&px, r0, t0, max_iterations, exact_start);
         if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
             (r, t, iterations, converged) = (out.r, out.t, out.iterations, out.converged);
+            // The squared loss: the iteration's own cost and count (no further pass).
+            if let Some((cost, in_front)) = out.squared.filter(|(c, _)| c.is_finite()) {
+                return Refined {
+                    r,
+                    t,
+                    cost,
+                    squared: cost,
+                    weight_sum,
+                    in_front,
+                    iterations,
+                    converged,
+                };
+            }
         }
     }
     let e = evaluate(rays, rig, world, pixels, loss, &r, &t, None);

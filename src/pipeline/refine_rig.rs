@@ -26,7 +26,7 @@ use super::frame::MIN_UNIT;
 use super::options::Loss;
 use super::refine::pass::{pass, Metric, PassInputs};
 use super::refine::{
-    levenberg_marquardt, Composed, Hessian, Normal, ReprojOptions, Residuals,
+    levenberg_marquardt, Composed, Hessian, Normal, ReprojOptions, ReprojStop, Residuals,
 };
 use super::refine_pixels::CameraMetric;
 use crate::camera::{Project, ProjectionJob, Projector};
@@ -64,6 +64,11 @@ pub(crate) struct RigOutcome {
     pub t: Vector3<f64>,
     pub iterations: u32,
     pub converged: bool,
+    /// With the squared loss, when the iteration ran: the pixel cost `sum w |e|^2` at the
+    /// returned pose (after a final step taken unverified, the linear model's prediction of it,
+    /// as `refine`'s), and the observations in front of their camera (those at the start: no
+    /// step moves a point across its camera's plane).
+    pub squared: Option<(f64, usize)>,
 }
 
 /// The residuals of a rig ([`Residuals`]).
@@ -118,6 +123,8 @@ impl CameraPass<'_> {
 impl RigResiduals<'_> {
     /// The pass of every camera at `pose`, composed into the rig's normal equations (module
     /// docs); `h` is `J^T W J`'s buffer (`None`: not formed).
+    // Index loops fill the blocks of H by position.
+    #[allow(clippy::needless_range_loop)]
     fn passes(
         &self,
         pose: &Composed,
@@ -256,10 +263,17 @@ pub(crate) fn refine_rig(
     };
     let t_work = (r * c + t) / d;
     let out = levenberg_marquardt(&prob, &Matrix3::identity(), d, r, &t_work, &opts);
+    let squared = match (px.loss, out.start_in_front) {
+        (Loss::Squared, Some(front)) if out.stop != ReprojStop::SkippedZeroDepth => {
+            Some((out.e * unit, front))
+        }
+        _ => None,
+    };
     RigOutcome {
         r: out.r,
         t: out.t * d - out.r * c,
         iterations: out.iterations,
         converged: out.stop.converged(),
+        squared,
     }
 }

@@ -46,7 +46,7 @@ fn moments_equal_the_direct_sum() {
                 (x, c, v, rng.random_range(0.1..2.0))
             })
             .collect();
-        let cost = Cost::new(rays.iter().copied()).expect("rays in general position");
+        let cost = Cost::new(rays.len(), |k| rays[k]).expect("rays in general position");
         let r = random_rotation(&mut rng);
         let t = cost.translation(&r);
         let (mut direct, mut grad, mut scale) = (0.0, Vector3::zeros(), 0.0);
