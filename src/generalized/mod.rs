@@ -19,6 +19,7 @@ mod refine;
 
 pub(crate) use rays::{one_camera, rays, Rays, RigInput};
 pub(crate) use refine::{pixel_error2, refine as refine_pixels};
+use refine::Grouped;
 
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, Point3, SMatrix, Vector3};
@@ -72,6 +73,8 @@ const PIXEL_RIVAL: f64 = 10.0;
 struct Minimum {
     r: Matrix3<f64>,
     f: f64,
+    /// Points in front of their ray's centre (counted only when the search found several
+    /// minima, to rank them; 0 otherwise).
     in_front: usize,
     iterations: u32,
     source: CandidateSource,
@@ -107,9 +110,10 @@ pub(crate) fn solve(
             .take_while(|m| rival(m))
             .count()
     };
+    let grouped = Grouped::new(&rays, input.rig, input.world, input.pixels);
     for m in minima.iter().take(count) {
         let (r, t) = to_original(&rays, &cost, &m.r);
-        solutions.push(finish(opts, &rays, input, &cost, m, &r, &t));
+        solutions.push(finish(opts, &rays, &grouped, input, &cost, m, &r, &t));
     }
     rank(&mut solutions);
     if let Some(all) = all {
@@ -146,7 +150,8 @@ pub(crate) fn refine_from(
     };
     let mut opts = *opts;
     opts.refinement = Refinement::Reprojection;
-    Ok(finish(&opts, &rays, input, &cost, &m, initial.0, initial.1))
+    let grouped = Grouped::new(&rays, input.rig, input.world, input.pixels);
+    Ok(finish(&opts, &rays, &grouped, input, &cost, &m, initial.0, initial.1))
 }
 
 fn check_loss(opts: &RigOptions) -> Result<(), PnpError> {
@@ -216,10 +221,16 @@ fn search(opts: &RigOptions, rays: &Rays, input: &RigInput<'_>, cost: &Cost) -> 
         minima.push(Minimum {
             r,
             f,
-            in_front: in_front(rays, input, cost, &r),
+            in_front: 0,
             iterations,
             source,
         });
+    }
+    // The points in front rank several minima (one needs no count: its refinement counts them).
+    if minima.len() > 1 {
+        for m in &mut minima {
+            m.in_front = in_front(rays, input, cost, &m.r);
+        }
     }
     let n = rays.rays.len();
     minima.sort_by(|a, b| {
@@ -312,9 +323,11 @@ fn spread_triples(rays: &Rays) -> Vec<[usize; 3]> {
 
 /// A minimum finished: refined in pixels (the default mode), its costs, diagnostics and
 /// covariance.
+#[allow(clippy::too_many_arguments)]
 fn finish(
     opts: &RigOptions,
     rays: &Rays,
+    grouped: &Grouped,
     input: &RigInput<'_>,
     cost: &Cost,
     m: &Minimum,
@@ -338,14 +351,14 @@ fn finish(
     } else {
         opts.reprojection_iterations
     };
-    let e = refine::refine(
+    let e = refine::refine_grouped(
+        grouped,
         rays,
         input.rig,
         input.world,
         input.pixels,
         opts.loss,
-        r,
-        t,
+        (r, t),
         iterations,
         m.f <= EXACT_FIT * cost.scale,
     );

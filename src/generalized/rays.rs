@@ -158,6 +158,8 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     }
     let mut rays = Vec::with_capacity(n);
     let mut skipped = 0;
+    // The weighted sums of the centroids, in the rays' order.
+    let (mut wsum, mut xw, mut cw) = (0.0f64, Vector3::zeros(), Vector3::zeros());
     let mut pixels: Vec<Point2<f64>> = Vec::new();
     let mut points: Vec<Point2<f64>> = Vec::new();
     let mut ok: Vec<bool> = Vec::new();
@@ -186,6 +188,9 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             }
             let m = points[j];
             let direction = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0)).normalize();
+            wsum += weight;
+            xw += input.world[i].coords * weight;
+            cw += centre * weight;
             rays.push(Ray {
                 index: i,
                 camera: k,
@@ -206,23 +211,20 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
         return Err(PnpError::Degenerate(DegenerateKind::CoincidentWorldPoints));
     }
     // The working frame: weighted centroids, the RMS distance of the world points.
-    let wsum: f64 = rays.iter().map(|r| r.weight).sum();
-    let x_mean = rays
-        .iter()
-        .map(|r| input.world[r.index].coords * r.weight)
-        .sum::<Vector3<f64>>()
-        / wsum;
-    let c_mean = rays
-        .iter()
-        .map(|r| r.centre * r.weight)
-        .sum::<Vector3<f64>>()
-        / wsum;
-    let mut scatter = Matrix3::zeros();
+    let x_mean = xw / wsum;
+    let c_mean = cw / wsum;
+    let mut sc = [0.0f64; 6];
     for r in &rays {
         let d = input.world[r.index].coords - x_mean;
-        scatter += d * d.transpose() * r.weight;
+        let wd = d * r.weight;
+        sc[0] += wd.x * d.x;
+        sc[1] += wd.x * d.y;
+        sc[2] += wd.x * d.z;
+        sc[3] += wd.y * d.y;
+        sc[4] += wd.y * d.z;
+        sc[5] += wd.z * d.z;
     }
-    scatter /= wsum;
+    let scatter = Matrix3::new(sc[0], sc[1], sc[2], sc[1], sc[3], sc[4], sc[2], sc[4], sc[5]) / wsum;
     let scale = scatter.trace().sqrt();
     if !(scale > 0.0 && scale.is_finite()) {
         return Err(PnpError::Degenerate(if scale == 0.0 {
@@ -240,14 +242,15 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     // 1e-8 times the first). Measured on the points themselves (one O(N) pass), not on the
     // scatter's small eigenvalue, whose rounding is u times the largest.
     let axis = eig.eigenvectors.column(order[2]).into_owned();
-    let (mut off_line, mut along) = (0.0f64, 0.0f64);
+    // (Squared distances: no square root per point.)
+    let (mut off_line2, mut along2) = (0.0f64, 0.0f64);
     for r in &rays {
         let d = input.world[r.index].coords - x_mean;
         let a = d.dot(&axis);
-        off_line = off_line.max((d - axis * a).norm());
-        along = along.max(a.abs());
+        off_line2 = off_line2.max((d - axis * a).norm_squared());
+        along2 = along2.max(a * a);
     }
-    if off_line <= 1e-8 * along {
+    if off_line2 <= 1e-16 * along2 {
         return Err(PnpError::Degenerate(DegenerateKind::CollinearWorldPoints));
     }
     Ok(Rays {

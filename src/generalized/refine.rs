@@ -167,13 +167,59 @@ struct Evaluated {
     flipped: bool,
 }
 
-/// Levenberg-Marquardt from `(r, t)` (the original frame), at most `max_iterations`
-/// iterations: the central pixel refinement's iteration and pass, per camera
-/// ([`crate::pipeline::refine_rig`]), on the rays' observations grouped by camera; then the
-/// costs, the squared error and the points in front at the returned pose (the iteration's own
-/// with the squared loss, otherwise [`evaluate`]).
-/// `exact_start`: the start is an exact fit (the object-space cost at its rounding level), from
-/// which the last Gauss-Newton step is applied ([`crate::pipeline::ReprojOptions`]).
+/// A rig problem's observations as the refinement reads them: grouped by camera (one
+/// [`RigCamera`] per run of rays of one camera: `rays` groups them, and a subset keeps the
+/// grouping), built once per solve.
+pub(crate) struct Grouped {
+    xs: Vec<Point3<f64>>,
+    ms: Vec<nalgebra::Point2<f64>>,
+    /// Empty when every weight is 1.
+    ws: Vec<f64>,
+    cameras: Vec<RigCamera>,
+    weight_sum: f64,
+}
+
+impl Grouped {
+    pub(crate) fn new(
+        rays: &Rays,
+        rig: &Rig,
+        world: &[Point3<f64>],
+        pixels: &[nalgebra::Point2<f64>],
+    ) -> Self {
+        let rs = &rays.rays;
+        let xs = rs.iter().map(|r| world[r.index]).collect();
+        let ms = rs.iter().map(|r| pixels[r.index]).collect();
+        let weighted = rs.iter().any(|r| r.weight != 1.0);
+        let ws = if weighted {
+            rs.iter().map(|r| r.weight).collect()
+        } else {
+            Vec::new()
+        };
+        let mut cameras: Vec<RigCamera> = Vec::new();
+        let mut start = 0;
+        while start < rs.len() {
+            let cam = rs[start].camera;
+            let end = start + rs[start..].iter().take_while(|r| r.camera == cam).count();
+            let (rk, tk) = rig.pose(cam);
+            cameras.push(RigCamera {
+                projector: rays.projectors[cam],
+                rotation: *rk,
+                translation: *tk,
+                range: start..end,
+            });
+            start = end;
+        }
+        Grouped {
+            xs,
+            ms,
+            ws,
+            cameras,
+            weight_sum: rs.iter().map(|r| r.weight).sum(),
+        }
+    }
+}
+
+/// [`refine_grouped`] with the observations grouped here.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     rays: &Rays,
@@ -186,47 +232,42 @@ pub(crate) fn refine(
     max_iterations: u32,
     exact_start: bool,
 ) -> Refined {
-    let weight_sum: f64 = rays.rays.iter().map(|x| x.weight).sum();
+    let grouped = Grouped::new(rays, rig, world, pixels);
+    let start = (r0, t0);
+    refine_grouped(&grouped, rays, rig, world, pixels, loss, start, max_iterations, exact_start)
+}
+
+/// Levenberg-Marquardt from `(r, t)` (the original frame), at most `max_iterations`
+/// iterations: the central pixel refinement's iteration and pass, per camera
+/// ([`crate::pipeline::refine_rig`], in the rays' working frame), on `grouped` (the rays'
+/// observations); then the costs, the squared error and the points in front at the returned pose
+/// (the iteration's own with the squared loss, otherwise [`evaluate`]). `exact_start`: the start
+/// is an exact fit (the object-space cost at its rounding level), from which the last
+/// Gauss-Newton step is applied ([`crate::pipeline::ReprojOptions`]).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refine_grouped(
+    grouped: &Grouped,
+    rays: &Rays,
+    rig: &Rig,
+    world: &[Point3<f64>],
+    pixels: &[nalgebra::Point2<f64>],
+    loss: Loss,
+    (r0, t0): (&Matrix3<f64>, &Vector3<f64>),
+    max_iterations: u32,
+    exact_start: bool,
+) -> Refined {
+    let weight_sum = grouped.weight_sum;
     let (mut r, mut t, mut iterations, mut converged) = (*r0, *t0, 0, false);
     if max_iterations > 0 {
-        let n = rays.rays.len();
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by_key(|&k| rays.rays[k].camera);
-        let xs: Vec<Point3<f64>> = order.iter().map(|&k| world[rays.rays[k].index]).collect();
-        let ms: Vec<nalgebra::Point2<f64>> =
-            order.iter().map(|&k| pixels[rays.rays[k].index]).collect();
-        let weighted = rays.rays.iter().any(|x| x.weight != 1.0);
-        let ws: Vec<f64> = if weighted {
-            order.iter().map(|&k| rays.rays[k].weight).collect()
-        } else {
-            Vec::new()
-        };
-        let mut cameras: Vec<RigCamera> = Vec::new();
-        let mut start = 0;
-        while start < n {
-            let cam = rays.rays[order[start]].camera;
-            let end = start
-                + order[start..]
-                    .iter()
-                    .take_while(|&&k| rays.rays[k].camera == cam)
-                    .count();
-            let (rk, tk) = rig.pose(cam);
-            cameras.push(RigCamera {
-                projector: rays.projectors[cam],
-                rotation: *rk,
-                translation: *tk,
-                range: start..end,
-            });
-            start = end;
-        }
         let px = RigPixels {
-            world: &xs,
-            pixels: &ms,
-            weights: weighted.then_some(&ws[..]),
-            cameras: &cameras,
+            world: &grouped.xs,
+            pixels: &grouped.ms,
+            weights: (!grouped.ws.is_empty()).then_some(&grouped.ws[..]),
+            cameras: &grouped.cameras,
             loss,
         };
-        let out = refine_rig(&px, r0, t0, max_iterations, exact_start);
+        let frame = (rays.x_mean, rays.scale);
+        let out = refine_rig(&px, frame, r0, t0, max_iterations, exact_start);
         if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
             (r, t, iterations, converged) = (out.r, out.t, out.iterations, out.converged);
             // The squared loss: the iteration's own cost and count (no further pass).

@@ -14,8 +14,8 @@
 //! (`|R_k q| = |q|`) and the points in front carry over, so the final-step rule of `refine`
 //! holds as it is: a depth `z = e_3^T x_k` moves by at most `|delta| (|q_i| + 1)`.
 //!
-//! The working frame: `P_i = (X_i - c) / d` (`c` the centroid of the world points, `d` their RMS
-//! distance from it), the pose `x_rig / d = R P_i + t_w`, so every camera's translation enters
+//! The working frame: `P_i = (X_i - c) / d` (the caller's: the centroid of the world points and
+//! their RMS distance from it), the pose `x_rig / d = R P_i + t_w`, so every camera's translation enters
 //! as `t_k / d`. No allocation.
 
 use core::ops::Range;
@@ -221,26 +221,17 @@ impl Residuals for RigResiduals<'_> {
 }
 
 /// Levenberg-Marquardt on the pixel error of the rig's observations from the rig's pose
-/// `(r, t)` (`x_rig = r X + t`), at most `max_iterations` iterations (`refine`'s options
+/// `(r, t)` (`x_rig = r X + t`) in the working frame `P_i = (X_i - c) / d` (`d > 0`), at most `max_iterations` iterations (`refine`'s options
 /// otherwise; `exact_start`: the start is an exact fit, [`ReprojOptions::exact_start`]). A
 /// starting depth at zero (relative to the others) leaves the pose as it is (not converged).
 pub(crate) fn refine_rig(
     px: &RigPixels<'_>,
+    (c, d): (Vector3<f64>, f64),
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
     max_iterations: u32,
     exact_start: bool,
 ) -> RigOutcome {
-    let n = px.world.len();
-    // The working frame: the world points' centroid and RMS distance from it.
-    let c = px.world.iter().map(|x| x.coords).sum::<Vector3<f64>>() / n.max(1) as f64;
-    let d2 = px
-        .world
-        .iter()
-        .map(|x| (x.coords - c).norm_squared())
-        .sum::<f64>()
-        / n.max(1) as f64;
-    let d = if d2 > 0.0 && d2.is_finite() { d2.sqrt() } else { 1.0 };
     // The weights in a power-of-two unit, so that no sum overflows or underflows.
     let unit = px.weights.map_or(1.0, |w| {
         let wmax = w.iter().fold(0.0f64, |m, &x| m.max(x));
