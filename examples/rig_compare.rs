@@ -34,7 +34,8 @@
 //! problems per row at sigma 1 px, no outliers: the central solve of normalised points (the
 //! problems of `cargo bench --bench solve`, `solve/general/default/100`), the central solve of
 //! pixels through one camera of this generator, and rigs of 2, 4 and 6 cameras, all-pinhole
-//! and distorting (SIMPLE_RADIAL and OPENCV alternating); the rows interleaved in each pass,
+//! and distorting (SIMPLE_RADIAL and OPENCV alternating over a rig's cameras, and over the
+//! problems of the central row); the rows interleaved in each pass,
 //! each row's time the median over `--solve-passes` passes; ratios of each rig row to the
 //! central normalised solve and to the central pixel solve of the same kind of camera.
 
@@ -69,8 +70,9 @@ enum Models {
     Mixed(usize),
     /// Every camera PINHOLE.
     Pinhole,
-    /// SIMPLE_RADIAL and OPENCV alternating.
-    Distorting,
+    /// SIMPLE_RADIAL and OPENCV alternating over the cameras, the first camera's at this index
+    /// (0: SIMPLE_RADIAL).
+    Distorting(usize),
 }
 
 /// One synthetic rig problem.
@@ -114,7 +116,7 @@ fn generate(seed: u64, n_cams: usize, models: Models, n: usize, sigma: f64, frac
         let m = match models {
             Models::Mixed(first) => (first + k) % MODELS.len(),
             Models::Pinhole => 0,
-            Models::Distorting => 1 + k % 2,
+            Models::Distorting(first) => 1 + (first + k) % 2,
         };
         let (name, params) = MODELS[m];
         let cam = Camera::from_colmap(name, 640, 480, params.to_vec()).expect("camera");
@@ -486,11 +488,17 @@ fn solve_rows(a: &Args) {
     });
     for (models, kind) in [
         (Models::Pinhole, "pinhole"),
-        (Models::Distorting, "distorting"),
+        (Models::Distorting(0), "distorting"),
     ] {
         for cams in [1usize, 2, 4, 6] {
             let cases: Vec<Case> = (0..m)
                 .map(|i| {
+                    // One camera: SIMPLE_RADIAL and OPENCV alternating over the problems, as
+                    // over a rig's cameras.
+                    let models = match models {
+                        Models::Distorting(_) if cams == 1 => Models::Distorting(i % 2),
+                        m => m,
+                    };
                     generate(
                         case_seed(a.seed ^ 0x501e, cams, i),
                         cams,
