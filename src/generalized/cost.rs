@@ -9,15 +9,16 @@
 //! `H = sum w Q`, `G = sum w Q K_i`, `S = sum w K_i^T Q K_i`, `q = sum w Q c`,
 //! `p = sum w K_i^T Q c`, `s0 = sum w c^T Q c` (`K_i r = R X_i`). Rays through one centre give
 //! `g = 0`, `k = 0`: the central cost. Newton on SO(3) runs in the chart `s -> R(s) R` with the
-//! local model of the generated kernels `so3_local_model` (the quadratic part) and
-//! `so3_local_affine` (the affine part).
+//! local model of the generated kernels `so3_local_model` (the quadratic part, in the central
+//! `newton`'s factored form) and `so3_local_affine` (the affine part).
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
-use crate::kernels::{so3_local_affine, so3_local_model};
+use crate::kernels::so3_local_affine;
 use crate::numeric::lanes::{dispatched, lane_sum, LANES};
 use crate::numeric::mat3::{ldl3, ldl3_solve, min_eigenvalue_sym3};
 use crate::numeric::rotation::cgr_to_rotation;
+use crate::pipeline::newton::{cost_at, local_model as newton_local_model};
 
 pub(crate) type M9 = SMatrix<f64, 9, 9>;
 pub(crate) type V9 = SVector<f64, 9>;
@@ -35,6 +36,8 @@ pub(crate) struct Cost {
     /// `trace(M)`: the scale of the cost (damping, acceptance floor).
     pub scale: f64,
     m45: [f64; 45],
+    /// `M`'s rows (the central `newton`'s local model reads them).
+    rows: [[f64; 9]; 9],
     g9: [f64; 9],
 }
 
@@ -103,6 +106,7 @@ impl Cost {
             }
         }
         let g9 = std::array::from_fn(|i| g[i]);
+        let rows = std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]));
         Some(Cost {
             m,
             g,
@@ -112,6 +116,7 @@ impl Cost {
             q,
             scale,
             m45,
+            rows,
             g9,
         })
     }
@@ -119,7 +124,7 @@ impl Cost {
     /// `f(R) = r^T M r + 2 g^T r + k`, clamped at 0 (its exact lower bound).
     pub(crate) fn value(&self, r: &Matrix3<f64>) -> f64 {
         let v = vec9(r);
-        (v.dot(&(self.m * v)) + 2.0 * self.g.dot(&v) + self.k).max(0.0)
+        (cost_at(&self.m45, r) + 2.0 * self.g.dot(&v) + self.k).max(0.0)
     }
 
     /// The translation minimising the cost for `R`.
@@ -128,16 +133,19 @@ impl Cost {
     }
 
     /// Value, gradient and exact Hessian of `f(R(s) R)` at `s = 0` (docs/algorithm.md,
-    /// `newton`: the Hessian is `H_C - 4 f I`).
+    /// `newton`: the Hessian is `H_C - 4 f I`, linear in the cost): the quadratic part's by the
+    /// central `newton`'s factored form of the kernel `so3_local_model` (its `f` by `cost_at`,
+    /// its `H_C - 4 f_q I`), plus the affine part's from the kernel `so3_local_affine`,
+    /// `H_C,a - 4 f_a I`.
     fn local_model(&self, r: &Matrix3<f64>) -> (f64, Vector3<f64>, Matrix3<f64>) {
         let rr = row_major(r);
-        let a = so3_local_model(&self.m45, &rr);
+        let fq = cost_at(&self.m45, r);
+        let (gq, hq) = newton_local_model(&self.rows, r);
         let b = so3_local_affine(&self.g9, self.k, &rr);
-        let c: [f64; 10] = std::array::from_fn(|i| a[i] + b[i]);
-        let f = c[0];
-        let g = Vector3::new(c[1], c[2], c[3]);
-        let hc = Matrix3::new(c[4], c[5], c[6], c[5], c[7], c[8], c[6], c[8], c[9]);
-        (f, g, hc - Matrix3::identity() * (4.0 * f))
+        let f = fq + b[0];
+        let g = gq + Vector3::new(b[1], b[2], b[3]);
+        let hca = Matrix3::new(b[4], b[5], b[6], b[5], b[7], b[8], b[6], b[8], b[9]);
+        (f, g, hq + hca - Matrix3::identity() * (4.0 * b[0]))
     }
 
     /// Damped Newton on SO(3) from `r0` (the central `newton` stage's iteration, without its

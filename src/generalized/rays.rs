@@ -160,25 +160,24 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     let mut skipped = 0;
     // The weighted sums of the centroids, in the rays' order.
     let (mut wsum, mut xw, mut cw) = (0.0f64, Vector3::zeros(), Vector3::zeros());
-    let mut pixels: Vec<Point2<f64>> = Vec::new();
-    let mut points: Vec<Point2<f64>> = Vec::new();
-    let mut ok: Vec<bool> = Vec::new();
+    // The pixels in the grouped order, undistorted camera by camera into `points`.
+    let pixels: Vec<Point2<f64>> = order.iter().map(|&i| input.pixels[i]).collect();
+    let mut points = vec![Point2::origin(); n];
+    let mut ok = vec![true; n];
     for k in 0..n_cams {
-        let idx = &order[start[k]..start[k + 1]];
-        if idx.is_empty() {
+        let range = start[k]..start[k + 1];
+        if range.is_empty() {
             continue;
         }
-        pixels.clear();
-        pixels.extend(idx.iter().map(|&i| input.pixels[i]));
-        points.clear();
-        points.resize(idx.len(), Point2::origin());
-        ok.clear();
-        ok.resize(idx.len(), true);
-        projectors[k].undistort_into(&pixels, &mut points, None, |j| ok[j] = false);
+        let (idx, ok_k) = (&order[range.clone()], &mut ok[range.clone()]);
+        projectors[k].undistort_into(&pixels[range.clone()], &mut points[range.clone()], None, |j| {
+            ok_k[j] = false;
+        });
+        let (ok_k, points_k) = (&ok[range.clone()], &points[range]);
         let (rk, _) = input.rig.pose(k);
         let centre = input.rig.centre(k).coords;
         for (j, &i) in idx.iter().enumerate() {
-            if !ok[j] {
+            if !ok_k[j] {
                 skipped += 1;
                 continue;
             }
@@ -186,7 +185,7 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             if !(weight > 0.0) {
                 continue;
             }
-            let m = points[j];
+            let m = points_k[j];
             let direction = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0)).normalize();
             wsum += weight;
             xw += input.world[i].coords * weight;

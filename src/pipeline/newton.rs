@@ -126,7 +126,7 @@ dispatched! {
     /// `R`, `Y_k` those of `M r` as a 3 x 3 matrix; `k, l = 1..3`). Every row of `X` and `U`
     /// is one AVX2 register (two SSE2 registers): 630 instructions per call against the
     /// kernel's 1,773 straight-line scalar ones (callgrind, the AVX2 build).
-    fn local_model[][](m: &[[f64; 9]; 9], r: &Matrix3<f64>) -> (Vector3<f64>, Matrix3<f64>) = local_model_body;
+    pub(crate) fn local_model[][](m: &[[f64; 9]; 9], r: &Matrix3<f64>) -> (Vector3<f64>, Matrix3<f64>) = local_model_body;
 }
 
 /// `acc += s v`, lane by lane.
