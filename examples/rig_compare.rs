@@ -591,16 +591,29 @@ fn solve_rows(a: &Args) {
             same
         );
     }
-    let worst = rows
-        .iter()
-        .zip(&us)
-        .filter(|(row, _)| row.label.starts_with("rig"))
-        .map(|(_, u)| u / us[0])
-        .fold(0.0, f64::max);
+    // The slowest rig row against the central normalised solve, and against the central pixel
+    // solve through the same kind of cameras.
+    let (mut worst_norm, mut worst_same) = (0.0f64, 0.0f64);
+    for (r, row) in rows.iter().enumerate() {
+        if !row.label.starts_with("rig") {
+            continue;
+        }
+        worst_norm = worst_norm.max(us[r] / us[0]);
+        if let Some(p) = rows
+            .iter()
+            .position(|o| o.kind == row.kind && o.label.starts_with("central, pixels"))
+        {
+            worst_same = worst_same.max(us[r] / us[p]);
+        }
+    }
+    let verdict = |w: f64| if w <= 2.0 { "met" } else { "missed" };
     println!(
-        "\nTarget: the rig solve within 2x the central default solve (of normalised \
-         points) at N = 100: {} (the slowest rig row {worst:.1}x)",
-        if worst <= 2.0 { "met" } else { "missed" }
+        "\nTarget: the rig solve within 2x the central default solve at N = 100. Against the \
+         central solve of pixels through the same camera models: {} (the slowest rig row \
+         {worst_same:.2}x); against the central solve of normalised points: {} (the slowest \
+         rig row {worst_norm:.2}x)",
+        verdict(worst_same),
+        verdict(worst_norm)
     );
 }
 
