@@ -6,7 +6,7 @@ use std::ffi::{c_char, CStr};
 use std::sync::{Arc, Mutex};
 
 use eopnp::camera::Camera;
-use eopnp::colmap::{self, Model, ReadOptions, Registrar, Registration};
+use eopnp::colmap::{self, ReadOptions, Registrar, Registration};
 use eopnp::covariance::NoiseModel;
 use eopnp::ransac::Ransac;
 use eopnp::{Loss, PlanarDetection, Problem, Refinement, Rig, Solver};
@@ -15,6 +15,7 @@ use nalgebra::{
 };
 
 use crate::error::{guard, last_info, last_message, EopnpErrorInfo, EopnpStatus, Failure};
+use crate::handles::{EopnpCamera, EopnpModel, EopnpRansac, EopnpRig, EopnpSolver};
 use crate::types::*;
 
 // Packed point arrays are read in place as nalgebra points: the same layout as `[f64; 3]` and
@@ -24,46 +25,13 @@ const _: () = assert!(std::mem::align_of::<Point3<f64>>() == 8);
 const _: () = assert!(std::mem::size_of::<Point2<f64>>() == 16);
 const _: () = assert!(std::mem::align_of::<Point2<f64>>() == 8);
 
-/// Solver options (the library's `Solver`): an opaque handle. Create with
-/// `eopnp_solver_create` (the recommended defaults), change with the `eopnp_solver_set_*`
-/// functions, release with `eopnp_solver_free`.
-pub struct EopnpSolver {
-    solver: Solver,
-}
-
-/// RANSAC options (the library's `Ransac`): an opaque handle. Create with
-/// `eopnp_ransac_create` (the recommended defaults: threshold 4 px, confidence 0.999, at most
-/// 10000 and at least 20 samples, seed 0, local optimisation on, final threshold factor 2),
-/// change with the `eopnp_ransac_set_*` functions, release with `eopnp_ransac_free`.
-pub struct EopnpRansac {
-    ransac: Ransac,
-}
-
-/// A camera model (the library's `Camera`: COLMAP's models, OpenCV's `K` + distortion): an
-/// opaque, immutable handle. Release with `eopnp_camera_free`.
-pub struct EopnpCamera {
-    camera: Camera,
-}
-
-/// A multi-camera rig (the library's `Rig`): cameras and their poses in the rig frame. An
-/// opaque, immutable handle; release with `eopnp_rig_free`.
-pub struct EopnpRig {
-    rig: Rig,
-}
-
-/// A COLMAP reconstruction read from disk (the library's `colmap::Model`): an opaque,
-/// immutable handle. Release with `eopnp_model_free`.
-pub struct EopnpModel {
-    model: Model,
-}
-
 type Res<T> = Result<T, Failure>;
 
 // ---------------------------------------------------------------------------------------------
 // Pointer checks.
 
 fn aligned<T>(p: *const T, name: &str) -> Res<()> {
-    if (p as usize) % std::mem::align_of::<T>() != 0 {
+    if !p.is_aligned() {
         return Err(Failure::invalid(format!(
             "`{name}` is not aligned for its type ({} bytes)",
             std::mem::align_of::<T>()

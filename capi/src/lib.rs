@@ -35,10 +35,11 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod error;
+mod ffi;
+mod handles;
 mod types;
-
-pub mod ffi;
 
 pub use error::{EopnpDegenerate, EopnpErrorInfo, EopnpInput, EopnpStatus};
 pub use ffi::*;
+pub use handles::{EopnpCamera, EopnpModel, EopnpRansac, EopnpRig, EopnpSolver};
 pub use types::*;

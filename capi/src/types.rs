@@ -115,9 +115,9 @@ pub struct EopnpProblem {
     /// `n` non-negative weights (a point of weight 0 is ignored), or NULL for all 1.
     pub weights: *const f64,
     /// The camera that observed the pixels `image`, or NULL.
-    pub camera: *const crate::ffi::EopnpCamera,
+    pub camera: *const crate::handles::EopnpCamera,
     /// The rig whose cameras observed the pixels `image`, or NULL. Not together with `camera`.
-    pub rig: *const crate::ffi::EopnpRig,
+    pub rig: *const crate::handles::EopnpRig,
     /// With `rig`: `n` camera indices into the rig (which camera saw each correspondence).
     /// Must be NULL without `rig`.
     pub rig_cameras: *const u32,
