@@ -375,6 +375,43 @@ typedef struct EopnpRegistration {
   double micros;
 } EopnpRegistration;
 
+// The registration of one frame of a COLMAP model with rigs (`eopnp_model_register_frame`):
+// the pose of the frame's rig from the correspondences of all its images, each through its own
+// camera and that camera's pose in the rig.
+typedef struct EopnpFrameRegistration {
+  // The frame's id.
+  uint32_t frame_id;
+  // The frame's rig.
+  uint32_t rig_id;
+  // `ransac` holds the RANSAC statistics (registration with RANSAC).
+  bool has_ransac;
+  // The number of the frame's images.
+  uint64_t images;
+  // 2D-3D correspondences of the frame's images.
+  uint64_t n;
+  // Correspondences the pose was fitted to: all that could be undistorted, or RANSAC's
+  // inliers.
+  uint64_t inliers;
+  // Observations whose pixel could not be undistorted.
+  uint64_t skipped;
+  // The rig's pose, `x_rig = R X + t` (rig from world); an image's camera pose is its
+  // `sensor_from_rig` composed with it.
+  struct EopnpSolution solution;
+  // RANSAC's statistics when `has_ransac`; zeros otherwise.
+  struct EopnpRansacStats ransac;
+  // Rotation difference to the model's rig-from-world pose, degrees.
+  double rotation_error_deg;
+  // Translation difference to the model's rig-from-world pose, percent of its `|t|`.
+  double translation_error_pct;
+  // RMS pixel residual of the solved pose over the fitted correspondences, each through its
+  // own camera.
+  double rmse_px;
+  // RMS pixel residual of the model's frame pose on the same correspondences.
+  double model_rmse_px;
+  // Wall time of undistortion plus solve (or RANSAC), microseconds.
+  double micros;
+} EopnpFrameRegistration;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -791,6 +828,30 @@ enum EopnpStatus eopnp_model_register_batch(const struct EopnpModel *model,
                                             size_t threads,
                                             struct EopnpRegistration *out,
                                             enum EopnpStatus *statuses);
+
+// The ids of the model's frames (models with rigs: `rigs.txt`/`frames.txt` or their binary
+// forms; none otherwise), ascending, as `eopnp_model_image_ids` gives the images'.
+//
+// # Safety
+// As `eopnp_model_image_ids`.
+enum EopnpStatus eopnp_model_frame_ids(const struct EopnpModel *model,
+                                       uint32_t *ids,
+                                       size_t capacity,
+                                       size_t *count);
+
+// Registers frame `frame_id` of a model with rigs: the pose of the frame's rig from all its
+// images' correspondences, each through its own camera and that camera's pose in the rig (the
+// library's `colmap::register_frame`), with RANSAC when `ransac` is not NULL. Into `*out`. An
+// unknown frame or rig, a camera without a pose in the rig, an empty frame:
+// `EOPNP_REGISTER_ERROR`; a solver failure: its own status.
+//
+// # Safety
+// `model`, `solver` NULL or live; `ransac` NULL or live; `out` NULL or writable.
+enum EopnpStatus eopnp_model_register_frame(const struct EopnpModel *model,
+                                            uint32_t frame_id,
+                                            const struct EopnpSolver *solver,
+                                            const struct EopnpRansac *ransac,
+                                            struct EopnpFrameRegistration *out);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -49,6 +49,8 @@ using Pose = EopnpPose;
 using RansacStats = EopnpRansacStats;
 /// The registration of one image of a COLMAP model.
 using Registration = EopnpRegistration;
+/// The registration of one frame of a COLMAP model with rigs.
+using FrameRegistration = EopnpFrameRegistration;
 /// The status codes.
 using Status = EopnpStatus;
 
@@ -525,6 +527,23 @@ class Model {
     std::vector<std::uint32_t> ids(count);
     detail::check(eopnp_model_image_ids(h_.get(), ids.data(), ids.size(), &count));
     return ids;
+  }
+  /// The frame ids (models with rigs), ascending.
+  std::vector<std::uint32_t> frame_ids() const {
+    std::size_t count = 0;
+    const EopnpStatus st = eopnp_model_frame_ids(h_.get(), nullptr, 0, &count);
+    if (st != EOPNP_OK && st != EOPNP_BUFFER_TOO_SMALL) detail::throw_status(st);
+    std::vector<std::uint32_t> ids(count);
+    if (count > 0) detail::check(eopnp_model_frame_ids(h_.get(), ids.data(), ids.size(), &count));
+    return ids;
+  }
+  /// Registers frame `frame_id`: the pose of its rig (with RANSAC when `ransac` is not null).
+  FrameRegistration register_frame(std::uint32_t frame_id, const Solver& solver,
+                                   const Ransac* ransac = nullptr) const {
+    FrameRegistration r{};
+    detail::check(eopnp_model_register_frame(h_.get(), frame_id, solver.get(),
+                                             ransac ? ransac->get() : nullptr, &r));
+    return r;
   }
   /// A copy of camera `camera_id`.
   Camera camera(std::uint32_t camera_id) const {

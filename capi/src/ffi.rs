@@ -6,7 +6,7 @@ use std::ffi::{c_char, CStr};
 use std::sync::{Arc, Mutex};
 
 use eopnp::camera::Camera;
-use eopnp::colmap::{self, ReadOptions, Registrar, Registration};
+use eopnp::colmap::{self, FrameRegistration, ReadOptions, Registrar, Registration};
 use eopnp::covariance::NoiseModel;
 use eopnp::ransac::Ransac;
 use eopnp::{Loss, PlanarDetection, Problem, Refinement, Rig, Solver};
@@ -1469,5 +1469,92 @@ pub unsafe extern "C" fn eopnp_model_register_batch(
             }
         }
         first_failure(failures)
+    })
+}
+
+/// The ids of the model's frames (models with rigs: `rigs.txt`/`frames.txt` or their binary
+/// forms; none otherwise), ascending, as `eopnp_model_image_ids` gives the images'.
+///
+/// # Safety
+/// As `eopnp_model_image_ids`.
+#[no_mangle]
+pub unsafe extern "C" fn eopnp_model_frame_ids(
+    model: *const EopnpModel,
+    ids: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+) -> EopnpStatus {
+    guard(|| {
+        let model = &get(model, "model")?.model;
+        let count = get_mut(count, "count")?;
+        let ids: &mut [u32] = if capacity == 0 && ids.is_null() {
+            &mut []
+        } else {
+            slice_mut(ids, capacity, "ids")?
+        };
+        *count = model.frames.len();
+        for (o, id) in ids.iter_mut().zip(model.frames.keys()) {
+            *o = *id;
+        }
+        if model.frames.len() > capacity {
+            return Err(Failure::new(
+                EopnpStatus::EOPNP_BUFFER_TOO_SMALL,
+                format!("{} frames, room for {capacity}", model.frames.len()),
+            ));
+        }
+        Ok(())
+    })
+}
+
+fn frame_registration(r: &FrameRegistration) -> EopnpFrameRegistration {
+    EopnpFrameRegistration {
+        frame_id: r.frame_id,
+        rig_id: r.rig_id,
+        has_ransac: r.ransac.is_some(),
+        images: r.image_ids.len() as u64,
+        n: r.n as u64,
+        inliers: r.inliers as u64,
+        skipped: r.skipped as u64,
+        solution: EopnpSolution::from(&r.solution),
+        ransac: r
+            .ransac
+            .as_ref()
+            .map_or(EopnpRansacStats::ZERO, EopnpRansacStats::from),
+        rotation_error_deg: r.rotation_error_deg,
+        translation_error_pct: r.translation_error_pct,
+        rmse_px: r.rmse_px,
+        model_rmse_px: r.model_rmse_px,
+        micros: r.micros,
+    }
+}
+
+/// Registers frame `frame_id` of a model with rigs: the pose of the frame's rig from all its
+/// images' correspondences, each through its own camera and that camera's pose in the rig (the
+/// library's `colmap::register_frame`), with RANSAC when `ransac` is not NULL. Into `*out`. An
+/// unknown frame or rig, a camera without a pose in the rig, an empty frame:
+/// `EOPNP_REGISTER_ERROR`; a solver failure: its own status.
+///
+/// # Safety
+/// `model`, `solver` NULL or live; `ransac` NULL or live; `out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn eopnp_model_register_frame(
+    model: *const EopnpModel,
+    frame_id: u32,
+    solver: *const EopnpSolver,
+    ransac: *const EopnpRansac,
+    out: *mut EopnpFrameRegistration,
+) -> EopnpStatus {
+    guard(|| {
+        let model = &get(model, "model")?.model;
+        let solver = &get(solver, "solver")?.solver;
+        let ransac = if ransac.is_null() {
+            None
+        } else {
+            Some(&get(ransac, "ransac")?.ransac)
+        };
+        let out = get_mut(out, "out")?;
+        let r = colmap::register_frame(model, frame_id, solver, ransac)?;
+        *out = frame_registration(&r);
+        Ok(())
     })
 }

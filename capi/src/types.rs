@@ -238,6 +238,45 @@ pub struct EopnpRegistration {
     pub micros: f64,
 }
 
+/// The registration of one frame of a COLMAP model with rigs (`eopnp_model_register_frame`):
+/// the pose of the frame's rig from the correspondences of all its images, each through its own
+/// camera and that camera's pose in the rig.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EopnpFrameRegistration {
+    /// The frame's id.
+    pub frame_id: u32,
+    /// The frame's rig.
+    pub rig_id: u32,
+    /// `ransac` holds the RANSAC statistics (registration with RANSAC).
+    pub has_ransac: bool,
+    /// The number of the frame's images.
+    pub images: u64,
+    /// 2D-3D correspondences of the frame's images.
+    pub n: u64,
+    /// Correspondences the pose was fitted to: all that could be undistorted, or RANSAC's
+    /// inliers.
+    pub inliers: u64,
+    /// Observations whose pixel could not be undistorted.
+    pub skipped: u64,
+    /// The rig's pose, `x_rig = R X + t` (rig from world); an image's camera pose is its
+    /// `sensor_from_rig` composed with it.
+    pub solution: EopnpSolution,
+    /// RANSAC's statistics when `has_ransac`; zeros otherwise.
+    pub ransac: EopnpRansacStats,
+    /// Rotation difference to the model's rig-from-world pose, degrees.
+    pub rotation_error_deg: f64,
+    /// Translation difference to the model's rig-from-world pose, percent of its `|t|`.
+    pub translation_error_pct: f64,
+    /// RMS pixel residual of the solved pose over the fitted correspondences, each through its
+    /// own camera.
+    pub rmse_px: f64,
+    /// RMS pixel residual of the model's frame pose on the same correspondences.
+    pub model_rmse_px: f64,
+    /// Wall time of undistortion plus solve (or RANSAC), microseconds.
+    pub micros: f64,
+}
+
 pub(crate) fn source(s: CandidateSource) -> EopnpSource {
     use EopnpSource as E;
     match s {

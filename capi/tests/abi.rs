@@ -593,3 +593,47 @@ fn last_error_is_per_thread() {
         t.join().unwrap();
     }
 }
+
+#[test]
+fn colmap_registration_is_the_librarys() {
+    use eopnp::colmap::{read_model, register_frame, register_image, ReadOptions};
+    let h = Handles::new();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for (dir, frames) in [("data/colmap-boxes", false), ("data/colmap-rig", true)] {
+        let path = root.join(dir);
+        let lib_model = read_model(&path, &ReadOptions::default()).unwrap();
+        let cpath = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
+        let mut model = ptr::null_mut();
+        assert_eq!(unsafe { eopnp_model_read(cpath.as_ptr(), &mut model) }, EopnpStatus::EOPNP_OK);
+        let id = *lib_model.images.keys().next().unwrap();
+        // SAFETY: all-zero is a valid `EopnpRegistration`.
+        let mut reg: EopnpRegistration = unsafe { std::mem::zeroed() };
+        assert_eq!(
+            unsafe { eopnp_model_register(model, id, h.solver, ptr::null(), &mut reg) },
+            EopnpStatus::EOPNP_OK,
+            "{}",
+            last_message()
+        );
+        let lib = register_image(&lib_model, id, &Solver::default(), None).unwrap();
+        assert_same(&reg.solution, &lib.solution);
+        assert_eq!(
+            (reg.n, reg.inliers, reg.rotation_error_deg.to_bits(), reg.rmse_px.to_bits()),
+            (lib.n as u64, lib.inliers as u64, lib.rotation_error_deg.to_bits(), lib.rmse_px.to_bits())
+        );
+        if frames {
+            let fid = *lib_model.frames.keys().next().unwrap();
+            // SAFETY: all-zero is a valid `EopnpFrameRegistration`.
+            let mut f: EopnpFrameRegistration = unsafe { std::mem::zeroed() };
+            assert_eq!(
+                unsafe { eopnp_model_register_frame(model, fid, h.solver, ptr::null(), &mut f) },
+                EopnpStatus::EOPNP_OK,
+                "{}",
+                last_message()
+            );
+            let lib = register_frame(&lib_model, fid, &Solver::default(), None).unwrap();
+            assert_same(&f.solution, &lib.solution);
+            assert_eq!((f.images, f.n), (lib.image_ids.len() as u64, lib.n as u64));
+        }
+        unsafe { eopnp_model_free(model) };
+    }
+}

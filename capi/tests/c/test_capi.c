@@ -4,7 +4,7 @@
  * several threads solving at once, and the poses equal to the Rust library's bit for bit (the
  * reference file written by `cargo run -p eopnp-capi --example reference_poses -- FILE`).
  *
- * Usage: test_capi REFERENCE_FILE COLMAP_MODEL_DIR
+ * Usage: test_capi REFERENCE_FILE COLMAP_MODEL_DIR COLMAP_RIG_MODEL_DIR
  */
 #include "eopnp.h"
 
@@ -691,6 +691,35 @@ static void test_model(const char *dir) {
   CHECK(none == NULL);
 }
 
+static void test_frames(const char *dir) {
+  EopnpModel *model = NULL;
+  EopnpSolver *s = NULL;
+  EopnpRansac *r = NULL;
+  EXPECT(EOPNP_OK, eopnp_model_read(dir, &model));
+  EXPECT(EOPNP_OK, eopnp_solver_create(&s));
+  EXPECT(EOPNP_OK, eopnp_ransac_create(&r));
+  size_t count = 0;
+  EXPECT(EOPNP_BUFFER_TOO_SMALL, eopnp_model_frame_ids(model, NULL, 0, &count));
+  CHECK(count == 6);
+  uint32_t ids[6];
+  EXPECT(EOPNP_OK, eopnp_model_frame_ids(model, ids, 6, &count));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_model_frame_ids(model, ids, 6, NULL));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_model_frame_ids(model, NULL, 6, &count));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_model_frame_ids(NULL, ids, 6, &count));
+  EopnpFrameRegistration f;
+  EXPECT(EOPNP_OK, eopnp_model_register_frame(model, ids[0], s, NULL, &f));
+  CHECK(f.frame_id == ids[0] && f.images >= 2 && !f.has_ransac && f.rotation_error_deg < 1.0);
+  EXPECT(EOPNP_OK, eopnp_model_register_frame(model, ids[1], s, r, &f));
+  CHECK(f.has_ransac && f.ransac.iterations >= 1 && f.inliers > 0);
+  EXPECT(EOPNP_REGISTER_ERROR, eopnp_model_register_frame(model, 4242, s, NULL, &f));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_model_register_frame(NULL, ids[0], s, NULL, &f));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_model_register_frame(model, ids[0], NULL, NULL, &f));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_model_register_frame(model, ids[0], s, NULL, NULL));
+  eopnp_ransac_free(r);
+  eopnp_solver_free(s);
+  eopnp_model_free(model);
+}
+
 /* Several threads solve with one shared solver and camera at once; each fails in its own way
  * in between, and its last error is its own. */
 typedef struct {
@@ -744,8 +773,8 @@ static void test_threads(void) {
 }
 
 int main(int argc, char **argv) {
-  if (argc != 3) {
-    fprintf(stderr, "usage: %s REFERENCE_FILE COLMAP_MODEL_DIR\n", argv[0]);
+  if (argc != 4) {
+    fprintf(stderr, "usage: %s REFERENCE_FILE COLMAP_MODEL_DIR COLMAP_RIG_MODEL_DIR\n", argv[0]);
     return 2;
   }
   make_problem();
@@ -755,6 +784,7 @@ int main(int argc, char **argv) {
   test_cameras();
   test_solves();
   test_model(argv[2]);
+  test_frames(argv[3]);
   test_threads();
   test_reference(argv[1]);
   printf("%d checks, %d failed\n", checks, failures);

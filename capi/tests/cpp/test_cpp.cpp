@@ -2,7 +2,7 @@
 // overloads, the poses equal to the Rust library's bit for bit (the reference file of the C
 // test), and, when built with OpenCV, the cv::solvePnP-shaped overloads.
 //
-// Usage: test_cpp REFERENCE_FILE COLMAP_MODEL_DIR
+// Usage: test_cpp REFERENCE_FILE COLMAP_MODEL_DIR COLMAP_RIG_MODEL_DIR
 #ifdef EOPNP_TEST_OPENCV
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
@@ -171,6 +171,16 @@ void make_problem() {
   }
 }
 
+void test_frames(const std::string& dir) {
+  const auto model = eopnp::Model::read(dir);
+  const auto ids = model.frame_ids();
+  CHECK(ids.size() == 6);
+  const eopnp::Solver solver;
+  const auto f = model.register_frame(ids[0], solver);
+  CHECK(f.frame_id == ids[0] && f.images >= 2 && f.rotation_error_deg < 1.0);
+  THROWS(eopnp::RegisterError, EOPNP_REGISTER_ERROR, model.register_frame(4242, solver));
+}
+
 void test_interface(const std::string& model_dir) {
   eopnp::Solver solver;
   const auto cam = eopnp::Camera::pinhole(800.0, 800.0, 320.0, 240.0);
@@ -331,13 +341,14 @@ void test_opencv() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 3) {
-    std::fprintf(stderr, "usage: %s REFERENCE_FILE COLMAP_MODEL_DIR\n", argv[0]);
+  if (argc != 4) {
+    std::fprintf(stderr, "usage: %s REFERENCE_FILE COLMAP_MODEL_DIR COLMAP_RIG_MODEL_DIR\n", argv[0]);
     return 2;
   }
   make_problem();
   try {
     test_interface(argv[2]);
+    test_frames(argv[3]);
 #ifdef EOPNP_TEST_OPENCV
     test_opencv();
 #endif
