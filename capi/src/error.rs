@@ -318,3 +318,7 @@ pub(crate) fn guard(body: impl FnOnce() -> Result<(), Failure>) -> EopnpStatus {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "../tests/unit/error.rs"]
+mod tests;

@@ -992,8 +992,9 @@ pub unsafe extern "C" fn eopnp_solve(
     })
 }
 
-/// Every local minimum of the problem's cost that the search finds (the library's
-/// `Solver::solve_all`), the best first: `*count` receives their number (at most
+/// Every distinct local minimum of the problem's cost that the search finds (the library's
+/// `Solver::solve_all`), best first (the poses with more than half of the points in front
+/// before the others, then by increasing reprojection error): `*count` receives their number (at most
 /// `EOPNP_MAX_SOLUTIONS`), `out[0 .. min(*count, capacity)]` the solutions. More than `capacity`:
 /// `EOPNP_BUFFER_TOO_SMALL` (the first `capacity` written). `out` may be NULL when `capacity` is
 /// 0.
