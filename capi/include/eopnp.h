@@ -735,7 +735,7 @@ enum EopnpStatus eopnp_ransac_estimate(const struct EopnpRansac *ransac,
 // status, each exactly what `eopnp_solve` gives for it. Returns `EOPNP_OK` if every problem
 // was solved, otherwise the status of the first problem that failed (its message names it,
 // `EopnpErrorInfo::index` is its index; the others are in `statuses`). `count = 0` does
-// nothing.
+// nothing (the pointers must not be NULL all the same).
 //
 // # Safety
 // `solver` NULL or live; `problems` NULL or `count` problems as `EopnpProblem` documents;

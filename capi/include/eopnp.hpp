@@ -500,6 +500,36 @@ class Ransac {
                                         r.inliers.data(), &r.stats));
     return r;
   }
+  /// Many problems on `threads` threads (0: one per core), problem i with the library's seed
+  /// problem_seed(seed, i). Each problem's status is in `statuses` (resized); throws only for a
+  /// failure of the call itself, never for a problem's.
+  std::vector<RansacResult> estimate_batch(const Solver& solver, const std::vector<Problem>& problems,
+                                           std::size_t threads, std::vector<Status>& statuses) const {
+    std::vector<EopnpProblem> ps;
+    std::vector<RansacResult> out(problems.size());
+    std::vector<Solution> sols(problems.size());
+    std::vector<RansacStats> stats(problems.size());
+    std::vector<std::uint8_t*> masks(problems.size());
+    ps.reserve(problems.size());
+    for (std::size_t i = 0; i < problems.size(); ++i) {
+      ps.push_back(problems[i].c());
+      out[i].inliers.resize(problems[i].size());
+      masks[i] = out[i].inliers.data();
+    }
+    // EOPNP_PANIC marks a status not written: a failure of the call itself.
+    statuses.assign(problems.size(), EOPNP_PANIC);
+    const EopnpStatus st = eopnp_ransac_batch(h_.get(), solver.get(), ps.data(), ps.size(), threads,
+                                              sols.data(), masks.data(), stats.data(), statuses.data());
+    if (st != EOPNP_OK && st != EOPNP_PANIC) {
+      for (Status x : statuses)
+        if (x == EOPNP_PANIC) detail::throw_status(st);
+    }
+    for (std::size_t i = 0; i < problems.size(); ++i) {
+      out[i].solution = sols[i];
+      out[i].stats = stats[i];
+    }
+    return out;
+  }
   /// The C handle (owned by this object).
   const EopnpRansac* get() const noexcept { return h_.get(); }
 
@@ -558,6 +588,22 @@ class Model {
     detail::check(eopnp_model_register(h_.get(), image_id, solver.get(),
                                        ransac ? ransac->get() : nullptr, &r));
     return r;
+  }
+  /// Registers the images `image_ids` on `threads` threads (0: one per core). Each image's
+  /// status is in `statuses` (resized); throws only for a failure of the call itself.
+  std::vector<Registration> register_batch(const std::vector<std::uint32_t>& image_ids,
+                                           const Solver& solver, const Ransac* ransac,
+                                           std::size_t threads, std::vector<Status>& statuses) const {
+    std::vector<Registration> out(image_ids.size());
+    statuses.assign(image_ids.size(), EOPNP_PANIC);
+    const EopnpStatus st = eopnp_model_register_batch(
+        h_.get(), image_ids.data(), image_ids.size(), solver.get(), ransac ? ransac->get() : nullptr,
+        threads, out.data(), statuses.data());
+    if (st != EOPNP_OK && st != EOPNP_PANIC) {
+      for (Status x : statuses)
+        if (x == EOPNP_PANIC) detail::throw_status(st);
+    }
+    return out;
   }
   /// The C handle (owned by this object).
   const EopnpModel* get() const noexcept { return h_.get(); }

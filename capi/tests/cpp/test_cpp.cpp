@@ -274,6 +274,23 @@ void test_interface(const std::string& model_dir) {
   CHECK(reg.has_ransac && reg.rotation_error_deg < 1.0);
   (void)model.camera(1);
   THROWS(eopnp::RegisterError, EOPNP_REGISTER_ERROR, model.register_image(99999, moved));
+  std::vector<std::uint32_t> with_bad = ids;
+  with_bad.push_back(99999);
+  std::vector<eopnp::Status> reg_statuses;
+  const auto regs = model.register_batch(with_bad, moved, &ransac, 2, reg_statuses);
+  CHECK(regs.size() == 7 && reg_statuses[6] == EOPNP_REGISTER_ERROR);
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    CHECK(reg_statuses[i] == EOPNP_OK && regs[i].image_id == ids[i]);
+    // The same as one registration at a time (RANSAC's seed does not depend on the batch).
+    const auto one = model.register_image(ids[i], moved, &ransac);
+    CHECK(std::memcmp(one.solution.rotation, regs[i].solution.rotation, sizeof one.solution.rotation) == 0);
+  }
+  // RANSAC batches: problem i with the seed problem_seed(seed, i); an invalid problem's status.
+  std::vector<eopnp::Status> r_statuses;
+  const auto rs = ransac.estimate_batch(
+      moved, {eopnp::Problem::pixels(W, PX, N, cam), eopnp::Problem::pixels(W, PX, 2, cam)}, 2, r_statuses);
+  CHECK(rs.size() == 2 && r_statuses[0] == EOPNP_OK && r_statuses[1] == EOPNP_TOO_FEW_POINTS);
+  CHECK(rs[0].stats.inliers == N && rs[0].inliers.size() == N && rs[0].inliers[N - 1] == 1);
 
   // Threads: one solver, several threads, each with its own last error.
   std::vector<std::thread> threads;
