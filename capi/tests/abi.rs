@@ -637,3 +637,136 @@ fn colmap_registration_is_the_librarys() {
         unsafe { eopnp_model_free(model) };
     }
 }
+
+/// Random problems with random bad values (NaN, infinities, negative and zero weights, huge and
+/// tiny coordinates, duplicated points, strides, counts, camera indices): every call returns a
+/// status (never `EOPNP_PANIC`), and an `EOPNP_OK` pose is finite.
+#[test]
+fn random_bad_input_never_panics() {
+    let h = Handles::new();
+    let mut g = problems::Lcg(77);
+    let cam = opencv_camera();
+    let params = cam.params().to_vec();
+    let (mut ccam, mut crig) = (ptr::null_mut(), ptr::null_mut());
+    let identity = EopnpPose {
+        rotation: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        translation: [0.0; 3],
+    };
+    let mut ransac = ptr::null_mut();
+    unsafe {
+        assert_eq!(
+            eopnp_camera_from_colmap(c"OPENCV".as_ptr(), 640, 480, params.as_ptr(), params.len(), &mut ccam),
+            EopnpStatus::EOPNP_OK
+        );
+        let cams = [ccam as *const EopnpCamera, ccam];
+        let poses = [identity, identity];
+        assert_eq!(eopnp_rig_create(cams.as_ptr(), poses.as_ptr(), 2, &mut crig), EopnpStatus::EOPNP_OK);
+        assert_eq!(eopnp_ransac_create(&mut ransac), EopnpStatus::EOPNP_OK);
+        assert_eq!(eopnp_ransac_set_max_iterations(ransac, 50), EopnpStatus::EOPNP_OK);
+    }
+    let specials = [f64::NAN, f64::INFINITY, -f64::INFINITY, 0.0, -0.0, 1e300, -1e300, 1e-300, 5e-324];
+    let mut outcomes = std::collections::BTreeMap::new();
+    for round in 0..1500 {
+        let n = (g.uniform() * 14.0) as usize;
+        let s = synthetic(5000 + round, n.max(1), 1e-3);
+        let (ws, is) = ((g.uniform() * 3.0) as usize, (g.uniform() * 3.0) as usize);
+        let world_stride = if ws == 0 { 0 } else { 2 + ws };
+        let image_stride = if is == 0 { 0 } else { 1 + is };
+        let (wstep, istep) = (world_stride.max(3), image_stride.max(2));
+        let mut w = vec![0.0; wstep * n.max(1)];
+        let mut m = vec![0.0; istep * n.max(1)];
+        for i in 0..n {
+            let x = s.world[i.min(s.world.len() - 1)];
+            w[wstep * i..wstep * i + 3].copy_from_slice(&[x.x, x.y, x.z]);
+            let y = s.normalised[i.min(s.normalised.len() - 1)];
+            m[istep * i..istep * i + 2].copy_from_slice(&[y.x, y.y]);
+        }
+        let mut weights: Vec<f64> = (0..n.max(1)).map(|_| g.range(-0.2, 2.0).max(0.0)).collect();
+        // A few bad values.
+        for _ in 0..(g.uniform() * 3.0) as usize {
+            let v = specials[(g.uniform() * specials.len() as f64) as usize];
+            match (g.uniform() * 4.0) as usize {
+                0 if !w.is_empty() => {
+                    let k = (g.uniform() * w.len() as f64) as usize;
+                    w[k] = v;
+                }
+                1 if !m.is_empty() => {
+                    let k = (g.uniform() * m.len() as f64) as usize;
+                    m[k] = v;
+                }
+                2 => {
+                    let k = (g.uniform() * weights.len() as f64) as usize;
+                    weights[k] = if g.uniform() < 0.5 { v } else { -1.0 };
+                }
+                _ => {
+                    // All points the same.
+                    for i in 1..n {
+                        w.copy_within(0..3, wstep * i);
+                    }
+                }
+            }
+        }
+        let which: Vec<u32> = (0..n.max(1)).map(|_| (g.uniform() * 2.3) as u32).collect();
+        let mut p = problem(&w, &m, n);
+        p.world_stride = world_stride;
+        p.image_stride = image_stride;
+        if g.uniform() < 0.5 {
+            p.weights = weights.as_ptr();
+        }
+        match (g.uniform() * 3.0) as usize {
+            0 => {}
+            1 => p.camera = ccam,
+            _ => {
+                p.rig = crig;
+                p.rig_cameras = which.as_ptr();
+            }
+        }
+        if g.uniform() < 0.3 {
+            p.focal_x = specials[(g.uniform() * specials.len() as f64) as usize];
+            p.focal_y = 800.0;
+        }
+        let mut out = zeroed_solution();
+        let st = match round % 4 {
+            0 => unsafe { eopnp_solve(h.solver, &p, &mut out) },
+            1 => {
+                let mut all = [zeroed_solution(); EOPNP_MAX_SOLUTIONS];
+                let mut count = 0;
+                let st = unsafe { eopnp_solve_all(h.solver, &p, all.as_mut_ptr(), all.len(), &mut count) };
+                out = all[0];
+                st
+            }
+            2 => {
+                let prior = EopnpPose {
+                    rotation: identity.rotation,
+                    translation: [0.0, 0.0, specials[(g.uniform() * specials.len() as f64) as usize]],
+                };
+                unsafe { eopnp_refine(h.solver, &p, &prior, &mut out) }
+            }
+            _ => {
+                let mut mask = vec![0u8; n.max(1)];
+                unsafe {
+                    eopnp_ransac_estimate(ransac, h.solver, &p, &mut out, mask.as_mut_ptr(), ptr::null_mut())
+                }
+            }
+        };
+        assert_ne!(st, EopnpStatus::EOPNP_PANIC, "round {round}: {}", last_message());
+        if st == EopnpStatus::EOPNP_OK {
+            assert!(
+                out.rotation.iter().chain(&out.translation).all(|x| x.is_finite()),
+                "round {round}: a non-finite pose"
+            );
+        } else {
+            assert!(!last_message().is_empty());
+        }
+        *outcomes.entry(format!("{st:?}")).or_insert(0) += 1;
+    }
+    println!("{outcomes:?}");
+    // Both outcomes occur: the generator reaches the solver and the checks.
+    assert!(outcomes.get("EOPNP_OK").copied().unwrap_or(0) > 100, "{outcomes:?}");
+    assert!(outcomes.len() >= 5, "{outcomes:?}");
+    unsafe {
+        eopnp_ransac_free(ransac);
+        eopnp_rig_free(crig);
+        eopnp_camera_free(ccam);
+    }
+}
