@@ -319,6 +319,7 @@ fn no_module_cycle_in_any_crate() {
         "verify/src",
         "compare/src",
         "testkit/src",
+        "capi/src",
         // The Python package's extension module (its own workspace, scanned all the same).
         "python/src",
     ] {

@@ -1,0 +1,369 @@
+//! The plain-data types of the interface: problems, poses, solutions, statistics, and the
+//! enumerations of the options.
+
+use crate::error::EopnpStatus;
+use eopnp::ransac::RansacStats;
+use eopnp::{CandidateSource, Solution};
+
+/// The largest number of local minima `eopnp_solve_all` returns (the library's capacity of
+/// `Solutions`).
+pub const EOPNP_MAX_SOLUTIONS: usize = 32;
+
+/// Which cost the returned pose minimises (`eopnp_solver_set_refinement`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EopnpRefinement {
+    /// EOPnP followed by Levenberg-Marquardt on the reprojection error: the maximum-likelihood
+    /// pose. Default.
+    EOPNP_REFINEMENT_REPROJECTION = 0,
+    /// EOPnP alone: the minimiser of the paper's algebraic cost.
+    EOPNP_REFINEMENT_ALGEBRAIC = 1,
+}
+
+/// How the planar branch is chosen (`eopnp_solver_set_planar_detection`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EopnpPlanarDetection {
+    /// From the planarity of the world points. Default.
+    EOPNP_PLANAR_AUTO = 0,
+    /// Planar branch only.
+    EOPNP_PLANAR_PLANAR = 1,
+    /// Non-planar branch only.
+    EOPNP_PLANAR_NON_PLANAR = 2,
+}
+
+/// The loss of the final refinement (`eopnp_solver_set_loss`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EopnpLoss {
+    /// `rho(r2) = r2`, the maximum-likelihood pose for Gaussian noise. Default.
+    EOPNP_LOSS_SQUARED = 0,
+    /// `rho(r2) = r2` for `r <= s`, `2 s r - s^2` beyond.
+    EOPNP_LOSS_HUBER = 1,
+    /// `rho(r2) = s^2 ln(1 + r2 / s^2)`.
+    EOPNP_LOSS_CAUCHY = 2,
+}
+
+/// Which covariance the solver computes (`eopnp_solver_set_covariance`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EopnpCovariance {
+    /// No covariance (default).
+    EOPNP_COVARIANCE_NONE = 0,
+    /// The noise estimated from the residuals at the pose, `sigma^2 = cost / (2 n - 6)`.
+    EOPNP_COVARIANCE_ESTIMATED = 1,
+    /// A given noise standard deviation per image coordinate, in the units of the
+    /// observations (pixels for pixel input, normalised units for normalised input).
+    EOPNP_COVARIANCE_SIGMA = 2,
+}
+
+/// The candidate generator of a solution's winning start (`EopnpSolution::source`), the
+/// library's `CandidateSource`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EopnpSource {
+    /// Null-space case 1 (non-planar).
+    EOPNP_SOURCE_CASE1 = 0,
+    /// Null-space case 2.
+    EOPNP_SOURCE_CASE2 = 1,
+    /// Null-space case 3.
+    EOPNP_SOURCE_CASE3 = 2,
+    /// Null-space case 4.
+    EOPNP_SOURCE_CASE4 = 3,
+    /// Planar case 1.
+    EOPNP_SOURCE_PLANAR1 = 4,
+    /// Planar case 2.
+    EOPNP_SOURCE_PLANAR2 = 5,
+    /// An extra start of the search.
+    EOPNP_SOURCE_EXTRA_START = 6,
+    /// The initial pose of `eopnp_refine`.
+    EOPNP_SOURCE_INITIAL = 7,
+    /// The P3P minimal solver (RANSAC).
+    EOPNP_SOURCE_P3P = 8,
+    /// The generalized (rig) solver.
+    EOPNP_SOURCE_GENERALIZED = 9,
+    /// The generalized three-point solver (rig RANSAC).
+    EOPNP_SOURCE_GP3P = 10,
+    /// A generator added to the library after this interface.
+    EOPNP_SOURCE_OTHER = 11,
+}
+
+/// One pose problem: `n` world points and their observations, like the Rust library's
+/// `Problem`. Zero-initialise it (`EopnpProblem p = {0};`) and set the fields you need.
+///
+/// The kind of observations follows from the fields: with `rig` set, pixels observed by the
+/// rig's cameras (`rig_cameras[i]` the camera of correspondence `i`); else with `camera` set,
+/// pixels observed by that camera (any model, distortion included; costs in pixels^2); else
+/// normalised image points `(x/z, y/z)` (costs in normalised units).
+///
+/// Every pointer is borrowed for the duration of the call that takes the problem only.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct EopnpProblem {
+    /// The number of correspondences (at least 4 are needed to solve; 0 is reported as
+    /// `EOPNP_TOO_FEW_POINTS`).
+    pub n: usize,
+    /// `n` world points `(x, y, z)`, point `i` at `world[i * world_stride]`. Not NULL.
+    pub world: *const f64,
+    /// Stride of `world` in `double`s: 0 (packed, 3) or at least 3.
+    pub world_stride: usize,
+    /// `n` image points `(x, y)`: normalised, or pixels with `camera` or `rig`; point `i` at
+    /// `image[i * image_stride]`. Not NULL.
+    pub image: *const f64,
+    /// Stride of `image` in `double`s: 0 (packed, 2) or at least 2.
+    pub image_stride: usize,
+    /// `n` non-negative weights (a point of weight 0 is ignored), or NULL for all 1.
+    pub weights: *const f64,
+    /// The camera that observed the pixels `image`, or NULL.
+    pub camera: *const crate::handles::EopnpCamera,
+    /// The rig whose cameras observed the pixels `image`, or NULL. Not together with `camera`.
+    pub rig: *const crate::handles::EopnpRig,
+    /// With `rig`: `n` camera indices into the rig (which camera saw each correspondence).
+    /// Must be NULL without `rig`.
+    pub rig_cameras: *const u32,
+    /// Normalised input only: the focal lengths `(fx, fy)` in pixels that make the RANSAC
+    /// threshold a pixel distance. Both 0 (the zero-initialised default) means `(1, 1)`: the
+    /// threshold in normalised units. Ignored by the plain solves and for pixel input.
+    pub focal_x: f64,
+    /// See `focal_x`.
+    pub focal_y: f64,
+}
+
+/// A pose `x_cam = R X + t` (world to camera), the input of `eopnp_refine` (a prior pose).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EopnpPose {
+    /// `R`, row-major: `rotation[3 * row + col]`. Must be a rotation (`|R^T R - I| <= 1e-6`
+    /// entrywise, `det R > 0`).
+    pub rotation: [f64; 9],
+    /// `t`, in world units.
+    pub translation: [f64; 3],
+}
+
+/// A solved pose and how it was found: the library's `Solution`. Written by the solve
+/// functions into caller-owned memory.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EopnpSolution {
+    /// `R` of the world-to-camera pose `x_cam = R X + t`, row-major (`rotation[3 * row + col]`).
+    pub rotation: [f64; 9],
+    /// `t` of the world-to-camera pose (the world origin in the camera frame), world units.
+    pub translation: [f64; 3],
+    /// The minimised cost: the (weighted) sum of squared reprojection residuals (normalised
+    /// units for normalised input, pixels^2 for pixel input), through the loss when one is set;
+    /// the algebraic cost in `EOPNP_REFINEMENT_ALGEBRAIC` mode.
+    pub cost: f64,
+    /// The paper's algebraic cost of the returned rotation.
+    pub algebraic_cost: f64,
+    /// Root-mean-square normalised reprojection residual (pixel input: the RMS pixel residual
+    /// divided by `max(fx, fy)`); multiply by the focal length for pixels.
+    pub reprojection_rmse: f64,
+    /// The covariance of `[delta_q (3), delta_t (3)]` (the library's `covariance` module,
+    /// pycolmap's convention), row-major 6 x 6, when `has_covariance`; zeros otherwise.
+    pub covariance: [f64; 36],
+    /// The noise standard deviation the covariance used (given or estimated), in image units;
+    /// 0 without a covariance.
+    pub covariance_sigma: f64,
+    /// Correspondences that entered the solve (those with a weight > 0).
+    pub used: u64,
+    /// Correspondences left out because their pixel could not be undistorted.
+    pub skipped: u64,
+    /// Damped-Newton iterations of the winning candidate.
+    pub newton_iterations: u32,
+    /// Levenberg-Marquardt iterations of the reprojection refinement.
+    pub reprojection_iterations: u32,
+    /// The candidate generator of the winning start.
+    pub source: EopnpSource,
+    /// More than half of the points are in front of the camera.
+    pub cheirality_ok: bool,
+    /// The configuration is close to degenerate; the pose may be ambiguous or wrong.
+    pub degenerate: bool,
+    /// The planar branch produced the starting candidate.
+    pub planar: bool,
+    /// The reprojection refinement stopped at a minimum.
+    pub converged: bool,
+    /// `covariance` holds the pose's covariance (asked for by `eopnp_solver_set_covariance`,
+    /// and the normal equations positive definite).
+    pub has_covariance: bool,
+}
+
+/// Statistics of a RANSAC run (the library's `RansacStats`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EopnpRansacStats {
+    /// Samples drawn.
+    pub iterations: u32,
+    /// P3P poses scored.
+    pub hypotheses: u32,
+    /// EOPnP fits in local optimisation.
+    pub local_fits: u32,
+    /// EOPnP fits in the final fit.
+    pub final_fits: u32,
+    /// Inliers of the returned pose (final threshold).
+    pub inliers: u64,
+    /// `inliers / n`.
+    pub inlier_ratio: f64,
+    /// Wall time of the run, microseconds.
+    pub micros: f64,
+}
+
+/// The registration of one image of a COLMAP model (`eopnp_model_register`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EopnpRegistration {
+    /// The image's id.
+    pub image_id: u32,
+    /// `has_ransac`: `ransac` holds the RANSAC statistics (registration with RANSAC).
+    pub has_ransac: bool,
+    /// 2D-3D correspondences of the image (its 2D points with a 3D point).
+    pub n: u64,
+    /// Correspondences used: RANSAC's inliers, or those of weight > 0.
+    pub inliers: u64,
+    /// Correspondences whose pixel could not be undistorted.
+    pub skipped: u64,
+    /// The solved pose (world to camera).
+    pub solution: EopnpSolution,
+    /// RANSAC's statistics when `has_ransac`; zeros otherwise.
+    pub ransac: EopnpRansacStats,
+    /// The largest angle between corresponding columns of the solved and the model's rotation,
+    /// degrees.
+    pub rotation_error_deg: f64,
+    /// `|t - t_model| / |t_model|`, percent.
+    pub translation_error_pct: f64,
+    /// RMS pixel residual of the solved pose (over the inliers with RANSAC).
+    pub rmse_px: f64,
+    /// RMS pixel residual of the model's pose, on the same points.
+    pub model_rmse_px: f64,
+    /// Wall time of the solve, microseconds.
+    pub micros: f64,
+}
+
+/// The registration of one frame of a COLMAP model with rigs (`eopnp_model_register_frame`):
+/// the pose of the frame's rig from the correspondences of all its images, each through its own
+/// camera and that camera's pose in the rig.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EopnpFrameRegistration {
+    /// The frame's id.
+    pub frame_id: u32,
+    /// The frame's rig.
+    pub rig_id: u32,
+    /// `ransac` holds the RANSAC statistics (registration with RANSAC).
+    pub has_ransac: bool,
+    /// The number of the frame's images.
+    pub images: u64,
+    /// 2D-3D correspondences of the frame's images.
+    pub n: u64,
+    /// Correspondences the pose was fitted to: all that could be undistorted, or RANSAC's
+    /// inliers.
+    pub inliers: u64,
+    /// Observations whose pixel could not be undistorted.
+    pub skipped: u64,
+    /// The rig's pose, `x_rig = R X + t` (rig from world); an image's camera pose is its
+    /// `sensor_from_rig` composed with it.
+    pub solution: EopnpSolution,
+    /// RANSAC's statistics when `has_ransac`; zeros otherwise.
+    pub ransac: EopnpRansacStats,
+    /// Rotation difference to the model's rig-from-world pose, degrees.
+    pub rotation_error_deg: f64,
+    /// Translation difference to the model's rig-from-world pose, percent of its `|t|`.
+    pub translation_error_pct: f64,
+    /// RMS pixel residual of the solved pose over the fitted correspondences, each through its
+    /// own camera.
+    pub rmse_px: f64,
+    /// RMS pixel residual of the model's frame pose on the same correspondences.
+    pub model_rmse_px: f64,
+    /// Wall time of undistortion plus solve (or RANSAC), microseconds.
+    pub micros: f64,
+}
+
+pub(crate) fn source(s: CandidateSource) -> EopnpSource {
+    use EopnpSource as E;
+    match s {
+        CandidateSource::Case1 => E::EOPNP_SOURCE_CASE1,
+        CandidateSource::Case2 => E::EOPNP_SOURCE_CASE2,
+        CandidateSource::Case3 => E::EOPNP_SOURCE_CASE3,
+        CandidateSource::Case4 => E::EOPNP_SOURCE_CASE4,
+        CandidateSource::Planar1 => E::EOPNP_SOURCE_PLANAR1,
+        CandidateSource::Planar2 => E::EOPNP_SOURCE_PLANAR2,
+        CandidateSource::ExtraStart => E::EOPNP_SOURCE_EXTRA_START,
+        CandidateSource::Initial => E::EOPNP_SOURCE_INITIAL,
+        CandidateSource::P3p => E::EOPNP_SOURCE_P3P,
+        CandidateSource::Generalized => E::EOPNP_SOURCE_GENERALIZED,
+        CandidateSource::Gp3p => E::EOPNP_SOURCE_GP3P,
+        #[allow(unreachable_patterns)]
+        _ => E::EOPNP_SOURCE_OTHER,
+    }
+}
+
+fn to_u64(x: usize) -> u64 {
+    u64::try_from(x).unwrap_or(u64::MAX)
+}
+
+impl From<&Solution> for EopnpSolution {
+    fn from(s: &Solution) -> Self {
+        let mut rotation = [0.0; 9];
+        for r in 0..3 {
+            for c in 0..3 {
+                rotation[3 * r + c] = s.rotation[(r, c)];
+            }
+        }
+        let (mut covariance, mut covariance_sigma) = ([0.0; 36], 0.0);
+        if let Some(cov) = &s.covariance {
+            for r in 0..6 {
+                for c in 0..6 {
+                    covariance[6 * r + c] = cov.matrix[(r, c)];
+                }
+            }
+            covariance_sigma = cov.sigma;
+        }
+        EopnpSolution {
+            rotation,
+            translation: [s.translation.x, s.translation.y, s.translation.z],
+            cost: s.cost,
+            algebraic_cost: s.algebraic_cost,
+            reprojection_rmse: s.reprojection_rmse,
+            covariance,
+            covariance_sigma,
+            used: to_u64(s.used),
+            skipped: to_u64(s.skipped),
+            newton_iterations: s.newton_iterations,
+            reprojection_iterations: s.reprojection_iterations,
+            source: source(s.source),
+            cheirality_ok: s.cheirality_ok,
+            degenerate: s.degenerate,
+            planar: s.planar,
+            converged: s.converged,
+            has_covariance: s.covariance.is_some(),
+        }
+    }
+}
+
+impl From<&RansacStats> for EopnpRansacStats {
+    fn from(s: &RansacStats) -> Self {
+        EopnpRansacStats {
+            iterations: s.iterations,
+            hypotheses: s.hypotheses,
+            local_fits: s.local_fits,
+            final_fits: s.final_fits,
+            inliers: to_u64(s.inliers),
+            inlier_ratio: s.inlier_ratio,
+            micros: s.micros,
+        }
+    }
+}
+
+impl EopnpRansacStats {
+    pub(crate) const ZERO: EopnpRansacStats = EopnpRansacStats {
+        iterations: 0,
+        hypotheses: 0,
+        local_fits: 0,
+        final_fits: 0,
+        inliers: 0,
+        inlier_ratio: 0.0,
+        micros: 0.0,
+    };
+}
+
+/// `EOPNP_OK`'s name, for the status array of the batch functions.
+pub(crate) const OK: EopnpStatus = EopnpStatus::EOPNP_OK;
