@@ -33,7 +33,9 @@ fn per_call_ns(f: &mut dyn FnMut()) -> f64 {
 }
 
 fn main() {
-    let rounds: usize = std::env::args().nth(1).map_or(200, |a| a.parse().expect("ROUNDS"));
+    let rounds: usize = std::env::args()
+        .nth(1)
+        .map_or(200, |a| a.parse().expect("ROUNDS"));
     let s = synthetic(2026, 10, 1e-3);
     let cam = opencv_camera();
     let pixels: Vec<Point2<f64>> = s.normalised.iter().map(|m| cam.project(*m)).collect();
@@ -45,7 +47,14 @@ fn main() {
     unsafe {
         assert_eq!(eopnp_solver_create(&mut handle), EopnpStatus::EOPNP_OK);
         assert_eq!(
-            eopnp_camera_from_colmap(c"OPENCV".as_ptr(), 640, 480, params.as_ptr(), params.len(), &mut chandle),
+            eopnp_camera_from_colmap(
+                c"OPENCV".as_ptr(),
+                640,
+                480,
+                params.as_ptr(),
+                params.len(),
+                &mut chandle
+            ),
             EopnpStatus::EOPNP_OK
         );
     }

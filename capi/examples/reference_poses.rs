@@ -52,7 +52,9 @@ fn pose_rows(r: &Matrix3<f64>, t: &Vector3<f64>) -> Vec<f64> {
 }
 
 fn main() {
-    let path = std::env::args().nth(1).expect("usage: reference_poses FILE");
+    let path = std::env::args()
+        .nth(1)
+        .expect("usage: reference_poses FILE");
     let colmap = opencv_camera();
     let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 810.0, 240.0, 0.0, 0.0, 1.0);
     let opencv = Camera::from_opencv(&k, &[-0.1, 0.02, 1e-3, -5e-4, 0.001]).unwrap();
@@ -82,23 +84,34 @@ fn main() {
             let prior = pose_rows(&prior_r, &prior_t);
             let cam = if kind == 6 { &opencv } else { &colmap };
             let pixels: Vec<Point2<f64>> = image.iter().map(|m| cam.project(*m)).collect();
-            let obs = if matches!(kind, 1 | 2 | 6) { &pixels } else { &image };
+            let obs = if matches!(kind, 1 | 2 | 6) {
+                &pixels
+            } else {
+                &image
+            };
             let problem = match kind {
                 1 | 2 | 6 => Problem::pixels(&s.world, &pixels, cam),
                 _ => Problem::normalised(&s.world, &image),
             };
-            let problem = if kind == 2 { problem.weights(&weights) } else { problem };
+            let problem = if kind == 2 {
+                problem.weights(&weights)
+            } else {
+                problem
+            };
             let mut mask = vec![1.0; n];
             let sol: Result<Solution, _> = match kind {
                 2 => Solver::default()
                     .loss(Loss::Huber(2.0))
                     .covariance(Some(NoiseModel::Sigma(1.0)))
                     .solve(&problem),
-                3 => Solver::default().refinement(Refinement::Algebraic).solve(&problem),
+                3 => Solver::default()
+                    .refinement(Refinement::Algebraic)
+                    .solve(&problem),
                 4 => {
                     // The isometry the interfaces build from the row-major matrix.
                     let m = Matrix3::from_row_slice(&prior[..9]);
-                    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(m));
+                    let q =
+                        UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(m));
                     let iso = Isometry3::from_parts(
                         Translation3::new(prior[9], prior[10], prior[11]),
                         UnitQuaternion::new_normalize(q.into_inner()),

@@ -152,10 +152,7 @@ impl Failure {
     }
 
     pub fn null(name: &str) -> Self {
-        Failure::new(
-            EopnpStatus::EOPNP_NULL_POINTER,
-            format!("`{name}` is NULL"),
-        )
+        Failure::new(EopnpStatus::EOPNP_NULL_POINTER, format!("`{name}` is NULL"))
     }
 
     pub fn invalid(message: impl Into<String>) -> Self {

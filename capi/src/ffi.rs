@@ -145,7 +145,9 @@ unsafe fn points<'a, P: Clone, const D: usize>(
         let len = if n == 0 { 0 } else { (n - 1) * stride + D };
         let all = std::slice::from_raw_parts(p, len);
         Ok(Cow::Owned(
-            (0..n).map(|i| make(&all[i * stride..i * stride + D])).collect(),
+            (0..n)
+                .map(|i| make(&all[i * stride..i * stride + D]))
+                .collect(),
         ))
     }
 }
@@ -423,7 +425,10 @@ pub unsafe extern "C" fn eopnp_solver_free(solver: *mut EopnpSolver) {
 ///
 /// # Safety
 /// `solver` must be NULL or a live handle not used by another thread.
-unsafe fn set_solver(solver: *mut EopnpSolver, f: impl FnOnce(Solver) -> Res<Solver>) -> EopnpStatus {
+unsafe fn set_solver(
+    solver: *mut EopnpSolver,
+    f: impl FnOnce(Solver) -> Res<Solver>,
+) -> EopnpStatus {
     guard(|| {
         let s = get_mut(solver, "solver")?;
         s.solver = f(s.solver)?;
@@ -637,7 +642,10 @@ pub unsafe extern "C" fn eopnp_ransac_free(ransac: *mut EopnpRansac) {
 
 /// # Safety
 /// `ransac` must be NULL or a live handle not used by another thread.
-unsafe fn set_ransac(ransac: *mut EopnpRansac, f: impl FnOnce(Ransac) -> Res<Ransac>) -> EopnpStatus {
+unsafe fn set_ransac(
+    ransac: *mut EopnpRansac,
+    f: impl FnOnce(Ransac) -> Res<Ransac>,
+) -> EopnpStatus {
     guard(|| {
         let r = get_mut(ransac, "ransac")?;
         r.ransac = f(r.ransac)?;
@@ -785,7 +793,10 @@ pub unsafe extern "C" fn eopnp_camera_from_colmap(
         get_mut(out, "out")?;
         let model = string(model, "model")?;
         let params = slice(params, n_params, "params")?;
-        new_camera(out, Camera::from_colmap(model, width, height, params.to_vec())?)
+        new_camera(
+            out,
+            Camera::from_colmap(model, width, height, params.to_vec())?,
+        )
     })
 }
 
@@ -943,7 +954,10 @@ pub unsafe extern "C" fn eopnp_rig_create(
         let mut parts = Vec::with_capacity(count);
         for (k, (c, p)) in cams.iter().zip(poses).enumerate() {
             let cam = get(*c, &format!("cameras[{k}]"))?;
-            parts.push((cam.camera.clone(), isometry(p, &format!("cam_from_rig[{k}]"))?));
+            parts.push((
+                cam.camera.clone(),
+                isometry(p, &format!("cam_from_rig[{k}]"))?,
+            ));
         }
         *out = Box::into_raw(Box::new(EopnpRig {
             rig: Rig::new(parts)?,
@@ -1215,7 +1229,9 @@ pub unsafe extern "C" fn eopnp_ransac_batch(
         for (i, p) in problems.iter().enumerate() {
             let checked = Inputs::new(p).and_then(|x| {
                 let m = match masks.map(|m| m[i]) {
-                    Some(m) if !m.is_null() => Some(slice_mut(m, x.n(), &format!("inlier_masks[{i}]"))?),
+                    Some(m) if !m.is_null() => {
+                        Some(slice_mut(m, x.n(), &format!("inlier_masks[{i}]"))?)
+                    }
                     _ => None,
                 };
                 Ok((x, m))
@@ -1231,8 +1247,10 @@ pub unsafe extern "C" fn eopnp_ransac_batch(
         // The library's batch seeds problem `i` of its slice with `problem_seed(seed, i)`: with
         // invalid problems left out, the indices would shift; so each valid problem is run
         // with its own index's seed here (what `estimate_batch` does for a full slice).
-        let jobs: Vec<(usize, Problem<'_>)> =
-            valid_inputs.iter().map(|(i, x)| (*i, x.problem())).collect();
+        let jobs: Vec<(usize, Problem<'_>)> = valid_inputs
+            .iter()
+            .map(|(i, x)| (*i, x.problem()))
+            .collect();
         let results = run_in(threads, || {
             use rayon::prelude::*;
             jobs.par_iter()
@@ -1288,7 +1306,9 @@ pub unsafe extern "C" fn eopnp_model_read(
         }
         let bytes = CStr::from_ptr(dir).to_bytes();
         #[cfg(unix)]
-        let path = std::path::PathBuf::from(<std::ffi::OsStr as std::os::unix::ffi::OsStrExt>::from_bytes(bytes));
+        let path = std::path::PathBuf::from(
+            <std::ffi::OsStr as std::os::unix::ffi::OsStrExt>::from_bytes(bytes),
+        );
         #[cfg(not(unix))]
         let path = std::path::PathBuf::from(
             std::str::from_utf8(bytes).map_err(|_| Failure::invalid("`dir` is not UTF-8"))?,

@@ -28,7 +28,11 @@ fn assert_same(c: &EopnpSolution, s: &Solution) {
         }
     }
     assert_eq!(bits(&c.rotation), bits(&r), "rotation");
-    assert_eq!(bits(&c.translation), bits(s.translation.as_slice()), "translation");
+    assert_eq!(
+        bits(&c.translation),
+        bits(s.translation.as_slice()),
+        "translation"
+    );
     assert_eq!(c.cost.to_bits(), s.cost.to_bits(), "cost");
     assert_eq!(c.algebraic_cost.to_bits(), s.algebraic_cost.to_bits());
     assert_eq!(c.reprojection_rmse.to_bits(), s.reprojection_rmse.to_bits());
@@ -81,7 +85,10 @@ struct Handles {
 impl Handles {
     fn new() -> Self {
         let mut solver = ptr::null_mut();
-        assert_eq!(unsafe { eopnp_solver_create(&mut solver) }, EopnpStatus::EOPNP_OK);
+        assert_eq!(
+            unsafe { eopnp_solver_create(&mut solver) },
+            EopnpStatus::EOPNP_OK
+        );
         Handles { solver }
     }
 }
@@ -132,7 +139,10 @@ fn strided_arrays_give_the_packed_result() {
     p.world_stride = 5;
     p.image_stride = 4;
     let (mut a, mut b) = (zeroed_solution(), zeroed_solution());
-    assert_eq!(unsafe { eopnp_solve(h.solver, &p, &mut a) }, EopnpStatus::EOPNP_OK);
+    assert_eq!(
+        unsafe { eopnp_solve(h.solver, &p, &mut a) },
+        EopnpStatus::EOPNP_OK
+    );
     assert_eq!(
         unsafe { eopnp_solve(h.solver, &problem(&w, &m, n), &mut b) },
         EopnpStatus::EOPNP_OK
@@ -153,14 +163,30 @@ fn options_weights_loss_covariance_and_pixels_are_the_librarys() {
     let params = cam.params().to_vec();
     assert_eq!(
         unsafe {
-            eopnp_camera_from_colmap(c"OPENCV".as_ptr(), 640, 480, params.as_ptr(), params.len(), &mut ccam)
+            eopnp_camera_from_colmap(
+                c"OPENCV".as_ptr(),
+                640,
+                480,
+                params.as_ptr(),
+                params.len(),
+                &mut ccam,
+            )
         },
         EopnpStatus::EOPNP_OK
     );
     unsafe {
-        assert_eq!(eopnp_solver_set_loss(h.solver, 2, 2.0), EopnpStatus::EOPNP_OK);
-        assert_eq!(eopnp_solver_set_covariance(h.solver, 2, 1.0), EopnpStatus::EOPNP_OK);
-        assert_eq!(eopnp_solver_set_reprojection_iterations(h.solver, 100), EopnpStatus::EOPNP_OK);
+        assert_eq!(
+            eopnp_solver_set_loss(h.solver, 2, 2.0),
+            EopnpStatus::EOPNP_OK
+        );
+        assert_eq!(
+            eopnp_solver_set_covariance(h.solver, 2, 1.0),
+            EopnpStatus::EOPNP_OK
+        );
+        assert_eq!(
+            eopnp_solver_set_reprojection_iterations(h.solver, 100),
+            EopnpStatus::EOPNP_OK
+        );
     }
     let lib_solver = Solver::default()
         .loss(Loss::Cauchy(2.0))
@@ -170,7 +196,10 @@ fn options_weights_loss_covariance_and_pixels_are_the_librarys() {
     p.camera = ccam;
     p.weights = weights.as_ptr();
     let mut out = zeroed_solution();
-    assert_eq!(unsafe { eopnp_solve(h.solver, &p, &mut out) }, EopnpStatus::EOPNP_OK);
+    assert_eq!(
+        unsafe { eopnp_solve(h.solver, &p, &mut out) },
+        EopnpStatus::EOPNP_OK
+    );
     let lib = lib_solver
         .solve(&Problem::pixels(&s.world, &pixels, &cam).weights(&weights))
         .unwrap();
@@ -179,11 +208,26 @@ fn options_weights_loss_covariance_and_pixels_are_the_librarys() {
 
     // Algebraic mode, planar detection, Newton options.
     unsafe {
-        assert_eq!(eopnp_solver_set_refinement(h.solver, 1), EopnpStatus::EOPNP_OK);
-        assert_eq!(eopnp_solver_set_newton_iterations(h.solver, 80), EopnpStatus::EOPNP_OK);
-        assert_eq!(eopnp_solver_set_newton_step_tolerance(h.solver, 1e-13), EopnpStatus::EOPNP_OK);
-        assert_eq!(eopnp_solver_set_exhaustive(h.solver, true), EopnpStatus::EOPNP_OK);
-        assert_eq!(eopnp_solver_set_planar_detection(h.solver, 2), EopnpStatus::EOPNP_OK);
+        assert_eq!(
+            eopnp_solver_set_refinement(h.solver, 1),
+            EopnpStatus::EOPNP_OK
+        );
+        assert_eq!(
+            eopnp_solver_set_newton_iterations(h.solver, 80),
+            EopnpStatus::EOPNP_OK
+        );
+        assert_eq!(
+            eopnp_solver_set_newton_step_tolerance(h.solver, 1e-13),
+            EopnpStatus::EOPNP_OK
+        );
+        assert_eq!(
+            eopnp_solver_set_exhaustive(h.solver, true),
+            EopnpStatus::EOPNP_OK
+        );
+        assert_eq!(
+            eopnp_solver_set_planar_detection(h.solver, 2),
+            EopnpStatus::EOPNP_OK
+        );
     }
     let lib_solver = lib_solver
         .refinement(Refinement::Algebraic)
@@ -191,7 +235,10 @@ fn options_weights_loss_covariance_and_pixels_are_the_librarys() {
         .newton_step_tolerance(1e-13)
         .exhaustive(true)
         .planar_detection(eopnp::PlanarDetection::NonPlanar);
-    assert_eq!(unsafe { eopnp_solve(h.solver, &p, &mut out) }, EopnpStatus::EOPNP_OK);
+    assert_eq!(
+        unsafe { eopnp_solve(h.solver, &p, &mut out) },
+        EopnpStatus::EOPNP_OK
+    );
     let lib = lib_solver
         .solve(&Problem::pixels(&s.world, &pixels, &cam).weights(&weights))
         .unwrap();
@@ -278,7 +325,10 @@ fn solve_all_refine_ransac_and_batches_are_the_librarys() {
     let mut ransac = ptr::null_mut();
     unsafe {
         assert_eq!(eopnp_ransac_create(&mut ransac), EopnpStatus::EOPNP_OK);
-        assert_eq!(eopnp_ransac_set_threshold_px(ransac, 2.0), EopnpStatus::EOPNP_OK);
+        assert_eq!(
+            eopnp_ransac_set_threshold_px(ransac, 2.0),
+            EopnpStatus::EOPNP_OK
+        );
         assert_eq!(eopnp_ransac_set_seed(ransac, 9), EopnpStatus::EOPNP_OK);
     }
     let lib_ransac = Ransac::default().threshold_px(2.0).seed(9);
@@ -297,20 +347,36 @@ fn solve_all_refine_ransac_and_batches_are_the_librarys() {
     };
     assert_eq!(
         unsafe {
-            eopnp_ransac_estimate(ransac, h.solver, &p, &mut out, mask.as_mut_ptr(), &mut stats)
+            eopnp_ransac_estimate(
+                ransac,
+                h.solver,
+                &p,
+                &mut out,
+                mask.as_mut_ptr(),
+                &mut stats,
+            )
         },
         EopnpStatus::EOPNP_OK,
         "{}",
         last_message()
     );
     let lib = lib_ransac
-        .estimate(&lib_solver, &Problem::normalised(&s.world, &image).focal(800.0, 800.0))
+        .estimate(
+            &lib_solver,
+            &Problem::normalised(&s.world, &image).focal(800.0, 800.0),
+        )
         .unwrap();
     assert_same(&out, &lib.solution);
     let lib_mask: Vec<u8> = lib.inliers.iter().map(|b| u8::from(*b)).collect();
     assert_eq!(mask, lib_mask);
     assert_eq!(
-        (stats.iterations, stats.hypotheses, stats.local_fits, stats.final_fits, stats.inliers),
+        (
+            stats.iterations,
+            stats.hypotheses,
+            stats.local_fits,
+            stats.final_fits,
+            stats.inliers
+        ),
         (
             lib.stats.iterations,
             lib.stats.hypotheses,
@@ -322,9 +388,13 @@ fn solve_all_refine_ransac_and_batches_are_the_librarys() {
     assert!(mask[..12].iter().all(|b| *b == 0));
 
     // Batches on 2 threads: each problem's result is the one-problem result.
-    let sets: Vec<_> = (0..8).map(|k| synthetic(100 + k, 20 + k as usize, 1e-3)).collect();
-    let flats: Vec<(Vec<f64>, Vec<f64>)> =
-        sets.iter().map(|s| (flat3(&s.world), flat2(&s.normalised))).collect();
+    let sets: Vec<_> = (0..8)
+        .map(|k| synthetic(100 + k, 20 + k as usize, 1e-3))
+        .collect();
+    let flats: Vec<(Vec<f64>, Vec<f64>)> = sets
+        .iter()
+        .map(|s| (flat3(&s.world), flat2(&s.normalised)))
+        .collect();
     let mut problems: Vec<EopnpProblem> = flats
         .iter()
         .zip(&sets)
@@ -335,10 +405,21 @@ fn solve_all_refine_ransac_and_batches_are_the_librarys() {
     let mut outs = vec![zeroed_solution(); problems.len()];
     let mut statuses = vec![EopnpStatus::EOPNP_PANIC; problems.len()];
     let st = unsafe {
-        eopnp_solve_batch(h.solver, problems.as_ptr(), problems.len(), 2, outs.as_mut_ptr(), statuses.as_mut_ptr())
+        eopnp_solve_batch(
+            h.solver,
+            problems.as_ptr(),
+            problems.len(),
+            2,
+            outs.as_mut_ptr(),
+            statuses.as_mut_ptr(),
+        )
     };
     assert_eq!(st, EopnpStatus::EOPNP_TOO_FEW_POINTS);
-    assert!(last_message().starts_with("problem 3: too few correspondences"), "{}", last_message());
+    assert!(
+        last_message().starts_with("problem 3: too few correspondences"),
+        "{}",
+        last_message()
+    );
     for (k, s) in sets.iter().enumerate() {
         if k == 3 {
             assert_eq!(statuses[k], EopnpStatus::EOPNP_TOO_FEW_POINTS);
@@ -370,8 +451,10 @@ fn solve_all_refine_ransac_and_batches_are_the_librarys() {
         )
     };
     assert_eq!(st, EopnpStatus::EOPNP_OK, "{}", last_message());
-    let lib_problems: Vec<Problem<'_>> =
-        sets.iter().map(|s| Problem::normalised(&s.world, &s.normalised).focal(800.0, 800.0)).collect();
+    let lib_problems: Vec<Problem<'_>> = sets
+        .iter()
+        .map(|s| Problem::normalised(&s.world, &s.normalised).focal(800.0, 800.0))
+        .collect();
     let lib = lib_ransac.estimate_batch(&lib_solver, &lib_problems);
     for (k, l) in lib.iter().enumerate() {
         let l = l.as_ref().unwrap();
@@ -413,7 +496,14 @@ fn rig_solve_is_the_librarys() {
     let mut crig = ptr::null_mut();
     unsafe {
         assert_eq!(
-            eopnp_camera_from_colmap(c"OPENCV".as_ptr(), 640, 480, params.as_ptr(), params.len(), &mut ccam),
+            eopnp_camera_from_colmap(
+                c"OPENCV".as_ptr(),
+                640,
+                480,
+                params.as_ptr(),
+                params.len(),
+                &mut ccam
+            ),
             EopnpStatus::EOPNP_OK
         );
         let cams = [ccam as *const EopnpCamera, ccam];
@@ -481,8 +571,14 @@ fn rig_solve_is_the_librarys() {
         got: 0,
         need: 0,
     };
-    assert_eq!(unsafe { eopnp_last_error(&mut info) }, EopnpStatus::EOPNP_OK);
-    assert_eq!((info.status, info.index, info.got), (EopnpStatus::EOPNP_UNKNOWN_CAMERA, 5, 7));
+    assert_eq!(
+        unsafe { eopnp_last_error(&mut info) },
+        EopnpStatus::EOPNP_OK
+    );
+    assert_eq!(
+        (info.status, info.index, info.got),
+        (EopnpStatus::EOPNP_UNKNOWN_CAMERA, 5, 7)
+    );
     unsafe { eopnp_rig_free(crig) };
 }
 
@@ -492,7 +588,8 @@ fn bad_input_gives_a_status_and_a_message() {
     let s = synthetic(41, 10, 0.0);
     let (mut w, m) = (flat3(&s.world), flat2(&s.normalised));
     let mut out = zeroed_solution();
-    let solve = |p: &EopnpProblem, out: &mut EopnpSolution| unsafe { eopnp_solve(h.solver, p, out) };
+    let solve =
+        |p: &EopnpProblem, out: &mut EopnpSolution| unsafe { eopnp_solve(h.solver, p, out) };
     // NULL handle, problem, output, points.
     assert_eq!(
         unsafe { eopnp_solve(ptr::null(), &problem(&w, &m, 10), &mut out) },
@@ -512,12 +609,19 @@ fn bad_input_gives_a_status_and_a_message() {
     assert_eq!(solve(&p, &mut out), EopnpStatus::EOPNP_NULL_POINTER);
     assert_eq!(last_message(), "`world` is NULL");
     // Zero points.
-    assert_eq!(solve(&problem(&w, &m, 0), &mut out), EopnpStatus::EOPNP_TOO_FEW_POINTS);
+    assert_eq!(
+        solve(&problem(&w, &m, 0), &mut out),
+        EopnpStatus::EOPNP_TOO_FEW_POINTS
+    );
     // A stride too small, a misaligned pointer.
     let mut p = problem(&w, &m, 10);
     p.image_stride = 1;
     assert_eq!(solve(&p, &mut out), EopnpStatus::EOPNP_INVALID_ARGUMENT);
-    assert!(last_message().contains("image_stride"), "{}", last_message());
+    assert!(
+        last_message().contains("image_stride"),
+        "{}",
+        last_message()
+    );
     let mut p = problem(&w, &m, 9);
     p.world = unsafe { w.as_ptr().cast::<u8>().add(1).cast() };
     assert_eq!(solve(&p, &mut out), EopnpStatus::EOPNP_INVALID_ARGUMENT);
@@ -527,7 +631,10 @@ fn bad_input_gives_a_status_and_a_message() {
     assert_eq!(solve(&p, &mut out), EopnpStatus::EOPNP_INVALID_ARGUMENT);
     // A NaN.
     w[3 * 4 + 1] = f64::NAN;
-    assert_eq!(solve(&problem(&w, &m, 10), &mut out), EopnpStatus::EOPNP_NON_FINITE);
+    assert_eq!(
+        solve(&problem(&w, &m, 10), &mut out),
+        EopnpStatus::EOPNP_NON_FINITE
+    );
     let mut info = EopnpErrorInfo {
         status: EopnpStatus::EOPNP_OK,
         input: EopnpInput::EOPNP_INPUT_NONE,
@@ -540,15 +647,32 @@ fn bad_input_gives_a_status_and_a_message() {
     assert_eq!((info.input, info.index), (EopnpInput::EOPNP_INPUT_WORLD, 4));
     // Unknown enumeration values, bad option values.
     unsafe {
-        assert_eq!(eopnp_solver_set_refinement(h.solver, 2), EopnpStatus::EOPNP_INVALID_ARGUMENT);
-        assert_eq!(eopnp_solver_set_loss(h.solver, 1, f64::NAN), EopnpStatus::EOPNP_INVALID_OPTION);
-        assert_eq!(eopnp_solver_set_loss(h.solver, -1, 1.0), EopnpStatus::EOPNP_INVALID_ARGUMENT);
-        assert_eq!(eopnp_solver_set_covariance(h.solver, 2, 0.0), EopnpStatus::EOPNP_INVALID_OPTION);
         assert_eq!(
-            CStr::from_ptr(eopnp_status_name(EopnpStatus::EOPNP_DEGENERATE as i32)).to_str().unwrap(),
+            eopnp_solver_set_refinement(h.solver, 2),
+            EopnpStatus::EOPNP_INVALID_ARGUMENT
+        );
+        assert_eq!(
+            eopnp_solver_set_loss(h.solver, 1, f64::NAN),
+            EopnpStatus::EOPNP_INVALID_OPTION
+        );
+        assert_eq!(
+            eopnp_solver_set_loss(h.solver, -1, 1.0),
+            EopnpStatus::EOPNP_INVALID_ARGUMENT
+        );
+        assert_eq!(
+            eopnp_solver_set_covariance(h.solver, 2, 0.0),
+            EopnpStatus::EOPNP_INVALID_OPTION
+        );
+        assert_eq!(
+            CStr::from_ptr(eopnp_status_name(EopnpStatus::EOPNP_DEGENERATE as i32))
+                .to_str()
+                .unwrap(),
             "EOPNP_DEGENERATE"
         );
-        assert_eq!(CStr::from_ptr(eopnp_status_name(99)).to_str().unwrap(), "EOPNP_UNKNOWN_STATUS");
+        assert_eq!(
+            CStr::from_ptr(eopnp_status_name(99)).to_str().unwrap(),
+            "EOPNP_UNKNOWN_STATUS"
+        );
     }
 }
 
@@ -604,7 +728,10 @@ fn colmap_registration_is_the_librarys() {
         let lib_model = read_model(&path, &ReadOptions::default()).unwrap();
         let cpath = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
         let mut model = ptr::null_mut();
-        assert_eq!(unsafe { eopnp_model_read(cpath.as_ptr(), &mut model) }, EopnpStatus::EOPNP_OK);
+        assert_eq!(
+            unsafe { eopnp_model_read(cpath.as_ptr(), &mut model) },
+            EopnpStatus::EOPNP_OK
+        );
         let id = *lib_model.images.keys().next().unwrap();
         // SAFETY: all-zero is a valid `EopnpRegistration`.
         let mut reg: EopnpRegistration = unsafe { std::mem::zeroed() };
@@ -617,8 +744,18 @@ fn colmap_registration_is_the_librarys() {
         let lib = register_image(&lib_model, id, &Solver::default(), None).unwrap();
         assert_same(&reg.solution, &lib.solution);
         assert_eq!(
-            (reg.n, reg.inliers, reg.rotation_error_deg.to_bits(), reg.rmse_px.to_bits()),
-            (lib.n as u64, lib.inliers as u64, lib.rotation_error_deg.to_bits(), lib.rmse_px.to_bits())
+            (
+                reg.n,
+                reg.inliers,
+                reg.rotation_error_deg.to_bits(),
+                reg.rmse_px.to_bits()
+            ),
+            (
+                lib.n as u64,
+                lib.inliers as u64,
+                lib.rotation_error_deg.to_bits(),
+                lib.rmse_px.to_bits()
+            )
         );
         if frames {
             let fid = *lib_model.frames.keys().next().unwrap();
@@ -655,16 +792,39 @@ fn random_bad_input_never_panics() {
     let mut ransac = ptr::null_mut();
     unsafe {
         assert_eq!(
-            eopnp_camera_from_colmap(c"OPENCV".as_ptr(), 640, 480, params.as_ptr(), params.len(), &mut ccam),
+            eopnp_camera_from_colmap(
+                c"OPENCV".as_ptr(),
+                640,
+                480,
+                params.as_ptr(),
+                params.len(),
+                &mut ccam
+            ),
             EopnpStatus::EOPNP_OK
         );
         let cams = [ccam as *const EopnpCamera, ccam];
         let poses = [identity, identity];
-        assert_eq!(eopnp_rig_create(cams.as_ptr(), poses.as_ptr(), 2, &mut crig), EopnpStatus::EOPNP_OK);
+        assert_eq!(
+            eopnp_rig_create(cams.as_ptr(), poses.as_ptr(), 2, &mut crig),
+            EopnpStatus::EOPNP_OK
+        );
         assert_eq!(eopnp_ransac_create(&mut ransac), EopnpStatus::EOPNP_OK);
-        assert_eq!(eopnp_ransac_set_max_iterations(ransac, 50), EopnpStatus::EOPNP_OK);
+        assert_eq!(
+            eopnp_ransac_set_max_iterations(ransac, 50),
+            EopnpStatus::EOPNP_OK
+        );
     }
-    let specials = [f64::NAN, f64::INFINITY, -f64::INFINITY, 0.0, -0.0, 1e300, -1e300, 1e-300, 5e-324];
+    let specials = [
+        f64::NAN,
+        f64::INFINITY,
+        -f64::INFINITY,
+        0.0,
+        -0.0,
+        1e300,
+        -1e300,
+        1e-300,
+        5e-324,
+    ];
     let mut outcomes = std::collections::BTreeMap::new();
     for round in 0..1500 {
         let n = (g.uniform() * 14.0) as usize;
@@ -731,28 +891,49 @@ fn random_bad_input_never_panics() {
             1 => {
                 let mut all = [zeroed_solution(); EOPNP_MAX_SOLUTIONS];
                 let mut count = 0;
-                let st = unsafe { eopnp_solve_all(h.solver, &p, all.as_mut_ptr(), all.len(), &mut count) };
+                let st = unsafe {
+                    eopnp_solve_all(h.solver, &p, all.as_mut_ptr(), all.len(), &mut count)
+                };
                 out = all[0];
                 st
             }
             2 => {
                 let prior = EopnpPose {
                     rotation: identity.rotation,
-                    translation: [0.0, 0.0, specials[(g.uniform() * specials.len() as f64) as usize]],
+                    translation: [
+                        0.0,
+                        0.0,
+                        specials[(g.uniform() * specials.len() as f64) as usize],
+                    ],
                 };
                 unsafe { eopnp_refine(h.solver, &p, &prior, &mut out) }
             }
             _ => {
                 let mut mask = vec![0u8; n.max(1)];
                 unsafe {
-                    eopnp_ransac_estimate(ransac, h.solver, &p, &mut out, mask.as_mut_ptr(), ptr::null_mut())
+                    eopnp_ransac_estimate(
+                        ransac,
+                        h.solver,
+                        &p,
+                        &mut out,
+                        mask.as_mut_ptr(),
+                        ptr::null_mut(),
+                    )
                 }
             }
         };
-        assert_ne!(st, EopnpStatus::EOPNP_PANIC, "round {round}: {}", last_message());
+        assert_ne!(
+            st,
+            EopnpStatus::EOPNP_PANIC,
+            "round {round}: {}",
+            last_message()
+        );
         if st == EopnpStatus::EOPNP_OK {
             assert!(
-                out.rotation.iter().chain(&out.translation).all(|x| x.is_finite()),
+                out.rotation
+                    .iter()
+                    .chain(&out.translation)
+                    .all(|x| x.is_finite()),
                 "round {round}: a non-finite pose"
             );
         } else {
@@ -762,7 +943,10 @@ fn random_bad_input_never_panics() {
     }
     println!("{outcomes:?}");
     // Both outcomes occur: the generator reaches the solver and the checks.
-    assert!(outcomes.get("EOPNP_OK").copied().unwrap_or(0) > 100, "{outcomes:?}");
+    assert!(
+        outcomes.get("EOPNP_OK").copied().unwrap_or(0) > 100,
+        "{outcomes:?}"
+    );
     assert!(outcomes.len() >= 5, "{outcomes:?}");
     unsafe {
         eopnp_ransac_free(ransac);

@@ -9,8 +9,8 @@ mod header;
 fn committed_header_is_fresh() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let fresh = header::render(dir);
-    let committed = std::fs::read_to_string(dir.join("include/eopnp.h"))
-        .expect("read include/eopnp.h");
+    let committed =
+        std::fs::read_to_string(dir.join("include/eopnp.h")).expect("read include/eopnp.h");
     if fresh != committed {
         let line = fresh
             .lines()

@@ -67,7 +67,9 @@ impl Cost {
         let hs: [f64; 6] = std::array::from_fn(|a| sums[PA_END + a]);
         let q = Vector3::new(sums[HS_END], sums[HS_END + 1], sums[HS_END + 2]);
         let s0 = sums[HS_END + 3];
-        let h = Matrix3::new(hs[0], hs[1], hs[2], hs[1], hs[3], hs[4], hs[2], hs[4], hs[5]);
+        let h = Matrix3::new(
+            hs[0], hs[1], hs[2], hs[1], hs[3], hs[4], hs[2], hs[4], hs[5],
+        );
         let mut gm = SMatrix::<f64, 3, 9>::zeros();
         for cc in 0..3 {
             for b in 0..3 {

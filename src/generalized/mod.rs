@@ -18,8 +18,8 @@ mod rays;
 mod refine;
 
 pub(crate) use rays::{one_camera, rays, Rays, RigInput};
-pub(crate) use refine::{pixel_error2, refine as refine_pixels};
 use refine::Grouped;
+pub(crate) use refine::{pixel_error2, refine as refine_pixels};
 
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, Point3, SMatrix, Vector3};
@@ -151,7 +151,9 @@ pub(crate) fn refine_from(
     let mut opts = *opts;
     opts.refinement = Refinement::Reprojection;
     let grouped = Grouped::new(&rays, input.rig, input.world, input.pixels);
-    Ok(finish(&opts, &rays, &grouped, input, &cost, &m, initial.0, initial.1))
+    Ok(finish(
+        &opts, &rays, &grouped, input, &cost, &m, initial.0, initial.1,
+    ))
 }
 
 fn check_loss(opts: &RigOptions) -> Result<(), PnpError> {

@@ -170,9 +170,14 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             continue;
         }
         let (idx, ok_k) = (&order[range.clone()], &mut ok[range.clone()]);
-        projectors[k].undistort_into(&pixels[range.clone()], &mut points[range.clone()], None, |j| {
-            ok_k[j] = false;
-        });
+        projectors[k].undistort_into(
+            &pixels[range.clone()],
+            &mut points[range.clone()],
+            None,
+            |j| {
+                ok_k[j] = false;
+            },
+        );
         let (ok_k, points_k) = (&ok[range.clone()], &points[range]);
         let (rk, _) = input.rig.pose(k);
         let centre = input.rig.centre(k).coords;
@@ -223,7 +228,9 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
         sc[4] += wd.y * d.z;
         sc[5] += wd.z * d.z;
     }
-    let scatter = Matrix3::new(sc[0], sc[1], sc[2], sc[1], sc[3], sc[4], sc[2], sc[4], sc[5]) / wsum;
+    let scatter = Matrix3::new(
+        sc[0], sc[1], sc[2], sc[1], sc[3], sc[4], sc[2], sc[4], sc[5],
+    ) / wsum;
     let scale = scatter.trace().sqrt();
     if !(scale > 0.0 && scale.is_finite()) {
         return Err(PnpError::Degenerate(if scale == 0.0 {

@@ -234,7 +234,17 @@ pub(crate) fn refine(
 ) -> Refined {
     let grouped = Grouped::new(rays, rig, world, pixels);
     let start = (r0, t0);
-    refine_grouped(&grouped, rays, rig, world, pixels, loss, start, max_iterations, exact_start)
+    refine_grouped(
+        &grouped,
+        rays,
+        rig,
+        world,
+        pixels,
+        loss,
+        start,
+        max_iterations,
+        exact_start,
+    )
 }
 
 /// Levenberg-Marquardt from `(r, t)` (the original frame), at most `max_iterations`

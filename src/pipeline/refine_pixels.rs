@@ -128,7 +128,8 @@ impl ProjectionJob for Job<'_> {
                 projection,
                 loss: Loss::Squared,
             });
-            let out = levenberg_marquardt(&squared, &fr.rw, fr.d, self.r_work, self.t_work, self.opts);
+            let out =
+                levenberg_marquardt(&squared, &fr.rw, fr.d, self.r_work, self.t_work, self.opts);
             return (out, out.e, 1.0);
         }
         let robust = self.problem(CameraMetric::<P, true> {

@@ -5,7 +5,8 @@ use std::path::Path;
 
 /// The header cbindgen renders from the crate at `dir` with its `cbindgen.toml`.
 pub fn render(dir: &Path) -> String {
-    let config = cbindgen::Config::from_file(dir.join("cbindgen.toml")).expect("read cbindgen.toml");
+    let config =
+        cbindgen::Config::from_file(dir.join("cbindgen.toml")).expect("read cbindgen.toml");
     let bindings = cbindgen::Builder::new()
         .with_crate(dir)
         .with_config(config)

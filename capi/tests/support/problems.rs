@@ -42,11 +42,8 @@ pub struct Synthetic {
 /// `noise` (standard deviation).
 pub fn synthetic(seed: u64, n: usize, noise: f64) -> Synthetic {
     let mut g = Lcg(seed);
-    let rotation = Rotation3::from_euler_angles(
-        g.range(-3.0, 3.0),
-        g.range(-1.5, 1.5),
-        g.range(-3.0, 3.0),
-    );
+    let rotation =
+        Rotation3::from_euler_angles(g.range(-3.0, 3.0), g.range(-1.5, 1.5), g.range(-3.0, 3.0));
     let translation = Vector3::new(g.range(-1.0, 1.0), g.range(-1.0, 1.0), g.range(4.0, 8.0));
     let mut world = Vec::with_capacity(n);
     let mut normalised = Vec::with_capacity(n);

@@ -32,7 +32,10 @@ fn a_message_with_a_nul_is_cut_there() {
 
 #[test]
 fn success_keeps_the_last_failure() {
-    assert_eq!(guard(|| Err(Failure::null("x"))), EopnpStatus::EOPNP_NULL_POINTER);
+    assert_eq!(
+        guard(|| Err(Failure::null("x"))),
+        EopnpStatus::EOPNP_NULL_POINTER
+    );
     assert_eq!(guard(|| Ok(())), EopnpStatus::EOPNP_OK);
     assert_eq!(message(), "`x` is NULL");
 }
