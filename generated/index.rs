@@ -2,7 +2,7 @@
 // Refresh the committed copy with `cargo run -p eopnp-codegen -- emit generated`.
 
 /// Operation counts of every generated kernel, in manifest order.
-pub const ALL_KERNEL_OPS: [&KernelOps; 23] = [
+pub const ALL_KERNEL_OPS: [&KernelOps; 24] = [
     &COST_COEFFICIENTS_OPS,
     &COST_OPS,
     &COST_GRADIENT_OPS,
@@ -26,4 +26,5 @@ pub const ALL_KERNEL_OPS: [&KernelOps; 23] = [
     &DISTORTION_FULL_OPENCV_OPS,
     &DISTORTION_THIN_PRISM_OPS,
     &GP3P_ELIMINATION_OPS,
+    &UP2P_QUADRATIC_OPS,
 ];

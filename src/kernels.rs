@@ -105,5 +105,6 @@ mod generated {
     include!(concat!(env!("OUT_DIR"), "/distortion_full_opencv.rs"));
     include!(concat!(env!("OUT_DIR"), "/distortion_thin_prism.rs"));
     include!(concat!(env!("OUT_DIR"), "/gp3p_elimination.rs"));
+    include!(concat!(env!("OUT_DIR"), "/up2p_quadratic.rs"));
     include!(concat!(env!("OUT_DIR"), "/index.rs"));
 }

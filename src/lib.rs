@@ -105,6 +105,12 @@ pub mod internals {
         pub use crate::numeric::gp3p::*;
     }
 
+    /// The upright two-point pose, the minimal solver with a known vertical
+    /// (`src/numeric/up2p.rs`).
+    pub mod up2p {
+        pub use crate::numeric::up2p::*;
+    }
+
     /// The error metrics of docs/algorithm.md section 1 (the paper's): the largest angle
     /// between corresponding columns of two rotations, in degrees, and the translation error
     /// in percent.

@@ -64,6 +64,7 @@ pub const KERNELS: &[(&str, KernelDef)] = &[
     ("distortion_full_opencv", || camera::rational(false)),
     ("distortion_thin_prism", || camera::rational(true)),
     ("gp3p_elimination", defs::gp3p::gp3p_elimination),
+    ("up2p_quadratic", defs::up2p::up2p_quadratic),
 ];
 
 /// Renders every kernel: `(file name, contents)`, plus `index.rs` listing their op counts.

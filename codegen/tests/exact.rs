@@ -371,3 +371,83 @@ fn bareiss_agrees_with_cofactor_on_a_symbolic_sylvester() {
         "common root x = 3 makes the resultant vanish"
     );
 }
+
+/// `up2p_quadratic` vanishes exactly at the true rotation: a rational instance (rational
+/// `s = tan(theta / 2)`, rational world points, centres and translation; the constraint rows
+/// need not be unit vectors, only orthogonal to the rays, so `v x e_x` and `v x (v x e_x)` are
+/// rational), for one camera and for a rig.
+#[test]
+fn up2p_quadratic_vanishes_at_the_true_rotation() {
+    let k = kernel("up2p_quadratic");
+    let mut rng = Lcg(11);
+    let cross = |a: &[Q; 3], b: &[Q; 3]| -> [Q; 3] {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    for trial in 0..20 {
+        let s = rng.next_q();
+        let one = Q::from_integer(1);
+        let (cm, cp) = (one - s * s, one + s * s);
+        let two_s = Q::from_integer(2) * s;
+        // R_y (scaled by 1 / (1 + s^2)) applied to x.
+        let rot = |x: &[Q; 3]| -> [Q; 3] {
+            [
+                (cm * x[0] + two_s * x[2]) / cp,
+                x[1],
+                (cm * x[2] - two_s * x[0]) / cp,
+            ]
+        };
+        let t = [rng.next_q(), rng.next_q(), rng.next_q()];
+        let mut rows: Vec<[Q; 3]> = Vec::new();
+        let mut p: Vec<Q> = Vec::new();
+        let mut e: Vec<Q> = Vec::new();
+        for _ in 0..2 {
+            let x = [rng.next_q(), rng.next_q(), rng.next_q()];
+            let c = if trial % 2 == 0 {
+                [Q::from_integer(0); 3]
+            } else {
+                [rng.next_q(), rng.next_q(), rng.next_q()]
+            };
+            let rx = rot(&x);
+            let v = [
+                rx[0] + t[0] - c[0],
+                rx[1] + t[1] - c[1],
+                rx[2] + t[2] - c[2],
+            ];
+            let a0 = cross(&v, &[one, Q::from_integer(0), Q::from_integer(0)]);
+            let a0 = if a0.iter().all(|z| *z == Q::from_integer(0)) {
+                cross(&v, &[Q::from_integer(0), one, Q::from_integer(0)])
+            } else {
+                a0
+            };
+            let a1 = cross(&v, &a0);
+            for a in [a0, a1] {
+                e.push(a[0] * c[0] + a[1] * c[1] + a[2] * c[2]);
+                rows.push(a);
+            }
+            p.extend(x);
+        }
+        let a: Vec<Q> = rows.iter().flat_map(|r| r.iter().copied()).collect();
+        let mut point: BTreeMap<Var, Q> = BTreeMap::new();
+        let values: Vec<Q> = a.into_iter().chain(p).chain(e).collect();
+        let vars: Vec<Var> = k
+            .inputs
+            .iter()
+            .flat_map(|i| i.vars.iter().copied())
+            .collect();
+        assert_eq!(vars.len(), values.len());
+        for (v, x) in vars.into_iter().zip(values) {
+            point.insert(v, x);
+        }
+        let c = k.eval_structured(&|v| point[&v]);
+        let at_s = c[0] + c[1] * s + c[2] * s * s;
+        assert_eq!(at_s, Q::from_integer(0), "trial {trial}: q(s*) = {at_s}");
+        assert!(
+            c.iter().any(|z| *z != Q::from_integer(0)),
+            "trial {trial}: all coefficients zero"
+        );
+    }
+}

@@ -4,3 +4,4 @@ pub mod camera;
 pub mod cost;
 pub mod gp3p;
 pub mod resultant;
+pub mod up2p;

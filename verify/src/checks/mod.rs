@@ -21,7 +21,7 @@
 //!
 //! One file per kernel family: `cost.rs` (the cost's coefficients, value, gradient and Hessian),
 //! `local_model.rs` (`newton`'s local model and its affine part for the generalized cost), `nullspace.rs` (the cases' cubics, resultants and
-//! determinants), `gp3p.rs` (the generalized three-point pose); [`all`] lists every check in
+//! determinants), `gp3p.rs` (the generalized three-point pose), `up2p.rs` (the upright two-point pose); [`all`] lists every check in
 //! report order.
 
 use crate::reference::gamma;
@@ -32,6 +32,7 @@ mod cost;
 mod gp3p;
 mod local_model;
 mod nullspace;
+mod up2p;
 
 pub use cost::{cost_coefficients, cost_value, gradient, hessian, Against, Variant};
 pub use gp3p::{gp3p_known_root, gp3p_octic, gp3p_solutions};
@@ -40,6 +41,7 @@ pub use nullspace::{
     case2_cubics, case2_known_root, case2_resultant, case3_cubics, case3_known_root, case3_quartic,
     case3_resultant, case4_determinant, case4_known_root, case4_known_system, case4_matrix,
 };
+pub use up2p::{up2p_determinant, up2p_known_root, up2p_solutions};
 
 /// 1e-12 relative to the absolute-value scale (module doc).
 pub const TOL_POLY: f64 = 1e-12;
@@ -64,6 +66,8 @@ pub const N_COST: usize = 10_000;
 pub const N_RESULTANT: usize = 5_000;
 /// Number of samples for the generalized three-point pose's checks.
 pub const N_GP3P: usize = 5_000;
+/// Samples of the upright two-point checks (the solver's independent count scans every tenth).
+pub const N_UP2P: usize = 5_000;
 
 /// Every check, in report order.
 #[must_use]
@@ -123,5 +127,8 @@ pub fn all() -> Vec<Measurement> {
     out.push(gp3p_octic(N_GP3P));
     out.push(gp3p_known_root(N_GP3P));
     out.push(gp3p_solutions(N_GP3P));
+    out.push(up2p_determinant(N_UP2P));
+    out.push(up2p_known_root(N_UP2P));
+    out.push(up2p_solutions(N_UP2P));
     out
 }
