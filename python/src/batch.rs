@@ -48,10 +48,12 @@ use rayon::ThreadPool;
 
 use crate::camera::PyCamera;
 use crate::convert::{contiguous_array, points2, points3, readonly, shape_str, vector};
-use crate::errors::{error, option_error, pnp_error, shape_error, InvalidInputError};
+use crate::errors::{
+    error, option_error, pnp_error, raise_option_error, shape_error, InvalidInputError,
+};
 use crate::options::{options_arg, solver_arg, KEYWORDS};
 use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
-use crate::rig::{rig_error, PyRig, RigObs};
+use crate::rig::{rig_error, PyRig, RigError, RigObs};
 use crate::solution::PySolution;
 use crate::solve::check_finite;
 
@@ -1161,7 +1163,11 @@ pub(crate) fn solve_ransac_batch<'py>(
     );
     buffers.give_back();
     done?;
-    let results = results.into_iter().map(|r| r.expect("every chunk solved"));
+    let results: Vec<Estimate> = results
+        .into_iter()
+        .map(|r| r.expect("every chunk solved"))
+        .collect();
+    raise_option_error(py, results.iter().filter_map(|r| r.as_ref().err()))?;
     let out = PyList::empty(py);
     for r in results {
         match r {
@@ -1493,6 +1499,13 @@ pub(crate) fn solve_generalized_ransac_batch<'py>(
         p.estimate(&r, &solver)
             .map(|(r, px)| (PySolution::from(&r.solution), r, px))
     })?;
+    raise_option_error(
+        py,
+        results.iter().filter_map(|r| match r {
+            Err(RigError::Pnp(e)) => Some(e),
+            _ => None,
+        }),
+    )?;
     let out = PyList::empty(py);
     for r in results {
         match r {

@@ -415,6 +415,30 @@ pub(crate) fn model_error(py: Python<'_>, e: &RustModelError) -> PyErr {
 }
 
 /// The exception of a registration error.
+/// A batch's option error, raised: an option out of range (`InvalidOption`) fails every problem
+/// of a batch alike, since it does not depend on the problem, so the batch raises it as one call
+/// would, rather than returning it once per problem. `errors` are the problems' errors.
+pub(crate) fn raise_option_error<'a>(
+    py: Python<'_>,
+    errors: impl IntoIterator<Item = &'a RustPnpError>,
+) -> PyResult<()> {
+    match errors
+        .into_iter()
+        .find(|e| matches!(e, RustPnpError::InvalidOption { .. }))
+    {
+        Some(e) => Err(pnp_error(py, e)),
+        None => Ok(()),
+    }
+}
+
+/// The solver's error of a registration error, if it is one.
+pub(crate) fn solver_error(e: &RegisterError) -> Option<&RustPnpError> {
+    match e {
+        RegisterError::Solver(e) => Some(e),
+        _ => None,
+    }
+}
+
 pub(crate) fn register_error(py: Python<'_>, e: &RegisterError) -> PyErr {
     match e {
         RegisterError::Solver(e) => pnp_error(py, e),

@@ -117,6 +117,9 @@ def test_malformed_batch_raises(rng):
         eopnp.solve_ransac_batch(good)
     with pytest.raises(eopnp.InvalidOptionError, match="covariance"):
         eopnp.solve_batch(good, covariance=-1.0)
+    # A RANSAC option out of range fails every problem alike: raised, as by solve_ransac.
+    with pytest.raises(eopnp.InvalidOptionError, match="confidence"):
+        eopnp.solve_ransac_batch(good, focal=800.0, ransac={"confidence": 2.0})
     assert eopnp.solve_batch([]) == []
 
 

@@ -106,6 +106,9 @@ def test_register_images_reports_each_failure(model):
         eopnp.register_images(model, threads=0)
     with pytest.raises(eopnp.InvalidOptionError):
         eopnp.register_images(model, refinement="nonsense")
+    # A RANSAC option out of range fails every image alike: raised, as by register_image.
+    with pytest.raises(eopnp.InvalidOptionError, match="confidence"):
+        eopnp.register_images(model, [1, 2], ransac={"confidence": 2.0})
 
 
 def test_register_ransac(model):
