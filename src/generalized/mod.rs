@@ -243,7 +243,8 @@ fn search(opts: &RigOptions, rays: &Rays, input: &RigInput<'_>, cost: &Cost) -> 
 }
 
 /// The starting rotations: the null vector of the homogenised cost `[[M, g], [g^T, k]]` (the
-/// exact rotation for noise-free data), the quadratic part's null vector (both signs), and the
+/// exact rotation for noise-free data), the quadratic part's null vector (the sign of positive
+/// determinant), and the
 /// gP3P poses of a few spread triples of rays (at most [`GP3P_MAX_RAYS`] rays, or exhaustive).
 fn starts(
     rays: &Rays,
