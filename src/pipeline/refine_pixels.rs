@@ -203,6 +203,19 @@ impl<'a> Job<'a> {
     }
 }
 
+/// The caller's weights' unit: a power of two near the largest (at least [`MIN_UNIT`]; 1 without
+/// weights, or with all 0), so that no sum of weights in that unit overflows or underflows.
+pub(super) fn weight_unit(weights: Option<&[f64]>) -> f64 {
+    weights.map_or(1.0, |w| {
+        let wmax = w.iter().fold(0.0f64, |m, &x| m.max(x));
+        if wmax > 0.0 {
+            pow2_scale(wmax).max(MIN_UNIT)
+        } else {
+            1.0
+        }
+    })
+}
+
 /// `refine_pixels` from the working-frame pose `(r_work, t_work)` (`refine`'s result). `world` are
 /// the solve's world points, `px` their observations; `fr` is `frame`'s working frame. No
 /// allocation.
@@ -215,15 +228,7 @@ pub(crate) fn refine_pixels(
     opts: &ReprojOptions,
 ) -> PixelOutcome {
     debug_assert_eq!(world.len(), px.pixels.len());
-    // The caller's weights in a power-of-two unit, so that no sum overflows or underflows.
-    let unit = px.weights.map_or(1.0, |w| {
-        let wmax = w.iter().fold(0.0f64, |m, &x| m.max(x));
-        if wmax > 0.0 {
-            pow2_scale(wmax).max(MIN_UNIT)
-        } else {
-            1.0
-        }
-    });
+    let unit = weight_unit(px.weights);
     let weight_sum = px.weights.map_or(world.len() as f64, |w| {
         w.iter().map(|&x| x / unit).sum::<f64>()
     });

@@ -22,15 +22,13 @@ use core::ops::Range;
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-use super::frame::MIN_UNIT;
 use super::options::Loss;
 use super::refine::pass::{pass, Metric, PassInputs};
 use super::refine::{
     levenberg_marquardt, Composed, Hessian, Normal, ReprojOptions, ReprojStop, Residuals,
 };
-use super::refine_pixels::CameraMetric;
+use super::refine_pixels::{weight_unit, CameraMetric};
 use crate::camera::{Project, ProjectionJob, Projector};
-use crate::numeric::mat3::pow2_scale;
 
 /// One camera of a rig and its observations (a range of [`RigPixels`]' arrays).
 #[derive(Clone, Debug)]
@@ -232,15 +230,7 @@ pub(crate) fn refine_rig(
     max_iterations: u32,
     exact_start: bool,
 ) -> RigOutcome {
-    // The weights in a power-of-two unit, so that no sum overflows or underflows.
-    let unit = px.weights.map_or(1.0, |w| {
-        let wmax = w.iter().fold(0.0f64, |m, &x| m.max(x));
-        if wmax > 0.0 {
-            pow2_scale(wmax).max(MIN_UNIT)
-        } else {
-            1.0
-        }
-    });
+    let unit = weight_unit(px.weights);
     let prob = RigResiduals {
         px,
         inv_weight: 1.0 / unit,

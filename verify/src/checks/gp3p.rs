@@ -258,19 +258,8 @@ pub fn gp3p_solutions(n: usize) -> Measurement {
     for i in 0..n {
         let inst = instance(&mut rng);
         let sols = gp3p(&inst.world, &inst.centres, &inst.directions);
-        let mut worst = 0.0f64;
-        for s in &sols {
-            for j in 0..3 {
-                let q = s.rotation * inst.world[j].coords + s.translation - inst.centres[j].coords;
-                let sine = q.cross(&inst.directions[j]).norm() / q.norm();
-                let behind = q.dot(&inst.directions[j]) <= 0.0;
-                worst = worst.max(if behind { f64::INFINITY } else { sine });
-            }
-        }
-        let found = sols.iter().any(|s| {
-            (s.rotation - inst.r).norm() + (s.translation - inst.t).norm() / (1.0 + inst.t.norm())
-                < 1e-8
-        });
+        let rays = (&inst.world[..], &inst.centres[..], &inst.directions[..]);
+        let (mut worst, found) = super::poses_on_rays(&sols, rays, (&inst.r, &inst.t));
         if !found {
             worst = f64::INFINITY;
         }

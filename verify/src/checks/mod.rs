@@ -54,6 +54,36 @@ pub fn g64() -> f64 {
     gamma(64)
 }
 
+/// Rays of a minimal solver's instance: world points, centres, directions.
+type Rays<'a> = (
+    &'a [nalgebra::Point3<f64>],
+    &'a [nalgebra::Point3<f64>],
+    &'a [nalgebra::Vector3<f64>],
+);
+
+/// A minimal solver's poses against its rays: the largest sine of the angle between
+/// `R X_j + t - c_j` and the ray `v_j` over every pose and point (infinite for a point behind its
+/// centre), and whether the true pose `(r, t)` is among the poses (to 1e-8).
+fn poses_on_rays(
+    poses: &[eopnp::p3p::P3pPose],
+    (world, centres, directions): Rays<'_>,
+    (r, t): (&Matrix3<f64>, &nalgebra::Vector3<f64>),
+) -> (f64, bool) {
+    let mut worst = 0.0f64;
+    for s in poses {
+        for j in 0..world.len() {
+            let q = s.rotation * world[j].coords + s.translation - centres[j].coords;
+            let sine = q.cross(&directions[j]).norm() / q.norm();
+            let behind = q.dot(&directions[j]) <= 0.0;
+            worst = worst.max(if behind { f64::INFINITY } else { sine });
+        }
+    }
+    let found = poses
+        .iter()
+        .any(|s| (s.rotation - r).norm() + (s.translation - t).norm() / (1.0 + t.norm()) < 1e-8);
+    (worst, found)
+}
+
 /// Symmetric 3 x 3 from `[H00, H01, H02, H11, H12, H22]`.
 #[must_use]
 pub fn sym3(h: &[f64; 6]) -> Matrix3<f64> {
