@@ -37,6 +37,9 @@
 // `Solutions`).
 #define EOPNP_MAX_SOLUTIONS 32
 
+// The length of `EopnpCameraInfo::model`, its terminating NUL included.
+#define EOPNP_MODEL_NAME_LEN 32
+
 // The result of every function of this interface that can fail. `EOPNP_OK` (0) is success;
 // any other value is a failure, whose message is then `eopnp_last_error_message()` and whose
 // details are `eopnp_last_error()` on the same thread.
@@ -234,6 +237,26 @@ typedef struct EopnpErrorInfo {
   // otherwise 0.
   uint64_t need;
 } EopnpErrorInfo;
+
+// A camera's description (`eopnp_camera_info`).
+typedef struct EopnpCameraInfo {
+  // COLMAP's name of the camera's model (`"SIMPLE_RADIAL"`, `"OPENCV"`, ...), NUL-terminated.
+  // A camera made from OpenCV's `K` and distortion has the COLMAP model of that distortion
+  // (`PINHOLE`, `OPENCV`, `FULL_OPENCV` or `OPENCV_THIN_PRISM_TILTED`; `OPENCV_FISHEYE` for
+  // `cv::fisheye`), its parameters `K`'s `fx, fy, cx, cy` and then the coefficients, padded
+  // with zeros to the model's count.
+  char model[EOPNP_MODEL_NAME_LEN];
+  // The image width in pixels, as given when the camera was made (0 for OpenCV's cameras).
+  uint64_t width;
+  // The image height in pixels (0 for OpenCV's cameras).
+  uint64_t height;
+  // The number of the model's parameters (`eopnp_camera_params`).
+  size_t n_params;
+  // The focal length along x in pixels.
+  double fx;
+  // The focal length along y in pixels (`fx` for the models with one focal length).
+  double fy;
+} EopnpCameraInfo;
 
 // A pose `x_cam = R X + t` (world to camera), the input of `eopnp_refine` (a prior pose).
 typedef struct EopnpPose {
@@ -652,6 +675,26 @@ enum EopnpStatus eopnp_camera_project(const struct EopnpCamera *camera,
 enum EopnpStatus eopnp_camera_undistort(const struct EopnpCamera *camera,
                                         const double *pixel,
                                         double *normalised);
+
+// The camera's description into `*out`: its model's COLMAP name, the image size, the number of
+// its parameters and its focal lengths in pixels.
+//
+// # Safety
+// `camera` must be NULL or a live handle; `out` NULL or a writable `EopnpCameraInfo`.
+enum EopnpStatus eopnp_camera_info(const struct EopnpCamera *camera, struct EopnpCameraInfo *out);
+
+// The camera's parameters, in its model's COLMAP order: `*count` receives their number,
+// `params[0 .. min(*count, capacity)]` the values. More than `capacity`:
+// `EOPNP_BUFFER_TOO_SMALL` (the first `capacity` written). `params` may be NULL when
+// `capacity` is 0 (to ask the count; `EopnpCameraInfo::n_params` has it too).
+//
+// # Safety
+// `camera` NULL or live; `params` NULL or `capacity` writable doubles; `count` NULL or
+// writable.
+enum EopnpStatus eopnp_camera_params(const struct EopnpCamera *camera,
+                                     double *params,
+                                     size_t capacity,
+                                     size_t *count);
 
 // Creates a rig of `count` cameras into `*out`, owned by the caller (release with
 // `eopnp_rig_free`): camera `k` is `cameras[k]` (copied: the camera handles may be freed

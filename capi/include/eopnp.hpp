@@ -216,6 +216,22 @@ class Camera {
     detail::check(eopnp_camera_undistort(get(), in, out.data()));
     return out;
   }
+  /// The camera's description: its model's COLMAP name, image size, parameter count and
+  /// focal lengths.
+  EopnpCameraInfo info() const {
+    EopnpCameraInfo out{};
+    detail::check(eopnp_camera_info(get(), &out));
+    return out;
+  }
+  /// The model's COLMAP name ("SIMPLE_RADIAL", "OPENCV", ...).
+  std::string model_name() const { return info().model; }
+  /// The parameters, in the model's COLMAP order.
+  std::vector<double> params() const {
+    std::vector<double> out(info().n_params);
+    std::size_t count = 0;
+    detail::check(eopnp_camera_params(get(), out.data(), out.size(), &count));
+    return out;
+  }
   /// The C handle (owned by this object).
   const EopnpCamera* get() const noexcept { return h_.get(); }
 

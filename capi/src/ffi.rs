@@ -928,6 +928,62 @@ pub unsafe extern "C" fn eopnp_camera_undistort(
     })
 }
 
+/// The camera's description into `*out`: its model's COLMAP name, the image size, the number of
+/// its parameters and its focal lengths in pixels.
+///
+/// # Safety
+/// `camera` must be NULL or a live handle; `out` NULL or a writable `EopnpCameraInfo`.
+#[no_mangle]
+pub unsafe extern "C" fn eopnp_camera_info(
+    camera: *const EopnpCamera,
+    out: *mut EopnpCameraInfo,
+) -> EopnpStatus {
+    guard(|| {
+        let cam = &get(camera, "camera")?.camera;
+        let out = get_mut(out, "out")?;
+        *out = EopnpCameraInfo::of(cam);
+        Ok(())
+    })
+}
+
+/// The camera's parameters, in its model's COLMAP order: `*count` receives their number,
+/// `params[0 .. min(*count, capacity)]` the values. More than `capacity`:
+/// `EOPNP_BUFFER_TOO_SMALL` (the first `capacity` written). `params` may be NULL when
+/// `capacity` is 0 (to ask the count; `EopnpCameraInfo::n_params` has it too).
+///
+/// # Safety
+/// `camera` NULL or live; `params` NULL or `capacity` writable doubles; `count` NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn eopnp_camera_params(
+    camera: *const EopnpCamera,
+    params: *mut f64,
+    capacity: usize,
+    count: *mut usize,
+) -> EopnpStatus {
+    guard(|| {
+        let cam = &get(camera, "camera")?.camera;
+        let count = get_mut(count, "count")?;
+        let out: &mut [f64] = if capacity == 0 && params.is_null() {
+            &mut []
+        } else {
+            slice_mut(params, capacity, "params")?
+        };
+        let p = cam.params();
+        *count = p.len();
+        for (o, v) in out.iter_mut().zip(p) {
+            *o = *v;
+        }
+        if p.len() > capacity {
+            return Err(Failure::new(
+                EopnpStatus::EOPNP_BUFFER_TOO_SMALL,
+                format!("{} parameters, room for {capacity}", p.len()),
+            ));
+        }
+        Ok(())
+    })
+}
+
 // ---------------------------------------------------------------------------------------------
 // Rigs.
 

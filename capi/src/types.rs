@@ -367,3 +367,50 @@ impl EopnpRansacStats {
 
 /// `EOPNP_OK`'s name, for the status array of the batch functions.
 pub(crate) const OK: EopnpStatus = EopnpStatus::EOPNP_OK;
+
+/// The length of `EopnpCameraInfo::model`, its terminating NUL included.
+pub const EOPNP_MODEL_NAME_LEN: usize = 32;
+
+/// A camera's description (`eopnp_camera_info`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EopnpCameraInfo {
+    /// COLMAP's name of the camera's model (`"SIMPLE_RADIAL"`, `"OPENCV"`, ...), NUL-terminated.
+    /// A camera made from OpenCV's `K` and distortion has the COLMAP model of that distortion
+    /// (`PINHOLE`, `OPENCV`, `FULL_OPENCV` or `OPENCV_THIN_PRISM_TILTED`; `OPENCV_FISHEYE` for
+    /// `cv::fisheye`), its parameters `K`'s `fx, fy, cx, cy` and then the coefficients, padded
+    /// with zeros to the model's count.
+    pub model: [std::ffi::c_char; EOPNP_MODEL_NAME_LEN],
+    /// The image width in pixels, as given when the camera was made (0 for OpenCV's cameras).
+    pub width: u64,
+    /// The image height in pixels (0 for OpenCV's cameras).
+    pub height: u64,
+    /// The number of the model's parameters (`eopnp_camera_params`).
+    pub n_params: usize,
+    /// The focal length along x in pixels.
+    pub fx: f64,
+    /// The focal length along y in pixels (`fx` for the models with one focal length).
+    pub fy: f64,
+}
+
+impl EopnpCameraInfo {
+    pub(crate) fn of(camera: &eopnp::camera::Camera) -> Self {
+        let mut model = [0 as std::ffi::c_char; EOPNP_MODEL_NAME_LEN];
+        // COLMAP's names are short ASCII identifiers; the last byte stays the NUL.
+        for (o, b) in model
+            .iter_mut()
+            .zip(camera.model().name().bytes().take(EOPNP_MODEL_NAME_LEN - 1))
+        {
+            *o = b as std::ffi::c_char;
+        }
+        let (fx, fy) = camera.focal_lengths();
+        EopnpCameraInfo {
+            model,
+            width: camera.width(),
+            height: camera.height(),
+            n_params: camera.params().len(),
+            fx,
+            fy,
+        }
+    }
+}

@@ -954,3 +954,40 @@ fn random_bad_input_never_panics() {
         eopnp_camera_free(ccam);
     }
 }
+
+#[test]
+fn camera_info_and_params_are_the_cameras() {
+    use eopnp::camera::Camera;
+    let params = [500.0, 505.0, 320.0, 240.0, -0.08, 0.01, 0.001, -0.0005];
+    let lib = Camera::from_colmap("OPENCV", 640, 480, params.to_vec()).unwrap();
+    let mut cam = ptr::null_mut();
+    let name = c"OPENCV";
+    let st =
+        unsafe { eopnp_camera_from_colmap(name.as_ptr(), 640, 480, params.as_ptr(), 8, &mut cam) };
+    assert_eq!(st, EopnpStatus::EOPNP_OK, "{}", last_message());
+    let mut info = std::mem::MaybeUninit::<EopnpCameraInfo>::zeroed();
+    assert_eq!(
+        unsafe { eopnp_camera_info(cam, info.as_mut_ptr()) },
+        EopnpStatus::EOPNP_OK
+    );
+    let info = unsafe { info.assume_init() };
+    let model = unsafe { CStr::from_ptr(info.model.as_ptr()) };
+    assert_eq!(model.to_str().unwrap(), lib.model().name());
+    assert_eq!((info.width, info.height, info.n_params), (640, 480, 8));
+    assert_eq!((info.fx, info.fy), lib.focal_lengths());
+    let (mut out, mut count) = ([0.0; 8], 0usize);
+    let st = unsafe { eopnp_camera_params(cam, out.as_mut_ptr(), 8, &mut count) };
+    assert_eq!(st, EopnpStatus::EOPNP_OK);
+    assert_eq!((count, bits(&out)), (8, bits(lib.params())));
+    // Too small: the count, the first values, a status.
+    let (mut three, mut count) = ([0.0; 3], 0usize);
+    let st = unsafe { eopnp_camera_params(cam, three.as_mut_ptr(), 3, &mut count) };
+    assert_eq!(st, EopnpStatus::EOPNP_BUFFER_TOO_SMALL);
+    assert_eq!((count, three), (8, [500.0, 505.0, 320.0]));
+    assert!(
+        last_message().contains("8 parameters, room for 3"),
+        "{}",
+        last_message()
+    );
+    unsafe { eopnp_camera_free(cam) };
+}

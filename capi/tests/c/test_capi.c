@@ -357,6 +357,28 @@ static void test_cameras(void) {
   EXPECT(EOPNP_NULL_POINTER, eopnp_camera_undistort(NULL, px, back));
   EXPECT(EOPNP_NULL_POINTER, eopnp_camera_undistort(c, NULL, back));
   EXPECT(EOPNP_NULL_POINTER, eopnp_camera_undistort(c, px, NULL));
+  /* The description and the parameters; a buffer too small; the count alone; NULLs. */
+  EopnpCameraInfo info;
+  EXPECT(EOPNP_OK, eopnp_camera_info(c, &info));
+  CHECK(strcmp(info.model, "SIMPLE_RADIAL") == 0);
+  CHECK(info.width == 640 && info.height == 480 && info.n_params == 4);
+  CHECK(info.fx == 800.0 && info.fy == 800.0);
+  double got[4] = {0.0, 0.0, 0.0, 0.0};
+  size_t count = 0;
+  EXPECT(EOPNP_OK, eopnp_camera_params(c, got, 4, &count));
+  CHECK(count == 4 && memcmp(got, params, sizeof got) == 0);
+  double two[2] = {0.0, 0.0};
+  count = 0;
+  EXPECT(EOPNP_BUFFER_TOO_SMALL, eopnp_camera_params(c, two, 2, &count));
+  CHECK(count == 4 && two[0] == 800.0 && two[1] == 320.0);
+  count = 0;
+  EXPECT(EOPNP_BUFFER_TOO_SMALL, eopnp_camera_params(c, NULL, 0, &count));
+  CHECK(count == 4);
+  EXPECT(EOPNP_NULL_POINTER, eopnp_camera_params(c, NULL, 4, &count));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_camera_params(c, got, 4, NULL));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_camera_params(NULL, got, 4, &count));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_camera_info(NULL, &info));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_camera_info(c, NULL));
   eopnp_camera_free(c);
   c = NULL;
   /* Bad model name, wrong parameter count, NaN parameter, NULLs. */
@@ -381,6 +403,13 @@ static void test_cameras(void) {
   EXPECT(EOPNP_OK, eopnp_camera_from_opencv(K, dist, 4, &c));
   eopnp_camera_free(c);
   EXPECT(EOPNP_OK, eopnp_camera_from_opencv(K, dist, 8, &c));
+  /* An OpenCV camera is described by its COLMAP model: K's intrinsics, then the coefficients. */
+  EXPECT(EOPNP_OK, eopnp_camera_info(c, &info));
+  CHECK(strcmp(info.model, "FULL_OPENCV") == 0 && info.n_params == 12);
+  CHECK(info.width == 0 && info.height == 0 && info.fx == K[0] && info.fy == K[4]);
+  double full[12];
+  EXPECT(EOPNP_OK, eopnp_camera_params(c, full, 12, &count));
+  CHECK(full[2] == K[2] && full[3] == K[5] && full[4] == dist[0] && full[11] == dist[7]);
   eopnp_camera_free(c);
   c = NULL;
   EXPECT(EOPNP_CAMERA_ERROR, eopnp_camera_from_opencv(K, dist, 3, &c));

@@ -87,6 +87,13 @@ void test_reference(const std::string& path) {
   const double dist[5] = {-0.1, 0.02, 1e-3, -5e-4, 0.001};
   const eopnp::Camera colmap_cam = eopnp::Camera::colmap("OPENCV", 640, 480, colmap);
   const eopnp::Camera opencv_cam = eopnp::Camera::opencv(k, dist, 5);
+  // The cameras describe themselves: COLMAP's name, size, parameters.
+  CHECK(colmap_cam.model_name() == "OPENCV" && colmap_cam.params() == colmap);
+  CHECK(colmap_cam.info().width == 640 && colmap_cam.info().height == 480);
+  const std::vector<double> full = opencv_cam.params();
+  CHECK(opencv_cam.model_name() == "FULL_OPENCV" && full.size() == 12);
+  CHECK(full[0] == 800.0 && full[1] == 810.0 && full[4] == -0.1 && full[8] == 0.001);
+  CHECK(full[9] == 0.0 && full[11] == 0.0 && opencv_cam.info().fy == 810.0);
   int cases = 0, equal = 0;
   std::string word;
   while (in >> word) {
