@@ -15,7 +15,7 @@ use crate::batch::in_pool;
 
 use crate::camera::PyCamera;
 use crate::convert::{array1, array2};
-use crate::errors::{model_error, raise_option_error, register_error, solver_error};
+use crate::errors::{model_error, register_error, registrations};
 use crate::model_rigs::{PyFrame, PySensorRig};
 use crate::options::{solver_arg, KEYWORDS};
 use crate::ransac::ransac_arg;
@@ -542,18 +542,5 @@ pub(crate) fn register_images<'py>(
             )
             .collect::<Vec<_>>()
     })?;
-    raise_option_error(
-        py,
-        results
-            .iter()
-            .filter_map(|r| r.as_ref().err().and_then(solver_error)),
-    )?;
-    let out = PyList::empty(py);
-    for r in results {
-        match r {
-            Ok(reg) => out.append(to_py(py, reg)?)?,
-            Err(e) => out.append(register_error(py, &e).into_value(py))?,
-        }
-    }
-    Ok(out)
+    registrations(py, results, |reg| to_py(py, reg))
 }

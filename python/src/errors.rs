@@ -32,7 +32,7 @@ use eopnp::{DegenerateKind, InputKind, PnpError as RustPnpError};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyLookupError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple, PyType};
+use pyo3::types::{PyDict, PyList, PyTuple, PyType};
 use pyo3::PyTypeInfo;
 
 create_exception!(
@@ -431,12 +431,29 @@ pub(crate) fn raise_option_error<'a>(
     }
 }
 
-/// The solver's error of a registration error, if it is one.
-pub(crate) fn solver_error(e: &RegisterError) -> Option<&RustPnpError> {
-    match e {
-        RegisterError::Solver(e) => Some(e),
-        _ => None,
+/// A batch of registrations as the list `register_images` and `register_frames` return: each
+/// result converted by `to_py`, or its error as an exception instance (not raised); an option
+/// error raised instead ([`raise_option_error`]).
+pub(crate) fn registrations<'py, T, U: IntoPyObject<'py>>(
+    py: Python<'py>,
+    results: Vec<Result<T, RegisterError>>,
+    mut to_py: impl FnMut(T) -> PyResult<U>,
+) -> PyResult<Bound<'py, PyList>> {
+    raise_option_error(
+        py,
+        results.iter().filter_map(|r| match r {
+            Err(RegisterError::Solver(e)) => Some(e),
+            _ => None,
+        }),
+    )?;
+    let out = PyList::empty(py);
+    for r in results {
+        match r {
+            Ok(reg) => out.append(to_py(reg)?)?,
+            Err(e) => out.append(register_error(py, &e).into_value(py))?,
+        }
     }
+    Ok(out)
 }
 
 pub(crate) fn register_error(py: Python<'_>, e: &RegisterError) -> PyErr {

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use crate::batch::in_pool;
 use crate::colmap::{ransac_stats, registration_ransac, PyModel};
 use crate::convert::array2;
-use crate::errors::{raise_option_error, register_error, solver_error};
+use crate::errors::{register_error, registrations};
 use crate::model_rigs::rt_rows;
 use crate::options::{solver_arg, KEYWORDS};
 use crate::solution::PySolution;
@@ -336,18 +336,5 @@ pub(crate) fn register_frames<'py>(
             )
             .collect::<Vec<_>>()
     })?;
-    raise_option_error(
-        py,
-        results
-            .iter()
-            .filter_map(|r| r.as_ref().err().and_then(solver_error)),
-    )?;
-    let out = PyList::empty(py);
-    for r in results {
-        match r {
-            Ok(reg) => out.append(to_py(py, &m, reg)?)?,
-            Err(e) => out.append(register_error(py, &e).into_value(py))?,
-        }
-    }
-    Ok(out)
+    registrations(py, results, |reg| to_py(py, &m, reg))
 }
