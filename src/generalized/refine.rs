@@ -115,10 +115,7 @@ pub(crate) fn pixel_error2(
 
 /// `sum w rho(|e|^2)` and `sum w |e|^2` at the pose (infinite if a point is at depth 0; one
 /// behind its camera projects through `(x / z, y / z)`, as in [`normal_equations`]) and the number of
-/// observations in front of their camera; with a `reference` pose, also whether any observation
-/// is on the other side of its camera than at the reference (a step may not move a point
-/// across a camera's plane: the central `refine`'s rule).
-#[allow(clippy::too_many_arguments)]
+/// observations in front of their camera.
 fn evaluate(
     rays: &Rays,
     rig: &Rig,
@@ -127,23 +124,16 @@ fn evaluate(
     loss: Loss,
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
-    reference: Option<(&Matrix3<f64>, &Vector3<f64>)>,
 ) -> Evaluated {
     let mut out = Evaluated {
         cost: 0.0,
         squared: 0.0,
         front: 0,
-        flipped: false,
     };
     for ry in &rays.rays {
         let (rk, tk) = rig.pose(ry.camera);
-        let x = world[ry.index].coords;
-        let p = rk * (r * x + t) + tk;
+        let p = rk * (r * world[ry.index].coords + t) + tk;
         let front = p.z > 0.0;
-        if let Some((r0, t0)) = reference {
-            let z0 = rk.row(2).transpose().dot(&(r0 * x + t0)) + tk.z;
-            out.flipped |= front != (z0 > 0.0);
-        }
         if !(p.z != 0.0) {
             out.cost = f64::INFINITY;
             continue;
@@ -164,7 +154,6 @@ struct Evaluated {
     cost: f64,
     squared: f64,
     front: usize,
-    flipped: bool,
 }
 
 /// A rig problem's observations as the refinement reads them: grouped by camera (one
@@ -295,7 +284,7 @@ pub(crate) fn refine_grouped(
             }
         }
     }
-    let e = evaluate(rays, rig, world, pixels, loss, &r, &t, None);
+    let e = evaluate(rays, rig, world, pixels, loss, &r, &t);
     Refined {
         r,
         t,
@@ -323,7 +312,7 @@ pub(crate) fn covariance(
     // The squared loss: `J^T W J` with the weights alone; the sums of [`evaluate`] (infinite
     // if a point is at depth 0: no covariance).
     let (jtj, _) = normal_equations(rays, rig, world, pixels, Loss::Squared, r, t);
-    let sums = evaluate(rays, rig, world, pixels, Loss::Squared, r, t, None);
+    let sums = evaluate(rays, rig, world, pixels, Loss::Squared, r, t);
     if !sums.cost.is_finite() {
         return None;
     }
