@@ -70,7 +70,7 @@ impl fmt::Display for DegenerateKind {
 
 /// Error returned by the solver.
 #[non_exhaustive]
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum PnpError {
     /// Fewer correspondences than the solver needs (`need` = 4). With weights, only the
     /// points with a weight > 0 count, and then only those whose weight is above 2^-52 times
@@ -150,6 +150,18 @@ pub enum PnpError {
         /// The least number of inliers accepted.
         needed: usize,
     },
+    /// The images contradict the known vertical ([`crate::Problem::gravity`]): the vertical of
+    /// the maximum-likelihood pose and the measured one differ by more than their combined
+    /// uncertainties allow: a right vertical is reported with a probability of 0.27 % (a
+    /// 3-sigma test's; docs/algorithm.md, `vertical`). The vertical is wrong, or its frames, or
+    /// its stated uncertainty too small, or the correspondences are wrong; solve without the
+    /// vertical to see the pose the images give.
+    GravityMismatch {
+        /// The angle between the two verticals, in degrees.
+        angle_deg: f64,
+        /// Their Mahalanobis distance in standard deviations (combined).
+        sigmas: f64,
+    },
 }
 
 impl fmt::Display for PnpError {
@@ -208,6 +220,10 @@ impl fmt::Display for PnpError {
                 "the loss scale is out of range: Huber and Cauchy take a finite scale s > 0 \
                  whose square and its reciprocal are normal numbers (about 1e-154 < s < 1e154)",
             ),
+            PnpError::InvalidOption { option: "gravity" } => f.write_str(
+                "the gravity direction is out of range: its two directions must be finite and \
+                 non-zero, its sigma_deg finite and > 0",
+            ),
             PnpError::InvalidOption { option } => {
                 let range = match *option {
                     "threshold_px" => "a finite number of pixels > 0 whose square is a normal number (above about 1e-154)",
@@ -232,6 +248,13 @@ impl fmt::Display for PnpError {
                  {inliers} inliers, {needed} needed to be more than chance at this threshold; \
                  check the correspondences and the intrinsics (focal length in pixels), or \
                  raise max_iterations"
+            ),
+            PnpError::GravityMismatch { angle_deg, sigmas } => write!(
+                f,
+                "the images contradict the given gravity direction: the pose they give is \
+                 {angle_deg:.3} degrees off it, {sigmas:.1} standard deviations of the combined \
+                 uncertainty; check the gravity vector's frames and its stated uncertainty \
+                 (sigma_deg)"
             ),
         }
     }

@@ -57,6 +57,7 @@ pub mod colmap;
 pub mod covariance;
 mod error;
 mod generalized;
+mod gravity;
 // The audit-only kernels (the global-chart cost) are used by `verify/` through `internals`.
 #[cfg_attr(not(feature = "internals"), allow(dead_code))]
 mod kernels;
@@ -75,6 +76,7 @@ mod test_data;
 /// crate's), re-exported so that callers need not depend on `arrayvec` themselves.
 pub use arrayvec::ArrayVec;
 pub use error::{DegenerateKind, InputKind, PnpError};
+pub use gravity::Gravity;
 #[cfg(eopnp_bench)]
 #[doc(hidden)]
 pub use pipeline::bench_hooks;

@@ -3,6 +3,7 @@
 use nalgebra::{Point2, Point3};
 
 use crate::camera::Camera;
+use crate::gravity::Gravity;
 use crate::rig::Rig;
 
 /// One pose problem: world points and their observations (normalised image points, observed
@@ -44,6 +45,7 @@ pub struct Problem<'a> {
     pub(crate) world: &'a [Point3<f64>],
     pub(crate) observations: Observations<'a>,
     pub(crate) weights: Option<&'a [f64]>,
+    pub(crate) gravity: Option<Gravity>,
 }
 
 /// The observations of a [`Problem`].
@@ -81,6 +83,7 @@ impl<'a> Problem<'a> {
                 focal: (1.0, 1.0),
             },
             weights: None,
+            gravity: None,
         }
     }
 
@@ -96,6 +99,7 @@ impl<'a> Problem<'a> {
                 camera,
             },
             weights: None,
+            gravity: None,
         }
     }
 
@@ -154,6 +158,7 @@ impl<'a> Problem<'a> {
                 rig,
             },
             weights: None,
+            gravity: None,
         }
     }
 
@@ -162,6 +167,16 @@ impl<'a> Problem<'a> {
     #[must_use]
     pub fn weights(mut self, weights: &'a [f64]) -> Self {
         self.weights = Some(weights);
+        self
+    }
+
+    /// A known vertical (the direction of gravity measured by an IMU, [`Gravity`]): the solve
+    /// returns the maximum a posteriori pose with it as a prior, RANSAC samples two points, and
+    /// a vertical that the images contradict is [`crate::PnpError::GravityMismatch`].
+    /// Default: none.
+    #[must_use]
+    pub fn gravity(mut self, gravity: Gravity) -> Self {
+        self.gravity = Some(gravity);
         self
     }
 

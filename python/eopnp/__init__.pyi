@@ -114,6 +114,14 @@ class NoConsensusError(PnpError, RuntimeError):
     or the best pose's ``inliers`` are no more than a wrong pose reaches by chance
     (``needed``: the least accepted; ``iterations``: samples drawn).
     """
+class GravityMismatchError(PnpError, ValueError):
+    """The images contradict the known vertical given as ``gravity=`` (also a ``ValueError``; kind
+    ``"GravityMismatch"``): the vertical of the maximum-likelihood pose is ``angle_deg``
+    degrees off the measured one, ``sigmas`` standard deviations of their combined
+    uncertainty (a right vertical is reported with a probability of 0.27 %).
+    """
+    angle_deg: float
+    sigmas: float
 class CameraError(PnpError, ValueError):
     """An invalid camera (also a ``ValueError``): unsupported model, wrong number of parameters,
     non-finite or non-positive focal lengths, a malformed ``K`` or distortion vector.
@@ -335,6 +343,40 @@ class Solution:
         """The image noise standard deviation the covariance assumes, or None."""
     def as_dict(self) -> dict[str, Any]:
         """Every field as a dict (arrays for R, t, rvec, q, covariance)."""
+
+@final
+class Gravity:
+    """The direction of gravity (or any direction known in both frames) measured in the camera's
+    frame and known in the world's, with the measurement's uncertainty.
+
+    Args:
+        in_camera: the direction in the camera's frame, shape (3,) (for a rig: the rig's frame),
+            e.g. an IMU's gravity vector rotated into the camera. Any non-zero length.
+        in_world: the same direction in the world's frame, shape (3,): ``(0, 0, -1)`` for a
+            world whose z axis points up. "Down" in both, or "up" in both.
+        sigma_deg: the measurement's standard deviation in degrees, about each of the two axes
+            across the direction (an IMU's tilt accuracy, 0.1 to 1 degree).
+
+    Passed as ``gravity=`` to ``solve``, ``refine``, ``solve_ransac``, ``solve_generalized``,
+    ``solve_generalized_ransac`` and ``refine_generalized``: the pose is then the maximum a
+    posteriori one with the vertical as a prior, RANSAC draws samples of two points (the upright
+    two-point pose), and a vertical the images contradict raises ``GravityMismatchError``.
+
+    Raises:
+        InvalidOptionError: a zero or non-finite direction, or ``sigma_deg`` not finite and
+            > 0 (``option`` ``"gravity"``).
+    """
+    def __new__(cls, in_camera: _ArrayLike, in_world: _ArrayLike, sigma_deg: float) -> Gravity: ...
+    @property
+    def in_camera(self) -> _F64Array:
+        """The direction in the camera's (rig's) frame, unit length, shape (3,)."""
+    @property
+    def in_world(self) -> _F64Array:
+        """The direction in the world's frame, unit length, shape (3,)."""
+    @property
+    def sigma_deg(self) -> float:
+        """The measurement's standard deviation, degrees."""
+    def __eq__(self, value: object, /) -> bool: ...
 
 @final
 class Camera:
@@ -745,6 +787,7 @@ def solve(
     weights: _ArrayLike | None = None,
     *,
     camera: Camera | None = None,
+    gravity: Gravity | None = None,
     options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
@@ -828,6 +871,7 @@ def refine(
     *,
     weights: _ArrayLike | None = None,
     camera: Camera | None = None,
+    gravity: Gravity | None = None,
     options: _Options = None,
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
@@ -1027,6 +1071,7 @@ def solve_ransac(
     *,
     camera: Camera | None = None,
     focal: float | tuple[float, float] | None = None,
+    gravity: Gravity | None = None,
     ransac: _RansacArg = None,
     options: _Options = None,
     refinement: _Refinement = "ml",
@@ -1302,6 +1347,7 @@ def solve_generalized(
     *,
     rig: Rig | None = None,
     weights: _ArrayLike | None = None,
+    gravity: Gravity | None = None,
     options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
@@ -1368,6 +1414,7 @@ def solve_generalized_ransac(
     *,
     rig: Rig | None = None,
     weights: _ArrayLike | None = None,
+    gravity: Gravity | None = None,
     ransac: _RansacArg = None,
     options: _Options = None,
     refinement: _Refinement = "ml",
@@ -1422,6 +1469,7 @@ def refine_generalized(
     *,
     rig: Rig | None = None,
     weights: _ArrayLike | None = None,
+    gravity: Gravity | None = None,
     options: _Options = None,
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
@@ -1553,6 +1601,8 @@ __all__ = [
     "DegenerateError",
     "Frame",
     "FrameRegistration",
+    "Gravity",
+    "GravityMismatchError",
     "Image",
     "InputTypeError",
     "InvalidInputError",

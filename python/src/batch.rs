@@ -1352,6 +1352,7 @@ impl Chunk<'_> {
             cameras: &indices[self.start + j],
             weights: it.weights.clone().map(|w| &self.weights[w]),
             rig: rigs[it.camera.expect("a rig batch's problems have a rig")],
+            gravity: None,
         })
     }
 }

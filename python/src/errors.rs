@@ -13,6 +13,7 @@
 //! ├── NoSolutionError(PnpError, RuntimeError)  NoSolution
 //! ├── InvalidOptionError(PnpError, ValueError) InvalidOption; bad keyword values
 //! ├── NoConsensusError(PnpError, RuntimeError) NoConsensus
+//! ├── GravityMismatchError(PnpError, ValueError) GravityMismatch
 //! ├── CameraError(PnpError, ValueError)        an invalid camera
 //! ├── ModelError(PnpError)                     a COLMAP model that cannot be read
 //! └── UnknownIdError(PnpError, LookupError)    no such image, camera, frame or rig in a
@@ -100,6 +101,15 @@ create_exception!(
 );
 create_exception!(
     eopnp,
+    GravityMismatchError,
+    PnpError,
+    "The images contradict the known vertical given as ``gravity=`` (also a ``ValueError``; kind\n\
+     ``\"GravityMismatch\"``): the vertical of the maximum-likelihood pose is ``angle_deg``\n\
+     degrees off the measured one, ``sigmas`` standard deviations of their combined\n\
+     uncertainty (a right vertical is reported with a probability of 0.27 %)."
+);
+create_exception!(
+    eopnp,
     CameraError,
     PnpError,
     "An invalid camera (also a ``ValueError``): unsupported model, wrong number of parameters,\n\
@@ -126,7 +136,7 @@ create_exception!(
 /// module's documentation).
 pub(crate) fn add_to_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
-    let mixed: [(Bound<'_, PyType>, Bound<'_, PyType>, Bound<'_, PyType>); 8] = [
+    let mixed: [(Bound<'_, PyType>, Bound<'_, PyType>, Bound<'_, PyType>); 9] = [
         (
             InvalidInputError::type_object(py),
             PnpError::type_object(py),
@@ -158,6 +168,11 @@ pub(crate) fn add_to_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
             PyRuntimeError::type_object(py),
         ),
         (
+            GravityMismatchError::type_object(py),
+            PnpError::type_object(py),
+            PyValueError::type_object(py),
+        ),
+        (
             CameraError::type_object(py),
             PnpError::type_object(py),
             PyValueError::type_object(py),
@@ -178,6 +193,10 @@ pub(crate) fn add_to_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DegenerateError", DegenerateError::type_object(py))?;
     m.add("NoSolutionError", NoSolutionError::type_object(py))?;
     m.add("InvalidOptionError", InvalidOptionError::type_object(py))?;
+    m.add(
+        "GravityMismatchError",
+        GravityMismatchError::type_object(py),
+    )?;
     m.add("NoConsensusError", NoConsensusError::type_object(py))?;
     m.add("CameraError", CameraError::type_object(py))?;
     m.add("ModelError", ModelError::type_object(py))?;
@@ -191,6 +210,7 @@ pub(crate) enum Field {
     /// A signed value (a camera index as given, which may be negative).
     Signed(i64),
     Str(String),
+    Float(f64),
     None,
 }
 
@@ -240,6 +260,7 @@ fn instance(
                 Field::Int(v) => v.into_pyobject(py)?.into_any(),
                 Field::Signed(v) => v.into_pyobject(py)?.into_any(),
                 Field::Str(v) => v.into_pyobject(py)?.into_any(),
+                Field::Float(v) => v.into_pyobject(py)?.into_any(),
                 Field::None => py.None().into_bound(py),
             };
             details.set_item(key, &value)?;
@@ -359,6 +380,14 @@ pub(crate) fn pnp_error(py: Python<'_>, e: &RustPnpError) -> PyErr {
                 ("iterations", iterations.into()),
                 ("inliers", inliers.into()),
                 ("needed", needed.into()),
+            ],
+        ),
+        RustPnpError::GravityMismatch { angle_deg, sigmas } => (
+            GravityMismatchError::type_object(py),
+            "GravityMismatch",
+            vec![
+                ("angle_deg", Field::Float(angle_deg)),
+                ("sigmas", Field::Float(sigmas)),
             ],
         ),
         _ => (PnpError::type_object(py), "Other", vec![]),

@@ -23,6 +23,7 @@ mod colmap;
 mod convert;
 mod errors;
 mod frames;
+mod gravity;
 mod model_rigs;
 mod options;
 mod pose;
@@ -60,6 +61,7 @@ fn _eopnp(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solution::_solution_from_state, m)?)?;
     m.add_class::<solution::PySolution>()?;
     m.add_class::<camera::PyCamera>()?;
+    m.add_class::<gravity::PyGravity>()?;
     m.add_class::<rig::PyRig>()?;
     m.add_class::<ransac::PyRansacOptions>()?;
     m.add_class::<options::PySolverOptions>()?;

@@ -12,9 +12,10 @@ use pyo3::types::{PyDict, PyTuple};
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
 use crate::errors::{option_error, pnp_error};
+use crate::gravity::{gravity_arg, PyGravity};
 use crate::options::{solver_arg, KEYWORDS};
 use crate::solution::PySolution;
-use crate::solve::check_finite;
+use crate::solve::{check_finite, problem_with};
 
 /// RANSAC options (the Rust ``eopnp::ransac::Ransac``); every argument is also a settable
 /// attribute. Out-of-range values raise ``InvalidOptionError`` when used.
@@ -330,8 +331,8 @@ fn rmse_px(
 ///     NoConsensusError: no pose with at least 4 inliers.
 ///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (world, image, weights = None, *, camera = None, focal = None, ransac = None,
-    options = None, **keywords))]
+#[pyo3(signature = (world, image, weights = None, *, camera = None, focal = None, gravity = None,
+    ransac = None, options = None, **keywords))]
 // One Rust parameter per Python parameter: the problem (world, image, weights), its camera or
 // focal lengths, and the RANSAC and solver options (`options=`, `**keywords`).
 #[allow(clippy::too_many_arguments)]
@@ -341,11 +342,13 @@ pub(crate) fn solve_ransac<'py>(
     weights: Option<&Bound<'py, PyAny>>,
     camera: Option<&Bound<'py, PyCamera>>,
     focal: Option<&Bound<'py, PyAny>>,
+    gravity: Option<&Bound<'py, PyGravity>>,
     ransac: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
     let py = world.py();
+    let g = gravity_arg(gravity);
     let solver = solver_arg(py, "solve_ransac", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
@@ -353,39 +356,35 @@ pub(crate) fn solve_ransac<'py>(
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
     let cam = camera.map(|c| &c.get().inner);
-    let result = match (cam, focal) {
-        (Some(_), Some(_)) => {
-            return Err(option_error(
+    let result =
+        match (cam, focal) {
+            (Some(_), Some(_)) => return Err(option_error(
                 py,
                 "focal",
                 "solve_ransac: pass camera= (pixel input) or focal= (normalised input), not both"
                     .into(),
-            ))
-        }
-        (None, None) => {
-            return Err(option_error(
-                py,
-                "focal",
-                "solve_ransac needs camera= (image points in pixels) or focal=(fx, fy) (image \
+            )),
+            (None, None) => {
+                return Err(option_error(
+                    py,
+                    "focal",
+                    "solve_ransac needs camera= (image points in pixels) or focal=(fx, fy) (image \
                  points normalised, the focal lengths in pixels for the threshold)"
-                    .into(),
-            ))
-        }
-        (Some(cam), None) => {
-            check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
-            py.detach(|| match &wts {
-                None => ransac.estimate(&solver, &Problem::pixels(&w, &img, cam)),
-                Some(wts) => ransac.estimate(&solver, &Problem::pixels(&w, &img, cam).weights(wts)),
-            })
-        }
-        (None, Some(f)) => py.detach(|| {
-            let problem = Problem::normalised(&w, &img).focal(f.0, f.1);
-            match &wts {
-                None => ransac.estimate(&solver, &problem),
-                Some(wts) => ransac.estimate(&solver, &problem.weights(wts)),
+                        .into(),
+                ))
             }
-        }),
-    };
+            (Some(cam), None) => {
+                check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
+                py.detach(|| {
+                    let p = problem_with(Problem::pixels(&w, &img, cam), wts.as_deref(), g);
+                    ransac.estimate(&solver, &p)
+                })
+            }
+            (None, Some(f)) => py.detach(|| {
+                let p = Problem::normalised(&w, &img).focal(f.0, f.1);
+                ransac.estimate(&solver, &problem_with(p, wts.as_deref(), g))
+            }),
+        };
     let r = result.map_err(|e| pnp_error(py, &e))?;
     ransac_result(py, &r, &w, &img, cam, focal)
 }

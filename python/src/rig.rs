@@ -21,10 +21,12 @@ use pyo3::types::{PyDict, PyTuple};
 use crate::camera::PyCamera;
 use crate::convert::{array2, indices, points2, points3, vector};
 use crate::errors::{option_error, pnp_error, unknown_camera};
+use crate::gravity::{gravity_arg, PyGravity};
 use crate::options::{solver_arg, KEYWORDS, REFINE_KEYWORDS};
 use crate::pose::pose_arg_as;
 use crate::ransac::{ransac_arg, ransac_info};
 use crate::solution::PySolution;
+use crate::solve::problem_with;
 
 /// A multi-camera rig: calibrated cameras fixed to one body (a car's or a headset's cameras, a
 /// stereo pair), each with its pose in the rig.
@@ -367,6 +369,8 @@ pub(crate) struct RigObs<'a> {
     pub(crate) cameras: &'a [i64],
     pub(crate) weights: Option<&'a [f64]>,
     pub(crate) rig: &'a Rig,
+    /// The known vertical, in the rig's frame (`gravity=`).
+    pub(crate) gravity: Option<eopnp::Gravity>,
 }
 
 impl RigObs<'_> {
@@ -433,11 +437,11 @@ impl RigObs<'_> {
 
     /// The library's problem on `cams` (`check`'s indices).
     fn problem<'b>(&'b self, cams: &'b [u32]) -> Problem<'b> {
-        let p = Problem::rig(self.world, self.image, cams, self.rig);
-        match self.weights {
-            Some(w) => p.weights(w),
-            None => p,
-        }
+        problem_with(
+            Problem::rig(self.world, self.image, cams, self.rig),
+            self.weights,
+            self.gravity,
+        )
     }
 
     /// `solve_generalized` on this problem.
@@ -517,13 +521,14 @@ impl Copied {
         })
     }
 
-    fn obs<'a>(&'a self, rig: &'a Rig) -> RigObs<'a> {
+    fn obs<'a>(&'a self, rig: &'a Rig, gravity: Option<eopnp::Gravity>) -> RigObs<'a> {
         RigObs {
             world: &self.world,
             image: &self.image,
             cameras: &self.cameras,
             weights: self.weights.as_deref(),
             rig,
+            gravity,
         }
     }
 }
@@ -575,7 +580,7 @@ impl Copied {
 ///     TypeError: as ``solve``.
 #[pyfunction]
 #[pyo3(signature = (points2D, points3D, camera_idxs, cams_from_rig = None, cameras = None, *,
-    rig = None, weights = None, options = None, **keywords))]
+    rig = None, weights = None, gravity = None, options = None, **keywords))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub(crate) fn solve_generalized(
     py: Python<'_>,
@@ -586,6 +591,7 @@ pub(crate) fn solve_generalized(
     cameras: Option<&Bound<'_, PyAny>>,
     rig: Option<&Bound<'_, PyAny>>,
     weights: Option<&Bound<'_, PyAny>>,
+    gravity: Option<&Bound<'_, PyGravity>>,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
@@ -593,7 +599,8 @@ pub(crate) fn solve_generalized(
     let rig = rig_arg(py, "solve_generalized", cams_from_rig, cameras, rig)?;
     let c = Copied::new(points2D, points3D, camera_idxs, weights)?;
     let rig = &rig.get().inner;
-    let result = py.detach(|| c.obs(rig).solve(&solver));
+    let g = gravity_arg(gravity);
+    let result = py.detach(|| c.obs(rig, g).solve(&solver));
     match result {
         Ok(s) => Ok(PySolution::from(&s)),
         Err(e) => Err(rig_error(py, &e)),
@@ -633,7 +640,7 @@ pub(crate) fn solve_generalized(
 ///     NoConsensusError: no pose with enough inliers.
 #[pyfunction]
 #[pyo3(signature = (points2D, points3D, camera_idxs, cams_from_rig = None, cameras = None, *,
-    rig = None, weights = None, ransac = None, options = None, **keywords))]
+    rig = None, weights = None, gravity = None, ransac = None, options = None, **keywords))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub(crate) fn solve_generalized_ransac<'py>(
     py: Python<'py>,
@@ -644,6 +651,7 @@ pub(crate) fn solve_generalized_ransac<'py>(
     cameras: Option<&Bound<'py, PyAny>>,
     rig: Option<&Bound<'py, PyAny>>,
     weights: Option<&Bound<'py, PyAny>>,
+    gravity: Option<&Bound<'py, PyGravity>>,
     ransac: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     keywords: Option<&Bound<'py, PyDict>>,
@@ -653,8 +661,9 @@ pub(crate) fn solve_generalized_ransac<'py>(
     let rig = rig_arg(py, "solve_generalized_ransac", cams_from_rig, cameras, rig)?;
     let c = Copied::new(points2D, points3D, camera_idxs, weights)?;
     let rig = &rig.get().inner;
+    let g = gravity_arg(gravity);
     let (r, px) = py
-        .detach(|| c.obs(rig).estimate(&ransac, &solver))
+        .detach(|| c.obs(rig, g).estimate(&ransac, &solver))
         .map_err(|e| rig_error(py, &e))?;
     Ok((PySolution::from(&r.solution), ransac_info(py, &r, px)?))
 }
@@ -689,7 +698,7 @@ pub(crate) fn solve_generalized_ransac<'py>(
 ///     starting pose that is not finite or not of the forms above.
 #[pyfunction]
 #[pyo3(signature = (rig_from_world, points2D, points3D, camera_idxs, cams_from_rig = None,
-    cameras = None, *, rig = None, weights = None, options = None, **keywords))]
+    cameras = None, *, rig = None, weights = None, gravity = None, options = None, **keywords))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub(crate) fn refine_generalized(
     py: Python<'_>,
@@ -701,6 +710,7 @@ pub(crate) fn refine_generalized(
     cameras: Option<&Bound<'_, PyAny>>,
     rig: Option<&Bound<'_, PyAny>>,
     weights: Option<&Bound<'_, PyAny>>,
+    gravity: Option<&Bound<'_, PyGravity>>,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
@@ -718,7 +728,8 @@ pub(crate) fn refine_generalized(
     let rig = rig_arg(py, "refine_generalized", cams_from_rig, cameras, rig)?;
     let c = Copied::new(points2D, points3D, camera_idxs, weights)?;
     let rig = &rig.get().inner;
-    let result = py.detach(|| c.obs(rig).refine(&solver, &initial));
+    let g = gravity_arg(gravity);
+    let result = py.detach(|| c.obs(rig, g).refine(&solver, &initial));
     match result {
         Ok(s) => Ok(PySolution::from(&s)),
         Err(e) => Err(rig_error(py, &e)),

@@ -2,7 +2,7 @@
 //! through a camera. The arrays are copied into points with the GIL held; the solve runs with
 //! the GIL released.
 
-use eopnp::Problem;
+use eopnp::{Gravity, Problem};
 use eopnp::{InputKind, PnpError};
 use nalgebra::{Point2, Point3};
 use pyo3::prelude::*;
@@ -11,9 +11,26 @@ use pyo3::types::{PyDict, PyList};
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
 use crate::errors::pnp_error;
+use crate::gravity::{gravity_arg, PyGravity};
 use crate::options::{solver_arg, KEYWORDS, REFINE_KEYWORDS};
 use crate::pose::pose_arg;
 use crate::solution::PySolution;
+
+/// `p` with its optional weights and known vertical.
+pub(crate) fn problem_with<'a>(
+    p: Problem<'a>,
+    weights: Option<&'a [f64]>,
+    gravity: Option<Gravity>,
+) -> Problem<'a> {
+    let p = match weights {
+        Some(w) => p.weights(w),
+        None => p,
+    };
+    match gravity {
+        Some(g) => p.gravity(g),
+        None => p,
+    }
+}
 
 /// NaN or infinite input as the library reports it on normalised input (lengths first, then
 /// the first offending index, world before image before weight). The pixel APIs of the library
@@ -82,14 +99,16 @@ pub(crate) fn check_finite(
 ///     InvalidOptionError: an option out of its range.
 ///     TypeError: an unknown keyword, or both ``options`` and option keywords.
 #[pyfunction]
-#[pyo3(signature = (world, image, weights = None, *, camera = None, options = None,
-    **keywords))]
+#[pyo3(signature = (world, image, weights = None, *, camera = None, gravity = None,
+    options = None, **keywords))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     py: Python<'_>,
     world: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     weights: Option<&Bound<'_, PyAny>>,
     camera: Option<&Bound<'_, PyCamera>>,
+    gravity: Option<&Bound<'_, PyGravity>>,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
@@ -97,17 +116,24 @@ pub(crate) fn solve(
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
+    let g = gravity_arg(gravity);
     let result = match camera {
-        None => py.detach(|| match &wts {
-            None => solver.solve(&Problem::normalised(&w, &img)),
-            Some(wts) => solver.solve(&Problem::normalised(&w, &img).weights(wts)),
+        None => py.detach(|| {
+            solver.solve(&problem_with(
+                Problem::normalised(&w, &img),
+                wts.as_deref(),
+                g,
+            ))
         }),
         Some(cam) => {
             let cam = &cam.get().inner;
             check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
-            py.detach(|| match &wts {
-                None => solver.solve(&Problem::pixels(&w, &img, cam)),
-                Some(wts) => solver.solve(&Problem::pixels(&w, &img, cam).weights(wts)),
+            py.detach(|| {
+                solver.solve(&problem_with(
+                    Problem::pixels(&w, &img, cam),
+                    wts.as_deref(),
+                    g,
+                ))
             })
         }
     };
@@ -215,14 +241,16 @@ pub(crate) fn _time_solve(
 ///     As ``solve``; InvalidOptionError (``option`` "initial") for an initial pose that is
 ///     not finite (the library's message) or not of the forms above.
 #[pyfunction]
-#[pyo3(signature = (world, image, initial, *, weights = None, camera = None, options = None,
-    **keywords))]
+#[pyo3(signature = (world, image, initial, *, weights = None, camera = None, gravity = None,
+    options = None, **keywords))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     world: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     initial: &Bound<'_, PyAny>,
     weights: Option<&Bound<'_, PyAny>>,
     camera: Option<&Bound<'_, PyCamera>>,
+    gravity: Option<&Bound<'_, PyGravity>>,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
@@ -232,17 +260,18 @@ pub(crate) fn refine(
     let w = points3(world, "world")?;
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
+    let g = gravity_arg(gravity);
     let result = match camera {
-        None => py.detach(|| match &wts {
-            None => solver.refine(&Problem::normalised(&w, &img), &initial),
-            Some(wts) => solver.refine(&Problem::normalised(&w, &img).weights(wts), &initial),
+        None => py.detach(|| {
+            let p = problem_with(Problem::normalised(&w, &img), wts.as_deref(), g);
+            solver.refine(&p, &initial)
         }),
         Some(cam) => {
             let cam = &cam.get().inner;
             check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
-            py.detach(|| match &wts {
-                None => solver.refine(&Problem::pixels(&w, &img, cam), &initial),
-                Some(wts) => solver.refine(&Problem::pixels(&w, &img, cam).weights(wts), &initial),
+            py.detach(|| {
+                let p = problem_with(Problem::pixels(&w, &img, cam), wts.as_deref(), g);
+                solver.refine(&p, &initial)
             })
         }
     };

@@ -29,6 +29,7 @@ use crate::error::PnpError;
 use crate::numeric::gp3p::gp3p;
 use crate::numeric::linalg::smallest_eigenvector;
 use crate::numeric::rotation::{candidate_to_rotation, nearest_rotation};
+use crate::pipeline::vertical::{self, Vertical, VerticalCheck};
 use crate::pipeline::{
     CandidateSource, Loss, Refinement, Solution, Solutions, EXACT_FIT, MAX_CANDIDATES,
 };
@@ -44,6 +45,8 @@ pub(crate) struct RigOptions {
     pub reprojection_iterations: u32,
     pub exhaustive: bool,
     pub covariance: Option<NoiseModel>,
+    /// The known vertical's prior (the `vertical` stage), in the rig's frame.
+    pub vertical: Option<Vertical>,
 }
 
 /// Two minima closer than this (Frobenius norm of the rotation difference) are the same.
@@ -93,7 +96,6 @@ pub(crate) fn solve(
     if minima.is_empty() {
         return Err(PnpError::NoSolution);
     }
-    let mut solutions: ArrayVec<Solution, MAX_CANDIDATES> = ArrayVec::new();
     let count = if all.is_some() {
         minima.len().min(MAX_CANDIDATES)
     } else if opts.refinement == Refinement::Algebraic {
@@ -111,10 +113,16 @@ pub(crate) fn solve(
             .count()
     };
     let grouped = Grouped::new(&rays, input.rig, input.world, input.pixels);
+    // A vertical the images contradict (at the best minimum) is reported as such.
+    let mut checks: ArrayVec<(Solution, Option<VerticalCheck>), MAX_CANDIDATES> = ArrayVec::new();
     for m in minima.iter().take(count) {
         let (r, t) = to_original(&rays, &cost, &m.r);
-        solutions.push(finish(opts, &rays, &grouped, input, &cost, m, &r, &t));
+        checks.push(finish(opts, &rays, &grouped, input, &cost, m, &r, &t));
     }
+    checks.sort_by(|a, b| order(&a.0, &b.0));
+    vertical::verdict(checks[0].1)?;
+    let mut solutions: ArrayVec<Solution, MAX_CANDIDATES> =
+        checks.iter().map(|(s, _)| *s).collect();
     rank(&mut solutions);
     if let Some(all) = all {
         for s in &solutions {
@@ -151,9 +159,11 @@ pub(crate) fn refine_from(
     let mut opts = *opts;
     opts.refinement = Refinement::Reprojection;
     let grouped = Grouped::new(&rays, input.rig, input.world, input.pixels);
-    Ok(finish(
+    let (sol, check) = finish(
         &opts, &rays, &grouped, input, &cost, &m, initial.0, initial.1,
-    ))
+    );
+    vertical::verdict(check)?;
+    Ok(sol)
 }
 
 fn check_loss(opts: &RigOptions) -> Result<(), PnpError> {
@@ -324,8 +334,8 @@ fn spread_triples(rays: &Rays) -> Vec<[usize; 3]> {
         .collect()
 }
 
-/// A minimum finished: refined in pixels (the default mode), its costs, diagnostics and
-/// covariance.
+/// A minimum finished: refined in pixels (the default mode; with a known vertical, on to the
+/// maximum a posteriori pose), its costs, diagnostics and covariance; and the vertical's test.
 #[allow(clippy::too_many_arguments)]
 fn finish(
     opts: &RigOptions,
@@ -336,7 +346,7 @@ fn finish(
     m: &Minimum,
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
-) -> Solution {
+) -> (Solution, Option<VerticalCheck>) {
     let fmax = input
         .rig
         .cameras()
@@ -364,6 +374,7 @@ fn finish(
         (r, t),
         iterations,
         m.f <= EXACT_FIT * cost.scale,
+        opts.vertical.map(|v| v.with_points(rays.rays.len())),
     );
     let (r, t, cost_px, squared, weight_sum, front) =
         (e.r, e.t, e.cost, e.squared, e.weight_sum, e.in_front);
@@ -390,14 +401,17 @@ fn finish(
     sol.used = n;
     sol.skipped = rays.skipped;
     sol.covariance = covariance;
-    sol
+    (sol, e.vertical)
 }
 
 /// Best first: most points in front, then the lowest cost.
 fn rank(s: &mut ArrayVec<Solution, MAX_CANDIDATES>) {
-    s.sort_by(|a, b| {
-        (!a.cheirality_ok)
-            .cmp(&!b.cheirality_ok)
-            .then(a.cost.total_cmp(&b.cost))
-    });
+    s.sort_by(order);
+}
+
+/// [`rank`]'s order.
+fn order(a: &Solution, b: &Solution) -> core::cmp::Ordering {
+    (!a.cheirality_ok)
+        .cmp(&!b.cheirality_ok)
+        .then(a.cost.total_cmp(&b.cost))
 }

@@ -16,6 +16,8 @@ pub(crate) struct RigInput<'a> {
     pub cameras: &'a [u32],
     pub rig: &'a Rig,
     pub weights: Option<&'a [f64]>,
+    /// The known vertical, in the rig's frame ([`crate::Problem::gravity`]).
+    pub gravity: Option<crate::gravity::Gravity>,
 }
 
 /// One kept correspondence (its pixel undistorts): the indices into the input, the ray.

@@ -8,6 +8,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use super::rays::Rays;
 use crate::covariance::{NoiseModel, PoseCovariance};
 use crate::pipeline::refine_rig::{refine_rig, RigCamera, RigPixels};
+use crate::pipeline::vertical::{Vertical, VerticalCheck};
 use crate::pipeline::Loss;
 use crate::rig::Rig;
 use nalgebra::Point3;
@@ -26,6 +27,8 @@ pub(crate) struct Refined {
     pub in_front: usize,
     pub iterations: u32,
     pub converged: bool,
+    /// With a known vertical, its test at the maximum-likelihood pose.
+    pub vertical: Option<VerticalCheck>,
 }
 
 /// The normal equations of the pose's pixel error, `J^T W J` and `J^T W e`, `W` the weights
@@ -233,6 +236,7 @@ pub(crate) fn refine(
         start,
         max_iterations,
         exact_start,
+        None,
     )
 }
 
@@ -254,9 +258,11 @@ pub(crate) fn refine_grouped(
     (r0, t0): (&Matrix3<f64>, &Vector3<f64>),
     max_iterations: u32,
     exact_start: bool,
+    vertical: Option<Vertical>,
 ) -> Refined {
     let weight_sum = grouped.weight_sum;
     let (mut r, mut t, mut iterations, mut converged) = (*r0, *t0, 0, false);
+    let mut check = None;
     if max_iterations > 0 {
         let px = RigPixels {
             world: &grouped.xs,
@@ -266,9 +272,10 @@ pub(crate) fn refine_grouped(
             loss,
         };
         let frame = (rays.x_mean, rays.scale);
-        let out = refine_rig(&px, frame, r0, t0, max_iterations, exact_start);
+        let out = refine_rig(&px, frame, r0, t0, max_iterations, exact_start, vertical);
         if out.r.iter().all(|x| x.is_finite()) && out.t.iter().all(|x| x.is_finite()) {
             (r, t, iterations, converged) = (out.r, out.t, out.iterations, out.converged);
+            check = out.vertical;
             // The squared loss: the iteration's own cost and count (no further pass).
             if let Some((cost, in_front)) = out.squared.filter(|(c, _)| c.is_finite()) {
                 return Refined {
@@ -280,6 +287,7 @@ pub(crate) fn refine_grouped(
                     in_front,
                     iterations,
                     converged,
+                    vertical: check,
                 };
             }
         }
@@ -294,6 +302,7 @@ pub(crate) fn refine_grouped(
         in_front: e.front,
         iterations,
         converged,
+        vertical: check,
     }
 }
 

@@ -572,3 +572,18 @@ pub(crate) fn null_vector3(m: &Matrix3<f64>) -> Option<Vector3<f64>> {
     }
     smallest_right_singular_vector(m)
 }
+
+/// Two unit vectors orthogonal to the unit `v` and to each other.
+pub(crate) fn orthogonal_pair(v: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    // The axis least aligned with `v`, made orthogonal to it.
+    let (ax, ay, az) = (v.x.abs(), v.y.abs(), v.z.abs());
+    let e = if ax <= ay && ax <= az {
+        Vector3::x()
+    } else if ay <= az {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    let a = v.cross(&e).normalize();
+    (a, v.cross(&a))
+}

@@ -22,26 +22,12 @@
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, Point3, Vector3};
 
+use super::mat3::orthogonal_pair;
 use super::p3p::P3pPose;
 use crate::kernels::up2p_quadratic;
 
 /// At most two poses (the quadratic's roots).
 pub type Up2pSolutions = ArrayVec<P3pPose, 2>;
-
-/// Two unit vectors orthogonal to the unit `v` and to each other.
-fn orthogonal_pair(v: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
-    // The axis least aligned with `v`, made orthogonal to it.
-    let (ax, ay, az) = (v.x.abs(), v.y.abs(), v.z.abs());
-    let e = if ax <= ay && ax <= az {
-        Vector3::x()
-    } else if ay <= az {
-        Vector3::y()
-    } else {
-        Vector3::z()
-    };
-    let a = v.cross(&e).normalize();
-    (a, v.cross(&a))
-}
 
 /// `R_y(theta)` from `(sin(theta / 2), cos(theta / 2))` up to a common positive or negative
 /// scale.

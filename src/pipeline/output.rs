@@ -18,6 +18,7 @@ use super::options::Refinement;
 use super::refine::{self, Composed, ReprojOptions, ReprojOutcome};
 use super::refine_pixels::{self, PixelInputs};
 use super::select::{in_front, Minimum};
+use super::vertical;
 use crate::covariance::PoseCovariance;
 use crate::error::PnpError;
 use crate::numeric::lanes::{blocks, dispatched, lane_sum, Block, LANES};
@@ -251,9 +252,11 @@ impl Output<'_> {
         front_check: bool,
     ) -> Result<Option<Solution>, PnpError> {
         let mut m = *m;
-        // `refine` (or `refine_pixels`) is told whether `m` is an exact fit.
+        // `refine` (or `refine_pixels`) is told whether `m` is an exact fit, and the number of
+        // correspondences of the vertical's prior (the `vertical` stage).
         let opts = &ReprojOptions {
             exact_start: m.exact,
+            vertical: opts.vertical.map(|v| v.with_points(self.fr.n_active)),
             ..*opts
         };
         // `select`'s depth test at `m`, when it is still to be made (`front_check`): counted by
@@ -312,6 +315,7 @@ impl Output<'_> {
             if let Some(px) = self.pixel.filter(|px| px.refine) {
                 let po = refine_pixels::refine_pixels(self.world, px, self.fr, &r, &t, opts);
                 let out = &po.out;
+                vertical::verdict(out.vertical)?;
                 // `refine_pixels` ran from `m` (with `front_check`: not from a `refine` outcome).
                 if refinement_counts {
                     if !front_at_m(out.start_in_front) {
@@ -340,6 +344,14 @@ impl Output<'_> {
         // `refine` when `refine_pixels` did not run: the normalised reprojection error.
         if mode == Refinement::Reprojection && pixel_refined.is_none() {
             let out = match refined {
+                Some(o) if opts.vertical.is_some() => refine::refine_reprojection_vertical(
+                    self.world,
+                    self.image,
+                    self.weights,
+                    self.fr,
+                    o,
+                    opts,
+                ),
                 Some(o) => *o,
                 None => refine::refine_reprojection(
                     self.world,
@@ -351,6 +363,7 @@ impl Output<'_> {
                     opts,
                 ),
             };
+            vertical::verdict(out.vertical)?;
             if refinement_counts && !refines_pixels {
                 // `refine` ran from `m`: its first pass counted the depths there.
                 if !front_at_m(out.start_in_front) {
@@ -469,9 +482,16 @@ pub(crate) fn rank_all(
     opts: &ReprojOptions,
     all: &mut Solutions,
 ) -> Result<Solution, PnpError> {
+    // A vertical the images contradict at every minimum is reported as such.
+    let mut mismatch = None;
     for m in minima {
-        let Ok(s) = out.finish(m, mode, opts) else {
-            continue;
+        let s = match out.finish(m, mode, opts) {
+            Ok(s) => s,
+            Err(e @ PnpError::GravityMismatch { .. }) => {
+                mismatch.get_or_insert(e);
+                continue;
+            }
+            Err(_) => continue,
         };
         if !all.iter().any(|o: &Solution| {
             (o.rotation - s.rotation).norm() <= 1e-6
@@ -485,7 +505,9 @@ pub(crate) fn rank_all(
             .cmp(&!b.cheirality_ok)
             .then(a.reprojection_rmse.total_cmp(&b.reprojection_rmse))
     });
-    all.first().copied().ok_or(PnpError::NoSolution)
+    all.first()
+        .copied()
+        .ok_or_else(|| mismatch.unwrap_or(PnpError::NoSolution))
 }
 
 dispatched! {

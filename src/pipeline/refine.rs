@@ -66,6 +66,7 @@ pub(super) mod pass;
 use pass::{pass, Metric, PassInputs, RowWeights};
 
 use super::frame::WorkingFrame;
+use super::vertical::{self, PriorTerm, Vertical, VerticalCheck};
 use crate::numeric::linalg::solve_damped6;
 use crate::numeric::rotation::exp_so3;
 
@@ -89,6 +90,10 @@ pub(crate) struct ReprojOptions {
     /// `xtol` stop, Gauss-Newton on residuals at the rounding level, is applied (module docs).
     /// Default `false`.
     pub exact_start: bool,
+    /// A known vertical: [`levenberg_marquardt`] continues from the maximum-likelihood pose to
+    /// the maximum a posteriori pose with the vertical as a prior ([`super::vertical`]).
+    /// Default `None`.
+    pub vertical: Option<Vertical>,
 }
 
 impl Default for ReprojOptions {
@@ -100,6 +105,7 @@ impl Default for ReprojOptions {
             gtol: 1e-13,
             row_weights: (1.0, 1.0),
             exact_start: false,
+            vertical: None,
         }
     }
 }
@@ -156,6 +162,9 @@ pub(crate) struct ReprojOutcome {
     /// The number of active points in front of the camera (positive depth) at the starting
     /// pose, counted by the first pass (`None` if it did not run).
     pub start_in_front: Option<usize>,
+    /// With [`ReprojOptions::vertical`]: the measured vertical against the maximum-likelihood
+    /// pose's (`None` without one, or if the maximum a posteriori run could not start).
+    pub vertical: Option<VerticalCheck>,
 }
 
 /// Relative depth below which a starting depth counts as zero.
@@ -314,9 +323,8 @@ pub(crate) fn refine_reprojection(
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
 ) -> ReprojOutcome {
-    refine_reprojection_until(world, image, weights, fr, r_work, t_work, opts, &mut |_| {
-        false
-    })
+    let prob = normalised_problem(world, image, weights, fr, opts);
+    levenberg_marquardt(&prob, &fr.rw, fr.d, r_work, t_work, opts)
 }
 
 /// Where a run of `refine` asks its caller whether to go on ([`refine_reprojection_until`]).
@@ -341,13 +349,39 @@ pub(crate) fn refine_reprojection_until(
     opts: &ReprojOptions,
     abandon: &mut dyn FnMut(Checkpoint<'_>) -> bool,
 ) -> ReprojOutcome {
+    let prob = normalised_problem(world, image, weights, fr, opts);
+    levenberg_marquardt_until(&prob, &fr.rw, fr.d, r_work, t_work, opts, None, abandon)
+}
+
+/// The `vertical` stage ([`vertical_map`]) after a run of [`refine_reprojection_until`] that
+/// ended at the maximum-likelihood pose `ml` (the small-N `search`'s).
+pub(crate) fn refine_reprojection_vertical(
+    world: &[Point3<f64>],
+    image: &[Point2<f64>],
+    weights: Option<&[f64]>,
+    fr: &WorkingFrame,
+    ml: &ReprojOutcome,
+    opts: &ReprojOptions,
+) -> ReprojOutcome {
+    let prob = normalised_problem(world, image, weights, fr, opts);
+    vertical_map(&prob, &fr.rw, fr.d, ml, opts)
+}
+
+/// `refine`'s residuals: the normalised reprojection error with `opts`' row weights.
+fn normalised_problem<'a>(
+    world: &'a [Point3<f64>],
+    image: &'a [Point2<f64>],
+    weights: Option<&'a [f64]>,
+    fr: &WorkingFrame,
+    opts: &ReprojOptions,
+) -> Problem<'a, RowWeights> {
     debug_assert_eq!(world.len(), image.len());
     debug_assert!(weights.is_none_or(|w| w.len() == world.len()));
     let n = world
         .len()
         .min(image.len())
         .min(weights.map_or(usize::MAX, <[f64]>::len));
-    let prob = Problem {
+    Problem {
         world: &world[..n],
         image: &image[..n],
         weights: weights.map(|w| &w[..n]),
@@ -357,14 +391,15 @@ pub(crate) fn refine_reprojection_until(
             wx: opts.row_weights.0,
             wy: opts.row_weights.1,
         },
-    };
-    levenberg_marquardt_until(&prob, &fr.rw, fr.d, r_work, t_work, opts, abandon)
+    }
 }
 
 /// The Levenberg-Marquardt iteration of `refine` (and `refine_pixels`, `refine_rig`) on the
 /// residuals of `prob`, from the working-frame pose `(r_work, t_work)` of the working frame
 /// `P_i = rw (X_i - c) / d`: the damping rule, the depth-sign guard, the reuse of `J^T W J` and
-/// the unverified final step of the module docs.
+/// the unverified final step of the module docs. With [`ReprojOptions::vertical`], a second run
+/// from the maximum-likelihood pose it reaches minimises the cost with the vertical's prior
+/// ([`vertical_map`]).
 pub(super) fn levenberg_marquardt<P: Residuals>(
     prob: &P,
     rw: &Matrix3<f64>,
@@ -373,7 +408,43 @@ pub(super) fn levenberg_marquardt<P: Residuals>(
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
 ) -> ReprojOutcome {
-    levenberg_marquardt_until(prob, rw, d, r_work, t_work, opts, &mut |_| false)
+    let ml = levenberg_marquardt_until(prob, rw, d, r_work, t_work, opts, None, &mut |_| false);
+    vertical_map(prob, rw, d, &ml, opts)
+}
+
+/// The `vertical` stage ([`super::vertical`]): with [`ReprojOptions::vertical`], the run from
+/// the maximum-likelihood outcome `ml` that adds the vertical's prior; `ml` itself without
+/// one, or when it did not start (a point at depth 0). The outcome's cost is the reprojection
+/// cost alone at the returned pose, its `e0` and depth count `ml`'s, its iterations both runs'.
+pub(super) fn vertical_map<P: Residuals>(
+    prob: &P,
+    rw: &Matrix3<f64>,
+    d: f64,
+    ml: &ReprojOutcome,
+    opts: &ReprojOptions,
+) -> ReprojOutcome {
+    let Some(v) = &opts.vertical else {
+        return *ml;
+    };
+    let finite = ml.r.iter().chain(ml.t.iter()).all(|x| x.is_finite());
+    if ml.stop == ReprojStop::SkippedZeroDepth || !finite {
+        return *ml;
+    }
+    // From an exact fit the first run has already applied its last step.
+    let opts = ReprojOptions {
+        exact_start: false,
+        ..*opts
+    };
+    let map = levenberg_marquardt_until(prob, rw, d, &ml.r, &ml.t, &opts, Some(v), &mut |_| false);
+    if map.stop == ReprojStop::SkippedZeroDepth {
+        return *ml;
+    }
+    ReprojOutcome {
+        e0: ml.e0,
+        iterations: ml.iterations + map.iterations,
+        start_in_front: ml.start_in_front,
+        ..map
+    }
 }
 
 /// [`levenberg_marquardt`], stopped ([`ReprojStop::Abandoned`]) at the first [`Checkpoint`]
@@ -386,6 +457,7 @@ fn levenberg_marquardt_until<P: Residuals>(
     r_work: &Matrix3<f64>,
     t_work: &Vector3<f64>,
     opts: &ReprojOptions,
+    vertical: Option<&Vertical>,
     abandon: &mut dyn FnMut(Checkpoint<'_>) -> bool,
 ) -> ReprojOutcome {
     let mut r = *r_work;
@@ -399,6 +471,7 @@ fn levenberg_marquardt_until<P: Residuals>(
         iterations: 0,
         stop: ReprojStop::SkippedZeroDepth,
         start_in_front: None,
+        vertical: None,
     };
     // `J^T W J` at the current pose is `hs[hi]`; a full pass at a candidate writes the other.
     let mut hs: [Hessian; 2] = [[[0.0; 6]; 6]; 2];
@@ -415,6 +488,16 @@ fn levenberg_marquardt_until<P: Residuals>(
     }
 
     let e0 = nrm.e;
+    // The vertical's prior (a run from the maximum-likelihood pose, `vertical_map`): the test
+    // at the start, then the term in every pass.
+    let check = vertical.map(|v| vertical::check(v, rw, &r, &hs[0], e0));
+    let prior = vertical.map(|v| PriorTerm::new(v, rw, e0));
+    let add_prior = |r: &Matrix3<f64>, nrm: &mut Normal, h: Option<&mut Hessian>| {
+        if let Some(p) = &prior {
+            p.add(r, &mut nrm.e, &mut nrm.g, h);
+        }
+    };
+    add_prior(&r, &mut nrm, Some(&mut hs[0]));
     // Pose-independent (see Normal::max_abs_q): measured by this first pass only.
     let max_abs_q = nrm.max_abs_q;
     let mut e_final = None;
@@ -491,9 +574,16 @@ fn levenberg_marquardt_until<P: Residuals>(
         // pose where it was computed, the pass only evaluates cost and gradient and keeps it.
         let reuse = h_dist + step_norm <= HESSIAN_REUSE_REL * scale;
         let next = if reuse {
-            prob.accumulate_gradient(&cand, &cur)
+            prob.accumulate_gradient(&cand, &cur).map(|mut n| {
+                add_prior(&r_new, &mut n, None);
+                n
+            })
         } else {
-            prob.accumulate(&cand, Some(&cur), &mut hs[1 - hi])
+            let h_next = &mut hs[1 - hi];
+            prob.accumulate(&cand, Some(&cur), h_next).map(|mut n| {
+                add_prior(&r_new, &mut n, Some(h_next));
+                n
+            })
         };
         match next {
             Some(next) if next.e < nrm.e => {
@@ -531,14 +621,18 @@ fn levenberg_marquardt_until<P: Residuals>(
             }
         }
     }
+    // The reprojection cost alone: the prior's term taken out.
+    let e = e_final.unwrap_or(nrm.e);
+    let e = prior.as_ref().map_or(e, |p| (e - p.cost(&r)).max(0.0));
     ReprojOutcome {
         r,
         t,
         e0,
-        e: e_final.unwrap_or(nrm.e),
+        e,
         iterations,
         stop,
         start_in_front,
+        vertical: check,
     }
 }
 

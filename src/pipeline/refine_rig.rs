@@ -28,6 +28,7 @@ use super::refine::{
     levenberg_marquardt, Composed, Hessian, Normal, ReprojOptions, ReprojStop, Residuals,
 };
 use super::refine_pixels::{weight_unit, CameraMetric};
+use super::vertical::{Vertical, VerticalCheck};
 use crate::camera::{Project, ProjectionJob, Projector};
 
 /// One camera of a rig and its observations (a range of [`RigPixels`]' arrays).
@@ -67,6 +68,8 @@ pub(crate) struct RigOutcome {
     /// as `refine`'s), and the observations in front of their camera (those at the start: no
     /// step moves a point across its camera's plane).
     pub squared: Option<(f64, usize)>,
+    /// With a known vertical, its test at the maximum-likelihood pose.
+    pub vertical: Option<VerticalCheck>,
 }
 
 /// The residuals of a rig ([`Residuals`]).
@@ -220,8 +223,9 @@ impl Residuals for RigResiduals<'_> {
 
 /// Levenberg-Marquardt on the pixel error of the rig's observations from the rig's pose
 /// `(r, t)` (`x_rig = r X + t`) in the working frame `P_i = (X_i - c) / d` (`d > 0`), at most `max_iterations` iterations (`refine`'s options
-/// otherwise; `exact_start`: the start is an exact fit, [`ReprojOptions::exact_start`]). A
-/// starting depth at zero (relative to the others) leaves the pose as it is (not converged).
+/// otherwise; `exact_start`: the start is an exact fit, [`ReprojOptions::exact_start`];
+/// `vertical`: on to the maximum a posteriori pose, the `vertical` stage). A starting depth at
+/// zero (relative to the others) leaves the pose as it is (not converged).
 pub(crate) fn refine_rig(
     px: &RigPixels<'_>,
     (c, d): (Vector3<f64>, f64),
@@ -229,6 +233,7 @@ pub(crate) fn refine_rig(
     t: &Vector3<f64>,
     max_iterations: u32,
     exact_start: bool,
+    vertical: Option<Vertical>,
 ) -> RigOutcome {
     let unit = weight_unit(px.weights);
     let prob = RigResiduals {
@@ -240,6 +245,7 @@ pub(crate) fn refine_rig(
     let opts = ReprojOptions {
         max_iterations,
         exact_start,
+        vertical,
         ..ReprojOptions::default()
     };
     let t_work = (r * c + t) / d;
@@ -256,5 +262,6 @@ pub(crate) fn refine_rig(
         iterations: out.iterations,
         converged: out.stop.converged(),
         squared,
+        vertical: out.vertical,
     }
 }

@@ -66,10 +66,11 @@ use nalgebra::{Point2, Point3, Vector3};
 use rand_core::SeedableRng;
 use rand_pcg::Pcg64;
 
-use super::p3p::p3p;
+use super::p3p::{p3p, P3pSolutions};
 use crate::camera::Camera;
 use crate::covariance::Metric;
 use crate::error::{InputKind, PnpError};
+use crate::gravity::Gravity;
 use crate::pipeline::PixelInputs;
 use crate::problem::{Observations, Problem};
 use crate::solver::undistort_all;
@@ -176,16 +177,17 @@ pub struct RansacSolution {
     pub stats: RansacStats,
 }
 
-/// Iterations needed for `confidence` with inlier ratio `w` and samples of 3.
-fn needed_iterations(confidence: f64, w: f64) -> f64 {
-    let good = w * w * w;
+/// Iterations needed for `confidence` with inlier ratio `w` and samples of `size` (3, or 2 with
+/// a known vertical).
+fn needed_iterations(confidence: f64, w: f64, size: i32) -> f64 {
+    let good = w.powi(size);
     if good >= 1.0 {
         return 0.0;
     }
     if good <= 0.0 {
         return f64::INFINITY;
     }
-    // A good sample is found and survives the SPRT with probability about w^3 (1 - 1/A).
+    // A good sample is found and survives the SPRT with probability about w^size (1 - 1/A).
     let good = good * (1.0 - 1.0 / SPRT_A);
     (1.0 - confidence).ln() / (1.0 - good).ln()
 }
@@ -302,10 +304,10 @@ impl Ransac {
         let (world, weights) = (problem.world, problem.weights);
         match problem.observations {
             Observations::Normalised { points, focal } => {
-                self.estimate_normalised(solver, world, points, focal, weights)
+                self.estimate_normalised(solver, world, points, focal, weights, problem.gravity)
             }
             Observations::Pixels { points, camera } => {
-                self.estimate_pixels(solver, camera, world, points, weights)
+                self.estimate_pixels(solver, camera, world, points, weights, problem.gravity)
             }
             Observations::Rig {
                 points,
@@ -319,6 +321,7 @@ impl Ransac {
                     cameras,
                     rig,
                     weights,
+                    gravity: problem.gravity,
                 },
             ),
         }
@@ -332,9 +335,10 @@ impl Ransac {
         image: &[Point2<f64>],
         focal: (f64, f64),
         weights: Option<&[f64]>,
+        gravity: Option<Gravity>,
     ) -> Result<RansacSolution, PnpError> {
         let pixel = solver.normalised_loss(image, weights);
-        let mut sol = self.estimate_with(solver, world, image, focal, weights, pixel)?;
+        let mut sol = self.estimate_with(solver, world, image, focal, weights, pixel, gravity)?;
         let weight = |i: usize| inlier_weight(&sol.inliers, weights, i);
         sol.solution =
             solver.with_covariance(sol.solution, world, image, &weight, Metric::Identity);
@@ -342,7 +346,8 @@ impl Ransac {
     }
 
     /// [`Ransac::estimate`] with `refine_pixels`' observations of every point (`pixel`) for the
-    /// fits.
+    /// fits; with a known vertical, samples of two points and the final fit with its prior.
+    #[allow(clippy::too_many_arguments)]
     fn estimate_with(
         &self,
         solver: &Solver,
@@ -351,6 +356,7 @@ impl Ransac {
         focal: (f64, f64),
         weights: Option<&[f64]>,
         pixel: Option<PixelInputs<'_>>,
+        gravity: Option<Gravity>,
     ) -> Result<RansacSolution, PnpError> {
         let start = Instant::now();
         self.check()?;
@@ -407,6 +413,10 @@ impl Ransac {
         let confidence = self.confidence;
         let bearings: Vec<Vector3<f64>> =
             image.iter().map(|p| Vector3::new(p.x, p.y, 1.0)).collect();
+        // With a known vertical: samples of two, solved by up2p.
+        let upright = gravity.as_ref().map(Upright::new);
+        let size = if upright.is_some() { 2 } else { 3 };
+        let origin = Point3::origin();
 
         let mut stats = RansacStats::default();
         let mut rng = Pcg64::seed_from_u64(self.seed);
@@ -427,12 +437,23 @@ impl Ransac {
             && (stats.iterations < self.min_iterations || f64::from(stats.iterations) < needed)
         {
             stats.iterations += 1;
-            let Some(idx) = sample3(&mut rng, n) else {
-                continue;
+            let poses = if let Some(up) = &upright {
+                let Some([a, b]) = sample2(&mut rng, n) else {
+                    continue;
+                };
+                let mut poses = P3pSolutions::new();
+                let (w, o, v) = (&world, &origin, &bearings);
+                poses.extend(up.poses([&w[a], &w[b]], [o, o], [&v[a], &v[b]]));
+                poses
+            } else {
+                let Some(idx) = sample3(&mut rng, n) else {
+                    continue;
+                };
+                let wp = [world[idx[0]], world[idx[1]], world[idx[2]]];
+                let bp = [bearings[idx[0]], bearings[idx[1]], bearings[idx[2]]];
+                p3p(&wp, &bp)
             };
-            let wp = [world[idx[0]], world[idx[1]], world[idx[2]]];
-            let bp = [bearings[idx[0]], bearings[idx[1]], bearings[idx[2]]];
-            for pose in p3p(&wp, &bp) {
+            for pose in poses {
                 stats.hypotheses += 1;
                 let bound = best.map_or(f64::INFINITY, |b| b.cost);
                 // The SPRT's good-model inlier ratio: the best hypothesis's, but at least
@@ -474,7 +495,7 @@ impl Ransac {
                     }
                 }
                 best = Some(cand);
-                needed = needed_iterations(confidence, cand.inliers as f64 / n as f64);
+                needed = needed_iterations(confidence, cand.inliers as f64 / n as f64, size);
             }
         }
         let no_consensus = PnpError::NoConsensus {
@@ -504,7 +525,17 @@ impl Ransac {
                 break;
             }
         }
-        let solution = solution.ok_or(no_consensus)?;
+        let mut solution = solution.ok_or(no_consensus)?;
+        // With a known vertical: the final inliers' maximum a posteriori pose (and the test that
+        // they agree with the vertical).
+        if gravity.is_some() {
+            let with_prior = solver.with_gravity(gravity);
+            if let Some(s) = prob.fit_result(&with_prior, &r, &t, thf2, &mut mask, &mut buf) {
+                solution = s?;
+                r = solution.rotation;
+                t = solution.translation;
+            }
+        }
         // The mask of the returned pose.
         for (i, m) in mask.iter_mut().enumerate() {
             *m = prob.sq_err(&r, &t, i) < thf2;
@@ -539,6 +570,7 @@ impl Ransac {
         world: &[Point3<f64>],
         pixels: &[Point2<f64>],
         weights: Option<&[f64]>,
+        gravity: Option<Gravity>,
     ) -> Result<RansacSolution, PnpError> {
         let start = Instant::now();
         self.check()?;
@@ -552,6 +584,7 @@ impl Ransac {
             u.focal,
             u.weights.as_deref(),
             Some(px),
+            gravity,
         )?;
         // The covariance from the inliers with the caller's weights, not the first-order
         // distortion weights of the fits (as a solve of pixels).
@@ -606,9 +639,11 @@ fn inlier_weight(inliers: &[bool], weights: Option<&[f64]>, i: usize) -> f64 {
 mod chance;
 mod rig;
 mod score;
+mod upright;
 
 pub(crate) use score::index;
-use score::{sample3, FitBuffers, Scored, ScoringSet};
+use score::{sample2, sample3, FitBuffers, Scored, ScoringSet};
+use upright::Upright;
 
 /// `impl sample_consensus::Estimator` (feature `sample-consensus`), so rust-cv's consensus
 /// algorithms (e.g. `arrsac::Arrsac`) can drive the [`crate::p3p`] minimal solver; refit the

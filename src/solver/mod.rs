@@ -7,6 +7,8 @@ use nalgebra::{Isometry3, Matrix3, Point2, Point3};
 use crate::camera::{Camera, Projector};
 use crate::covariance::{pose_covariance, Metric, NoiseModel};
 use crate::error::PnpError;
+use crate::gravity::Gravity;
+use crate::pipeline::vertical::Vertical;
 use crate::pipeline::{
     self, Loss, Options, PixelInputs, PlanarDetection, Refinement, ReprojOptions, Solution,
     Solutions,
@@ -16,7 +18,7 @@ use crate::problem::{Observations, Problem};
 mod rig;
 mod undistort;
 
-pub(crate) use rig::in_rig;
+pub(crate) use rig::{central_problem, in_rig};
 
 pub(crate) use undistort::undistort_all;
 use undistort::Undistorted;
@@ -312,20 +314,38 @@ impl Solver {
         problem: &Problem<'_>,
         initial: &Isometry3<f64>,
     ) -> Result<Solution, PnpError> {
+        let this = self.for_problem(problem);
         let (world, weights) = (problem.world, problem.weights);
         match problem.observations {
             Observations::Normalised { points, .. } => {
-                self.refine_normalised(world, points, weights, initial)
+                this.refine_normalised(world, points, weights, initial)
             }
             Observations::Pixels { points, camera } => {
-                self.refine_pixels(world, points, camera, weights, initial)
+                this.refine_pixels(world, points, camera, weights, initial)
             }
             Observations::Rig {
                 points,
                 cameras,
                 rig,
-            } => self.refine_rig(&rig_problem(world, points, cameras, rig, weights), initial),
+            } => this.refine_rig(
+                &rig_problem(world, points, cameras, rig, weights, problem.gravity),
+                initial,
+            ),
         }
+    }
+
+    /// This solver with `problem`'s known vertical (the `vertical` stage's prior) or without
+    /// one.
+    pub(crate) fn for_problem(&self, problem: &Problem<'_>) -> Solver {
+        self.with_gravity(problem.gravity)
+    }
+
+    /// This solver with the known vertical `gravity` (the `vertical` stage's prior) or without
+    /// one.
+    pub(crate) fn with_gravity(&self, gravity: Option<Gravity>) -> Solver {
+        let mut s = *self;
+        s.opts.reproj.vertical = gravity.as_ref().map(Vertical::new);
+        s
     }
 
     /// [`Solver::solve`] (`all: None`) and [`Solver::solve_all`].
@@ -334,17 +354,21 @@ impl Solver {
         problem: &Problem<'_>,
         all: Option<&mut Solutions>,
     ) -> Result<Solution, PnpError> {
+        let this = self.for_problem(problem);
         let (world, weights) = (problem.world, problem.weights);
         match problem.observations {
-            Observations::Normalised { points, .. } => self.normalised(world, points, weights, all),
+            Observations::Normalised { points, .. } => this.normalised(world, points, weights, all),
             Observations::Pixels { points, camera } => {
-                self.pixels(world, points, camera, weights, all)
+                this.pixels(world, points, camera, weights, all)
             }
             Observations::Rig {
                 points,
                 cameras,
                 rig,
-            } => self.rig(&rig_problem(world, points, cameras, rig, weights), all),
+            } => this.rig(
+                &rig_problem(world, points, cameras, rig, weights, problem.gravity),
+                all,
+            ),
         }
     }
 
@@ -598,6 +622,7 @@ fn rig_problem<'a>(
     cameras: &'a [u32],
     rig: &'a crate::rig::Rig,
     weights: Option<&'a [f64]>,
+    gravity: Option<Gravity>,
 ) -> crate::generalized::RigInput<'a> {
     crate::generalized::RigInput {
         world,
@@ -605,6 +630,7 @@ fn rig_problem<'a>(
         cameras,
         rig,
         weights,
+        gravity,
     }
 }
 

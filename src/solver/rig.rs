@@ -22,6 +22,7 @@ impl Solver {
             reprojection_iterations: self.opts.reproj.max_iterations,
             exhaustive: self.opts.exhaustive,
             covariance: self.covariance,
+            vertical: self.opts.reproj.vertical,
         }
     }
 
@@ -32,11 +33,7 @@ impl Solver {
         mut all: Option<&mut Solutions>,
     ) -> Result<Solution, PnpError> {
         if let Some(k) = one_camera(p)? {
-            let camera = &p.rig.cameras()[k];
-            let mut central = Problem::pixels(p.world, p.pixels, camera);
-            if let Some(w) = p.weights {
-                central = central.weights(w);
-            }
+            let central = central_problem(p, k);
             let sol = self.solve_problem(&central, all.as_deref_mut())?;
             for s in all.into_iter().flatten() {
                 *s = in_rig(s, p.rig, k);
@@ -61,15 +58,24 @@ impl Solver {
                 (rk * t + tk).into(),
                 nalgebra::UnitQuaternion::from_matrix(&(rk * r)),
             );
-            let mut central = Problem::pixels(p.world, p.pixels, &p.rig.cameras()[k]);
-            if let Some(w) = p.weights {
-                central = central.weights(w);
-            }
-            let sol = self.refine(&central, &prior)?;
+            let sol = self.refine(&central_problem(p, k), &prior)?;
             return Ok(in_rig(&sol, p.rig, k));
         }
         generalized::refine_from(&self.rig_options(), p, (&r, &t))
     }
+}
+
+/// Camera `k`'s central problem of the observations of a rig problem (all in camera `k`), with
+/// the vertical in the camera's frame.
+pub(crate) fn central_problem<'a>(p: &RigInput<'a>, k: usize) -> Problem<'a> {
+    let mut central = Problem::pixels(p.world, p.pixels, &p.rig.cameras()[k]);
+    if let Some(w) = p.weights {
+        central = central.weights(w);
+    }
+    if let Some(g) = &p.gravity {
+        central = central.gravity(g.rotated(p.rig.pose(k).0));
+    }
+    central
 }
 
 /// A solution of camera `k`'s central problem (`x_cam = R_c X + t_c`) as the rig's pose:

@@ -152,31 +152,85 @@ pub fn lm_refine_projection(
     project: &dyn Fn(Point2<f64>) -> Point2<f64>,
 ) -> LmResult {
     lm_core(r0, t0, &|r, t, with_jacobian| {
-        let n = world.len();
-        let mut res = DVector::zeros(2 * n);
-        let mut jac = DMatrix::zeros(if with_jacobian { 2 * n } else { 0 }, 6);
-        for (i, (x, m)) in world.iter().zip(obs).enumerate() {
-            let q = r * x.coords;
-            let p = q + t;
-            let nrm = Point2::new(p.x / p.z, p.y / p.z);
-            let u = project(nrm);
-            res[2 * i] = u.x - m.x;
-            res[2 * i + 1] = u.y - m.y;
-            if with_jacobian {
-                let h = 1e-6 * nrm.coords.norm().max(1.0);
-                let dx = (project(nrm + nalgebra::Vector2::new(h, 0.0))
-                    - project(nrm - nalgebra::Vector2::new(h, 0.0)))
-                    / (2.0 * h);
-                let dy = (project(nrm + nalgebra::Vector2::new(0.0, h))
-                    - project(nrm - nalgebra::Vector2::new(0.0, h)))
-                    / (2.0 * h);
-                let jc = nalgebra::Matrix2::new(dx.x, dy.x, dx.y, dy.y);
-                let dn = nalgebra::Matrix2x3::new(1.0, 0.0, -nrm.x, 0.0, 1.0, -nrm.y) / p.z;
-                jacobian_rows(&mut jac, i, &(jc * dn), &q);
-            }
+        projection_residuals(world, obs, r, t, project, with_jacobian)
+    })
+}
+
+/// [`lm_refine_projection`] with a known vertical as a prior: three more residuals
+/// `sqrt(lambda) (R g_world - g_camera)` (Jacobian `-sqrt(lambda) [R g_world]x` in `w`), the
+/// maximum a posteriori pose of the library's `vertical` stage, minimised independently of it.
+/// The returned cost includes the prior's term.
+#[allow(clippy::too_many_arguments)]
+pub fn lm_refine_vertical(
+    world: &[Point3<f64>],
+    obs: &[Point2<f64>],
+    r0: &Matrix3<f64>,
+    t0: &Vector3<f64>,
+    project: &dyn Fn(Point2<f64>) -> Point2<f64>,
+    g_world: &Vector3<f64>,
+    g_camera: &Vector3<f64>,
+    lambda: f64,
+) -> LmResult {
+    let s = lambda.sqrt();
+    lm_core(r0, t0, &|r, t, with_jacobian| {
+        let (res, jac) = projection_residuals(world, obs, r, t, project, with_jacobian);
+        let m = res.len();
+        let mut res = res.resize_vertically(m + 3, 0.0);
+        let u = r * g_world;
+        let e = (u - g_camera) * s;
+        for k in 0..3 {
+            res[m + k] = e[k];
         }
+        let jac = if with_jacobian {
+            let mut jac = jac.resize_vertically(m + 3, 0.0);
+            let j = -u.cross_matrix() * s;
+            for a in 0..3 {
+                for b in 0..3 {
+                    jac[(m + a, b)] = j[(a, b)];
+                }
+            }
+            jac
+        } else {
+            jac
+        };
         (res, jac)
     })
+}
+
+/// The residuals `project(pi(R X + t)) - obs` and (`with_jacobian`) their Jacobian through
+/// `project` by central differences ([`lm_refine_projection`]).
+fn projection_residuals(
+    world: &[Point3<f64>],
+    obs: &[Point2<f64>],
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+    project: &dyn Fn(Point2<f64>) -> Point2<f64>,
+    with_jacobian: bool,
+) -> (DVector<f64>, DMatrix<f64>) {
+    let n = world.len();
+    let mut res = DVector::zeros(2 * n);
+    let mut jac = DMatrix::zeros(if with_jacobian { 2 * n } else { 0 }, 6);
+    for (i, (x, m)) in world.iter().zip(obs).enumerate() {
+        let q = r * x.coords;
+        let p = q + t;
+        let nrm = Point2::new(p.x / p.z, p.y / p.z);
+        let u = project(nrm);
+        res[2 * i] = u.x - m.x;
+        res[2 * i + 1] = u.y - m.y;
+        if with_jacobian {
+            let h = 1e-6 * nrm.coords.norm().max(1.0);
+            let dx = (project(nrm + nalgebra::Vector2::new(h, 0.0))
+                - project(nrm - nalgebra::Vector2::new(h, 0.0)))
+                / (2.0 * h);
+            let dy = (project(nrm + nalgebra::Vector2::new(0.0, h))
+                - project(nrm - nalgebra::Vector2::new(0.0, h)))
+                / (2.0 * h);
+            let jc = nalgebra::Matrix2::new(dx.x, dy.x, dx.y, dy.y);
+            let dn = nalgebra::Matrix2x3::new(1.0, 0.0, -nrm.x, 0.0, 1.0, -nrm.y) / p.z;
+            jacobian_rows(&mut jac, i, &(jc * dn), &q);
+        }
+    }
+    (res, jac)
 }
 
 /// Residuals and (optionally) their Jacobian at a pose.

@@ -11,12 +11,13 @@ use rand_core::SeedableRng;
 use rand_pcg::Pcg64;
 
 use super::chance;
-use super::score::sample3;
+use super::score::{sample2, sample3};
+use super::upright::Upright;
 use super::{needed_iterations, Ransac, RansacSolution, RansacStats, FINAL_STEPS, LO_STEPS};
 use crate::error::PnpError;
 use crate::generalized::{self, pixel_error2, refine_pixels, Rays, RigInput};
-use crate::numeric::gp3p::gp3p;
-use crate::problem::Problem;
+use crate::numeric::gp3p::{gp3p, Gp3pSolutions};
+use crate::solver::central_problem;
 use crate::Solver;
 
 /// Attempts to draw a sample whose rays are not all in one camera (when the rays span two or
@@ -46,11 +47,7 @@ impl Ransac {
         solver.check_loss()?;
         let one = generalized::one_camera(input)?;
         if let Some(k) = one {
-            let mut p = Problem::pixels(input.world, input.pixels, &input.rig.cameras()[k]);
-            if let Some(w) = input.weights {
-                p = p.weights(w);
-            }
-            let mut sol = self.estimate(solver, &p)?;
+            let mut sol = self.estimate(solver, &central_problem(input, k))?;
             sol.solution = crate::solver::in_rig(&sol.solution, input.rig, k);
             return Ok(sol);
         }
@@ -89,13 +86,22 @@ impl Ransac {
         };
         let mut best: Option<Scored> = None;
         let mut needed = f64::INFINITY;
+        // With a known vertical: samples of two rays, solved by up2p.
+        let upright = input.gravity.as_ref().map(Upright::new);
+        let size = if upright.is_some() { 2 } else { 3 };
         while stats.iterations < self.max_iterations
             && (stats.iterations < self.min_iterations || f64::from(stats.iterations) < needed)
         {
             stats.iterations += 1;
             let mut sample = None;
             for _ in 0..SPREAD_ATTEMPTS {
-                let Some(s) = sample3(&mut rng, m) else {
+                // A sample of two is `[a, b, b]` (its third ray the second's).
+                let drawn = if upright.is_some() {
+                    sample2(&mut rng, m).map(|[a, b]| [a, b, b])
+                } else {
+                    sample3(&mut rng, m)
+                };
+                let Some(s) = drawn else {
                     break;
                 };
                 let cam = |i: usize| rays.rays[s[i]].camera;
@@ -110,7 +116,18 @@ impl Ransac {
             let world: [Point3<f64>; 3] = s.map(|k| input.world[rays.rays[k].index]);
             let centres = s.map(|k| Point3::from(rays.rays[k].centre));
             let dirs = s.map(|k| rays.rays[k].direction);
-            for pose in gp3p(&world, &centres, &dirs) {
+            let poses = if let Some(up) = &upright {
+                let mut poses = Gp3pSolutions::new();
+                poses.extend(up.poses(
+                    [&world[0], &world[1]],
+                    [&centres[0], &centres[1]],
+                    [&dirs[0], &dirs[1]],
+                ));
+                poses
+            } else {
+                gp3p(&world, &centres, &dirs)
+            };
+            for pose in poses {
                 stats.hypotheses += 1;
                 let bound = best.map_or(f64::INFINITY, |b| b.cost);
                 let Some(mut cand) = score(&pose.rotation, &pose.translation, bound) else {
@@ -129,7 +146,7 @@ impl Ransac {
                     }
                 }
                 best = Some(cand);
-                needed = needed_iterations(self.confidence, cand.inliers as f64 / m as f64);
+                needed = needed_iterations(self.confidence, cand.inliers as f64 / m as f64, size);
             }
         }
         let no_consensus = PnpError::NoConsensus {
@@ -195,7 +212,9 @@ impl Ransac {
             weights: Some(&weights),
             ..*input
         };
-        let mut solution = generalized::refine_from(&solver.rig_options(), &masked, (&r, &t))?;
+        // With a known vertical, on to the maximum a posteriori pose (the `vertical` stage).
+        let opts = solver.with_gravity(input.gravity).rig_options();
+        let mut solution = generalized::refine_from(&opts, &masked, (&r, &t))?;
         // The mask of the returned pose.
         let final_rays = inlier_mask(
             &rays,

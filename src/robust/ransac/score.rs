@@ -7,7 +7,7 @@ use rand_pcg::Pcg64;
 
 use super::{MIN_FIT_POINTS, SAMPLE_ATTEMPTS, SPRT_A};
 use crate::pipeline::PixelInputs;
-use crate::{Solution, Solver};
+use crate::{PnpError, Solution, Solver};
 
 /// A hypothesis with its MSAC cost.
 #[derive(Clone, Copy, Debug)]
@@ -133,6 +133,19 @@ impl ScoringSet<'_> {
         mask: &mut [bool],
         buf: &mut FitBuffers,
     ) -> Option<Solution> {
+        self.fit_result(solver, r, t, th2, mask, buf)?.ok()
+    }
+
+    /// [`ScoringSet::fit`] with the solve's error: `None` for too few inliers.
+    pub(super) fn fit_result(
+        &self,
+        solver: &Solver,
+        r: &Matrix3<f64>,
+        t: &Vector3<f64>,
+        th2: f64,
+        mask: &mut [bool],
+        buf: &mut FitBuffers,
+    ) -> Option<Result<Solution, PnpError>> {
         buf.clear();
         for (i, m) in mask.iter_mut().enumerate() {
             *m = self.sq_err(r, t, i) < th2;
@@ -156,16 +169,14 @@ impl ScoringSet<'_> {
             weights: px.weights.map(|_| &buf.user_weights[..]),
             ..px
         });
-        solver
-            .solve_with_row_weights(
-                &buf.world,
-                &buf.image,
-                Some(&buf.weights),
-                self.rows,
-                px.as_ref(),
-                None,
-            )
-            .ok()
+        Some(solver.solve_with_row_weights(
+            &buf.world,
+            &buf.image,
+            Some(&buf.weights),
+            self.rows,
+            px.as_ref(),
+            None,
+        ))
     }
 }
 
@@ -194,6 +205,22 @@ impl FitBuffers {
 #[inline]
 pub(crate) fn index(rng: &mut Pcg64, n: usize) -> usize {
     ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
+}
+
+/// Two distinct indices in `0..n`, or `None` (n < 2, or the bounded attempts ran out).
+pub(super) fn sample2(rng: &mut Pcg64, n: usize) -> Option<[usize; 2]> {
+    if n < 2 {
+        return None;
+    }
+    let a = index(rng, n);
+    let mut b = index(rng, n);
+    for _ in 0..SAMPLE_ATTEMPTS {
+        if b != a {
+            break;
+        }
+        b = index(rng, n);
+    }
+    (a != b).then_some([a, b])
 }
 
 /// Three distinct indices in `0..n`, or `None` (n < 3, or the bounded attempts ran out).
