@@ -2,7 +2,7 @@
 // Refresh the committed copy with `cargo run -p eopnp-codegen -- emit generated`.
 
 /// Operation counts of every generated kernel, in manifest order.
-pub const ALL_KERNEL_OPS: [&KernelOps; 24] = [
+pub const ALL_KERNEL_OPS: [&KernelOps; 26] = [
     &COST_COEFFICIENTS_OPS,
     &COST_OPS,
     &COST_GRADIENT_OPS,
@@ -27,4 +27,6 @@ pub const ALL_KERNEL_OPS: [&KernelOps; 24] = [
     &DISTORTION_THIN_PRISM_OPS,
     &GP3P_ELIMINATION_OPS,
     &UP2P_QUADRATIC_OPS,
+    &P4PF_QUADRICS_OPS,
+    &E3Q3_OCTIC_OPS,
 ];

@@ -106,5 +106,7 @@ mod generated {
     include!(concat!(env!("OUT_DIR"), "/distortion_thin_prism.rs"));
     include!(concat!(env!("OUT_DIR"), "/gp3p_elimination.rs"));
     include!(concat!(env!("OUT_DIR"), "/up2p_quadratic.rs"));
+    include!(concat!(env!("OUT_DIR"), "/p4pf_quadrics.rs"));
+    include!(concat!(env!("OUT_DIR"), "/e3q3_octic.rs"));
     include!(concat!(env!("OUT_DIR"), "/index.rs"));
 }

@@ -113,6 +113,12 @@ pub mod internals {
         pub use crate::numeric::up2p::*;
     }
 
+    /// The four-point pose with unknown focal length, the minimal solver of RANSAC when the
+    /// focal length is unknown (`src/numeric/p4pf.rs`).
+    pub mod p4pf {
+        pub use crate::numeric::p4pf::*;
+    }
+
     /// The error metrics of docs/algorithm.md section 1 (the paper's): the largest angle
     /// between corresponding columns of two rotations, in degrees, and the translation error
     /// in percent.

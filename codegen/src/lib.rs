@@ -65,6 +65,8 @@ pub const KERNELS: &[(&str, KernelDef)] = &[
     ("distortion_thin_prism", || camera::rational(true)),
     ("gp3p_elimination", defs::gp3p::gp3p_elimination),
     ("up2p_quadratic", defs::up2p::up2p_quadratic),
+    ("p4pf_quadrics", defs::p4pf::p4pf_quadrics),
+    ("e3q3_octic", defs::p4pf::e3q3_octic),
 ];
 
 /// Renders every kernel: `(file name, contents)`, plus `index.rs` listing their op counts.

@@ -451,3 +451,132 @@ fn up2p_quadratic_vanishes_at_the_true_rotation() {
         );
     }
 }
+
+/// `e3q3_octic` vanishes exactly at a planted solution: rational relations `x^2 = A1 x + B1 y +
+/// C1`, `xy = ...`, `y^2 = ...` (random rational `A_i`, `B_i` and the `z`, `z^2` coefficients
+/// of `C_i`, the constant terms set so that each holds at a rational `(x*, y*, z*)`): the octic
+/// is 0 at `z*` and `(x*, y*, 1)` is a null vector of `L(z*)`.
+#[test]
+fn e3q3_octic_vanishes_at_a_planted_solution() {
+    let k = kernel("e3q3_octic");
+    let mut rng = Lcg(17);
+    let zero = Q::from_integer(0);
+    for trial in 0..10 {
+        let (x, y, z) = (rng.next_q(), rng.next_q(), rng.next_q());
+        let mut m: Vec<Q> = Vec::new();
+        for lhs in [x * x, x * y, y * y] {
+            let r: Vec<Q> = (0..7).map(|_| rng.next_q()).collect();
+            let rhs_rest = (r[0] + r[1] * z) * x + (r[2] + r[3] * z) * y + r[5] * z + r[6] * z * z;
+            let mut r = r;
+            r[4] = lhs - rhs_rest;
+            m.extend(r);
+        }
+        let vars: Vec<Var> = k
+            .inputs
+            .iter()
+            .flat_map(|i| i.vars.iter().copied())
+            .collect();
+        let point: BTreeMap<Var, Q> = vars.into_iter().zip(m).collect();
+        let out = k.eval_structured(&|v| point[&v]);
+        let horner = |c: &[Q]| c.iter().rev().fold(zero, |acc, ci| acc * z + *ci);
+        assert_eq!(horner(&out[0..9]), zero, "trial {trial}: octic(z*)");
+        assert!(
+            out[0..9].iter().any(|c| *c != zero),
+            "trial {trial}: octic is 0"
+        );
+        let lens = [3, 3, 4, 3, 3, 4, 4, 4, 5];
+        let mut at = 9;
+        let mut l = [zero; 9];
+        for (n, len) in lens.into_iter().enumerate() {
+            l[n] = horner(&out[at..at + len]);
+            at += len;
+        }
+        for r in 0..3 {
+            let v = l[3 * r] * x + l[3 * r + 1] * y + l[3 * r + 2];
+            assert_eq!(v, zero, "trial {trial}: row {r} of L(z*) (x*, y*, 1)");
+        }
+    }
+}
+
+/// `p4pf_quadrics` vanish exactly at the true depth ratios of a rational camera: a rational
+/// rotation (Cayley, rational parameters), translation, focal length and world points, so the
+/// image points, `G = (A^T A)^-1` and the ratios `l_i = z_i / z_1` are rational; each quadric is
+/// 0 at `(l_2 - 1, l_3 - 1, l_4 - 1)`.
+#[test]
+fn p4pf_quadrics_vanish_at_the_true_depth_ratios() {
+    let k = kernel("p4pf_quadrics");
+    let mut rng = Lcg(23);
+    let zero = Q::from_integer(0);
+    let one = Q::from_integer(1);
+    let mut checked = 0;
+    // Small integers (the rationals of the instance stay within i128).
+    let int = |rng: &mut Lcg| Q::from_integer(*rng.next_q().numer() % 3);
+    for _ in 0..40 {
+        let s = [int(&mut rng), int(&mut rng), int(&mut rng)];
+        let n2 = one + s[0] * s[0] + s[1] * s[1] + s[2] * s[2];
+        // Cayley: R = ((1 - s.s) I + 2 s s^T + 2 [s]x) / (1 + s.s).
+        let d = one - (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+        let two = Q::from_integer(2);
+        let r: [[Q; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let diag = if i == j { d } else { zero };
+                let cross = match (i, j) {
+                    (0, 1) => -s[2],
+                    (0, 2) => s[1],
+                    (1, 0) => s[2],
+                    (1, 2) => -s[0],
+                    (2, 0) => -s[1],
+                    (2, 1) => s[0],
+                    _ => zero,
+                };
+                (diag + two * s[i] * s[j] + two * cross) / n2
+            })
+        });
+        let t = [int(&mut rng), int(&mut rng), Q::from_integer(20)];
+        let f = Q::from_integer(7);
+        let world: Vec<[Q; 3]> = (0..4)
+            .map(|_| [int(&mut rng), int(&mut rng), int(&mut rng)])
+            .collect();
+        let cam: Vec<[Q; 3]> = world
+            .iter()
+            .map(|x| {
+                std::array::from_fn(|i| r[i][0] * x[0] + r[i][1] * x[1] + r[i][2] * x[2] + t[i])
+            })
+            .collect();
+        if cam.iter().any(|c| c[2] == zero) {
+            continue;
+        }
+        let a: [[Q; 3]; 3] =
+            std::array::from_fn(|i| std::array::from_fn(|j| world[j + 1][i] - world[0][i]));
+        let ata: [[Q; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).fold(zero, |acc, kk| acc + a[kk][i] * a[kk][j]))
+        });
+        let Some(g) = inv3(&ata) else {
+            continue;
+        };
+        let mut values: Vec<Q> = Vec::new();
+        for c in &cam {
+            values.push(f * c[0] / c[2]);
+            values.push(f * c[1] / c[2]);
+        }
+        values.extend([g[0][0], g[0][1], g[0][2], g[1][1], g[1][2], g[2][2]]);
+        let vars: Vec<Var> = k
+            .inputs
+            .iter()
+            .flat_map(|i| i.vars.iter().copied())
+            .collect();
+        let point: BTreeMap<Var, Q> = vars.into_iter().zip(values).collect();
+        let out = k.eval_structured(&|v| point[&v]);
+        let mu = [1, 2, 3].map(|i| cam[i][2] / cam[0][2] - one);
+        let terms = |x: Q, y: Q, z: Q| [x * x, x * y, y * y, x * z, y * z, z * z, x, y, z, one];
+        for n in 0..4 {
+            let v = terms(mu[0], mu[1], mu[2])
+                .iter()
+                .zip(&out[10 * n..10 * n + 10])
+                .fold(zero, |acc, (t, c)| acc + *t * *c);
+            assert_eq!(v, zero, "quadric {n} at the true ratios");
+        }
+        checked += 1;
+    }
+    assert!(checked >= 20, "{checked} instances");
+}

@@ -3,5 +3,6 @@
 pub mod camera;
 pub mod cost;
 pub mod gp3p;
+pub mod p4pf;
 pub mod resultant;
 pub mod up2p;

@@ -6,13 +6,13 @@
 //! (in units of the world triangle's longest side, the solver's scaled units), each through a
 //! world point 0.2 to 3 of those units away, the rig at any rotation.
 
+use super::companion_roots;
 use crate::reference::{det_with_bound, hadamard};
 use crate::report::{Measurement, Tracker};
 use crate::strategies as st;
 use eopnp::internals::gp3p::gp3p;
 use eopnp::internals::kernels as k;
 use nalgebra::{DMatrix, Matrix3, Point3, Vector3};
-use num_complex::Complex;
 
 /// A random instance: the coefficients `e` of the three distance quadrics (the kernel's input)
 /// and the true depths; also the geometry, for the solver.
@@ -204,38 +204,6 @@ pub fn gp3p_known_root(n: usize) -> Measurement {
         });
     }
     t.finish()
-}
-
-/// The real roots of `c[0] + c[1] x + ...` (degree <= 8, leading coefficient non-zero) as
-/// eigenvalues of the companion matrix (nalgebra's Schur decomposition), and the smallest
-/// distance of any root, real or complex, to the real axis: real means `|Im z| <= 1e-7 (1 + |z|)`.
-fn companion_roots(c: &[f64]) -> (Vec<f64>, f64) {
-    let deg = c.iter().rposition(|x| *x != 0.0).unwrap_or(0);
-    if deg == 0 {
-        return (Vec::new(), f64::INFINITY);
-    }
-    let lead = c[deg];
-    let m = DMatrix::from_fn(deg, deg, |i, j| {
-        if i == 0 {
-            -c[deg - 1 - j] / lead
-        } else if i == j + 1 {
-            1.0
-        } else {
-            0.0
-        }
-    });
-    let eig: Vec<Complex<f64>> = m.complex_eigenvalues().iter().copied().collect();
-    let mut real = Vec::new();
-    let mut closest_complex = f64::INFINITY;
-    for z in eig {
-        let tol = 1e-7 * (1.0 + z.norm());
-        if z.im.abs() <= tol {
-            real.push(z.re);
-        } else {
-            closest_complex = closest_complex.min(z.im.abs() / (1.0 + z.norm()));
-        }
-    }
-    (real, closest_complex)
 }
 
 /// The solver: every pose puts the three points on their rays, in front, to 1e-10 (the sine of

@@ -21,17 +21,20 @@
 //!
 //! One file per kernel family: `cost.rs` (the cost's coefficients, value, gradient and Hessian),
 //! `local_model.rs` (`newton`'s local model and its affine part for the generalized cost), `nullspace.rs` (the cases' cubics, resultants and
-//! determinants), `gp3p.rs` (the generalized three-point pose), `up2p.rs` (the upright two-point pose); [`all`] lists every check in
+//! determinants), `gp3p.rs` (the generalized three-point pose), `up2p.rs` (the upright two-point pose),
+//! `p4pf.rs` (the four-point pose with unknown focal length and its three-quadric elimination); [`all`] lists every check in
 //! report order.
 
 use crate::reference::gamma;
 use crate::report::Measurement;
-use nalgebra::Matrix3;
+use nalgebra::{DMatrix, Matrix3};
+use num_complex::Complex;
 
 mod cost;
 mod gp3p;
 mod local_model;
 mod nullspace;
+mod p4pf;
 mod up2p;
 
 pub use cost::{cost_coefficients, cost_value, gradient, hessian, Against, Variant};
@@ -40,6 +43,9 @@ pub use local_model::{hessian_directions, local_affine, local_model, LocalAgains
 pub use nullspace::{
     case2_cubics, case2_known_root, case2_resultant, case3_cubics, case3_known_root, case3_quartic,
     case3_resultant, case4_determinant, case4_known_root, case4_known_system, case4_matrix,
+};
+pub use p4pf::{
+    e3q3_determinant, e3q3_known_root, e3q3_solutions, p4pf_quadrics, p4pf_solutions, N_P4PF,
 };
 pub use up2p::{up2p_determinant, up2p_known_root, up2p_solutions};
 
@@ -82,6 +88,38 @@ fn poses_on_rays(
         .iter()
         .any(|s| (s.rotation - r).norm() + (s.translation - t).norm() / (1.0 + t.norm()) < 1e-8);
     (worst, found)
+}
+
+/// The real roots of `c[0] + c[1] x + ...` (degree <= 8, leading coefficient non-zero) as
+/// eigenvalues of the companion matrix (nalgebra's Schur decomposition), and the smallest
+/// distance of any root, real or complex, to the real axis: real means `|Im z| <= 1e-7 (1 + |z|)`.
+pub(super) fn companion_roots(c: &[f64]) -> (Vec<f64>, f64) {
+    let deg = c.iter().rposition(|x| *x != 0.0).unwrap_or(0);
+    if deg == 0 {
+        return (Vec::new(), f64::INFINITY);
+    }
+    let lead = c[deg];
+    let m = DMatrix::from_fn(deg, deg, |i, j| {
+        if i == 0 {
+            -c[deg - 1 - j] / lead
+        } else if i == j + 1 {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let eig: Vec<Complex<f64>> = m.complex_eigenvalues().iter().copied().collect();
+    let mut real = Vec::new();
+    let mut closest_complex = f64::INFINITY;
+    for z in eig {
+        let tol = 1e-7 * (1.0 + z.norm());
+        if z.im.abs() <= tol {
+            real.push(z.re);
+        } else {
+            closest_complex = closest_complex.min(z.im.abs() / (1.0 + z.norm()));
+        }
+    }
+    (real, closest_complex)
 }
 
 /// Symmetric 3 x 3 from `[H00, H01, H02, H11, H12, H22]`.
@@ -160,5 +198,10 @@ pub fn all() -> Vec<Measurement> {
     out.push(up2p_determinant(N_UP2P));
     out.push(up2p_known_root(N_UP2P));
     out.push(up2p_solutions(N_UP2P));
+    out.push(p4pf_quadrics(N_P4PF));
+    out.push(e3q3_determinant(N_P4PF));
+    out.push(e3q3_known_root(N_P4PF));
+    out.push(e3q3_solutions(N_P4PF));
+    out.push(p4pf_solutions(N_P4PF));
     out
 }
