@@ -220,6 +220,12 @@ impl fmt::Display for PnpError {
                 "the loss scale is out of range: Huber and Cauchy take a finite scale s > 0 \
                  whose square and its reciprocal are normal numbers (about 1e-154 < s < 1e154)",
             ),
+            PnpError::InvalidOption {
+                option: "unknown_focal",
+            } => f.write_str(
+                "an unknown focal length is estimated only for pixels through one camera \
+                 (Problem::pixels), without a known vertical, within a range 0 < min < max",
+            ),
             PnpError::InvalidOption { option: "gravity" } => f.write_str(
                 "the gravity direction is out of range: its two directions must be finite and \
                  non-zero, its sigma_deg finite and > 0",

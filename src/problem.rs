@@ -46,6 +46,34 @@ pub struct Problem<'a> {
     pub(crate) observations: Observations<'a>,
     pub(crate) weights: Option<&'a [f64]>,
     pub(crate) gravity: Option<Gravity>,
+    pub(crate) unknown_focal: Option<FocalRange>,
+}
+
+/// Where an unknown focal length is sought ([`Problem::unknown_focal`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum FocalRange {
+    /// Between these multiples of the camera's focal length.
+    Relative(f64, f64),
+    /// Between these focal lengths, pixels.
+    Pixels(f64, f64),
+}
+
+impl FocalRange {
+    /// The range as multiples of a camera whose (first) focal length is `f`, or
+    /// `InvalidOption("unknown_focal")` unless `0 < lo < hi` are finite.
+    pub(crate) fn scales(self, f: f64) -> Result<(f64, f64), crate::PnpError> {
+        let (lo, hi) = match self {
+            FocalRange::Relative(lo, hi) => (lo, hi),
+            FocalRange::Pixels(lo, hi) => (lo / f, hi / f),
+        };
+        if lo > 0.0 && hi > lo && hi.is_finite() {
+            Ok((lo, hi))
+        } else {
+            Err(crate::PnpError::InvalidOption {
+                option: "unknown_focal",
+            })
+        }
+    }
 }
 
 /// The observations of a [`Problem`].
@@ -84,6 +112,7 @@ impl<'a> Problem<'a> {
             },
             weights: None,
             gravity: None,
+            unknown_focal: None,
         }
     }
 
@@ -100,6 +129,7 @@ impl<'a> Problem<'a> {
             },
             weights: None,
             gravity: None,
+            unknown_focal: None,
         }
     }
 
@@ -159,6 +189,7 @@ impl<'a> Problem<'a> {
             },
             weights: None,
             gravity: None,
+            unknown_focal: None,
         }
     }
 
@@ -177,6 +208,50 @@ impl<'a> Problem<'a> {
     #[must_use]
     pub fn gravity(mut self, gravity: Gravity) -> Self {
         self.gravity = Some(gravity);
+        self
+    }
+
+    /// The camera's focal length is unknown (pixels through a camera only, [`Problem::pixels`]):
+    /// it is estimated with the pose, between a tenth and ten times the camera's, which is the
+    /// starting guess (square pixels: a camera's two focal lengths scaled alike; the principal
+    /// point and the distortion as given). The solution carries it in
+    /// [`Solution::focal`](crate::Solution::focal); the pose and focal length minimise the pixel
+    /// error together (docs/algorithm.md, `refine_focal`). Normalised or rig input with it is
+    /// [`crate::PnpError::InvalidOption`] (`"unknown_focal"`).
+    ///
+    /// ```
+    /// use eopnp::camera::Camera;
+    /// use eopnp::{Problem, Solver};
+    /// use nalgebra::{Point2, Point3, Vector3};
+    ///
+    /// let t = Vector3::new(0.1, -0.2, 6.0);
+    /// let world: Vec<Point3<f64>> = (0..12)
+    ///     .map(|i| Point3::new((i % 4) as f64 - 1.5, (i % 3) as f64 - 1.0, (i % 5) as f64 * 0.5 - 1.0))
+    ///     .collect();
+    /// let truth = Camera::pinhole(1200.0, 1200.0, 320.0, 240.0)?;
+    /// let pixels: Vec<Point2<f64>> = world
+    ///     .iter()
+    ///     .map(|x| { let p = x.coords + t; truth.project(Point2::new(p.x / p.z, p.y / p.z)) })
+    ///     .collect();
+    /// // The camera as far as known: the focal length a guess, 800 px.
+    /// let guess = Camera::pinhole(800.0, 800.0, 320.0, 240.0)?;
+    /// let sol = Solver::default().solve(&Problem::pixels(&world, &pixels, &guess).unknown_focal())?;
+    /// let (fx, _) = sol.focal.unwrap();
+    /// assert!((fx - 1200.0).abs() < 1e-6);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn unknown_focal(mut self) -> Self {
+        self.unknown_focal = Some(FocalRange::Relative(0.1, 10.0));
+        self
+    }
+
+    /// As [`Problem::unknown_focal`], the focal length sought between `min_px` and `max_px`
+    /// (the camera's first focal length's range; finite, `0 < min_px < max_px`, else
+    /// [`crate::PnpError::InvalidOption`] (`"unknown_focal"`) at solve time).
+    #[must_use]
+    pub fn unknown_focal_within(mut self, min_px: f64, max_px: f64) -> Self {
+        self.unknown_focal = Some(FocalRange::Pixels(min_px, max_px));
         self
     }
 

@@ -238,6 +238,17 @@ impl Camera {
         }
     }
 
+    /// This camera with its focal length(s) multiplied by `scale` (finite and positive: the
+    /// caller's promise), everything else equal.
+    pub(crate) fn with_focal_scale(&self, scale: f64) -> Camera {
+        let mut c = self.clone();
+        c.params[0] *= scale;
+        if !self.model.single_focal() {
+            c.params[1] *= scale;
+        }
+        c
+    }
+
     /// Principal point `(cx, cy)` in pixels.
     #[must_use]
     pub fn principal_point(&self) -> (f64, f64) {

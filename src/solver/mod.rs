@@ -15,6 +15,7 @@ use crate::pipeline::{
 };
 use crate::problem::{Observations, Problem};
 
+mod focal;
 mod rig;
 mod undistort;
 
@@ -316,6 +317,10 @@ impl Solver {
     ) -> Result<Solution, PnpError> {
         let this = self.for_problem(problem);
         let (world, weights) = (problem.world, problem.weights);
+        if let Some(range) = problem.unknown_focal {
+            let (points, camera) = focal_input(problem)?;
+            return this.refine_pixels_focal(world, points, camera, weights, range, initial);
+        }
         match problem.observations {
             Observations::Normalised { points, .. } => {
                 this.refine_normalised(world, points, weights, initial)
@@ -356,6 +361,15 @@ impl Solver {
     ) -> Result<Solution, PnpError> {
         let this = self.for_problem(problem);
         let (world, weights) = (problem.world, problem.weights);
+        if let Some(range) = problem.unknown_focal {
+            let (points, camera) = focal_input(problem)?;
+            let sol = this.pixels_focal(world, points, camera, weights, range)?;
+            if let Some(all) = all {
+                all.clear();
+                all.push(sol);
+            }
+            return Ok(sol);
+        }
         match problem.observations {
             Observations::Normalised { points, .. } => this.normalised(world, points, weights, all),
             Observations::Pixels { points, camera } => {
@@ -631,6 +645,22 @@ fn rig_problem<'a>(
         rig,
         weights,
         gravity,
+    }
+}
+
+/// The pixels and camera of a problem with an unknown focal length, or
+/// [`PnpError::InvalidOption`] (`"unknown_focal"`): only pixels through a camera, without a known
+/// vertical, can have one.
+pub(crate) fn focal_input<'a>(
+    problem: &Problem<'a>,
+) -> Result<(&'a [Point2<f64>], &'a Camera), PnpError> {
+    match problem.observations {
+        Observations::Pixels { points, camera } if problem.gravity.is_none() => {
+            Ok((points, camera))
+        }
+        _ => Err(PnpError::InvalidOption {
+            option: "unknown_focal",
+        }),
     }
 }
 

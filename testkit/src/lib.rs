@@ -16,8 +16,8 @@ mod rotation;
 mod seed;
 
 pub use lm::{
-    lm_refine, lm_refine_projection, lm_refine_vertical, reprojection_cost, Camera, LmResult,
-    NORMALISED, PIXEL_CAMERA,
+    lm_refine, lm_refine_focal, lm_refine_projection, lm_refine_vertical, reprojection_cost,
+    Camera, LmFocalResult, LmResult, NORMALISED, PIXEL_CAMERA,
 };
 pub use metrics::{max_of, mean, median, pose_of, rot_err_deg, trans_err_pct, trans_err_rel};
 pub use problem::{Problem, ProblemOptions, RotationKind, Scene};

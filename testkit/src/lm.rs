@@ -352,3 +352,110 @@ fn lm_core(r0: &Matrix3<f64>, t0: &Vector3<f64>, resjac: &ResidualFn<'_>) -> LmR
         converged,
     }
 }
+
+/// Output of [`lm_refine_focal`].
+#[derive(Clone, Copy, Debug)]
+pub struct LmFocalResult {
+    /// Refined rotation.
+    pub r: Matrix3<f64>,
+    /// Refined translation.
+    pub t: Vector3<f64>,
+    /// Refined focal length.
+    pub f: f64,
+    /// Final sum of squared pixel residuals.
+    pub cost: f64,
+    /// Iterations.
+    pub iterations: usize,
+}
+
+/// Levenberg-Marquardt over the pose and the focal length of a pinhole camera with principal
+/// point `c` (square pixels): residuals `f (x / z, y / z) + c - obs`, `(x, y, z) = R X + t`,
+/// parameters `R := Exp(w) R`, `t := t + dt`, `f := f + df`, Marquardt's scaling by the
+/// Jacobian's column norms, each step solved by the SVD of the augmented least-squares system;
+/// stops on a relative step or cost decrease below 1e-14, or after 500 iterations. Dense and
+/// independent of the library's `refine_focal`: the reference of the unknown-focal solve.
+pub fn lm_refine_focal(
+    world: &[Point3<f64>],
+    obs: &[Point2<f64>],
+    r0: &Matrix3<f64>,
+    t0: &Vector3<f64>,
+    f0: f64,
+    c: Point2<f64>,
+) -> LmFocalResult {
+    let n = world.len();
+    let eval = |r: &Matrix3<f64>, t: &Vector3<f64>, f: f64, with_jac: bool| {
+        let mut res = DVector::zeros(2 * n);
+        let mut jac = DMatrix::zeros(if with_jac { 2 * n } else { 0 }, 7);
+        for (i, (x, m)) in world.iter().zip(obs).enumerate() {
+            let q = r * x.coords;
+            let p = q + t;
+            res[2 * i] = f * p.x / p.z + c.x - m.x;
+            res[2 * i + 1] = f * p.y / p.z + c.y - m.y;
+            if with_jac {
+                let dp = nalgebra::Matrix2x3::new(1.0, 0.0, -p.x / p.z, 0.0, 1.0, -p.y / p.z)
+                    * (f / p.z);
+                let dw = -(dp * q.cross_matrix());
+                for k in 0..3 {
+                    jac[(2 * i, k)] = dw[(0, k)];
+                    jac[(2 * i + 1, k)] = dw[(1, k)];
+                    jac[(2 * i, 3 + k)] = dp[(0, k)];
+                    jac[(2 * i + 1, 3 + k)] = dp[(1, k)];
+                }
+                jac[(2 * i, 6)] = p.x / p.z;
+                jac[(2 * i + 1, 6)] = p.y / p.z;
+            }
+        }
+        (res, jac)
+    };
+    let (mut r, mut t, mut f) = (*r0, *t0, f0);
+    let (mut res, mut jac) = eval(&r, &t, f, true);
+    let mut cost = res.norm_squared();
+    let mut lam: f64 = 1e-3;
+    let mut iterations = 0;
+    for it in 1..=500 {
+        iterations = it;
+        let diag: Vec<f64> = (0..7).map(|k| jac.column(k).norm().max(1e-300)).collect();
+        let m = jac.nrows();
+        let mut aug = DMatrix::zeros(m + 7, 7);
+        aug.view_mut((0, 0), (m, 7)).copy_from(&jac);
+        let mut rhs = DVector::zeros(m + 7);
+        rhs.rows_mut(0, m).copy_from(&(-&res));
+        for k in 0..7 {
+            aug[(m + k, k)] = lam.sqrt() * diag[k];
+        }
+        let Ok(delta) = aug.svd(true, true).solve(&rhs, 0.0) else {
+            break;
+        };
+        let r_new = exp_so3(&Vector3::new(delta[0], delta[1], delta[2])) * r;
+        let t_new = t + Vector3::new(delta[3], delta[4], delta[5]);
+        let f_new = f + delta[6];
+        let (res_new, _) = eval(&r_new, &t_new, f_new, false);
+        let cost_new = res_new.norm_squared();
+        let step = (0..7)
+            .map(|k| (diag[k] * delta[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if cost_new.is_finite() && cost_new < cost {
+            let small = cost - cost_new <= 1e-14 * cost;
+            (r, t, f) = (r_new, t_new, f_new);
+            let (rs, jc) = eval(&r, &t, f, true);
+            (res, jac, cost) = (rs, jc, cost_new);
+            lam = (lam / 3.0).max(1e-15);
+            if small || step <= 1e-14 * cost.sqrt().max(1e-300) {
+                break;
+            }
+        } else {
+            lam *= 4.0;
+            if lam > 1e20 {
+                break;
+            }
+        }
+    }
+    LmFocalResult {
+        r,
+        t,
+        f,
+        cost,
+        iterations,
+    }
+}

@@ -1,0 +1,268 @@
+//! Solves with an unknown focal length ([`crate::Problem::unknown_focal`]): the focal length and
+//! the pose that minimise the pixel error together.
+//!
+//! The search (docs/algorithm.md, `refine_focal`): P4Pf ([`crate::numeric::p4pf`]) on
+//! [`SUBSETS`] four-point subsets spread over the correspondences gives candidate focal lengths,
+//! each scored by its hypothesis' pixel cost on every correspondence; the best
+//! [`STARTS`] - 1 of them within the range, and the camera's own focal length, each start a
+//! full solve at that focal length (EOPnP and the maximum-likelihood refinement: the global pose
+//! for it), and `refine_focal` runs from each to a minimum over pose and focal length together.
+//! The lowest wins.
+
+use nalgebra::{Isometry3, Matrix3, Point2, Point3, Vector3};
+
+use super::Solver;
+use crate::camera::Camera;
+use crate::error::PnpError;
+use crate::numeric::p4pf::p4pf;
+use crate::pipeline::refine_focal::{refine_focal, FocalInputs, FocalOutcome};
+use crate::pipeline::Solution;
+use crate::problem::{FocalRange, Problem};
+
+/// Four-point subsets tried by P4Pf.
+const SUBSETS: usize = 12;
+/// Starts refined over pose and focal length: the camera's focal length and the best of the
+/// other candidates.
+const STARTS: usize = 4;
+/// A geometric grid of focal scales within the range, each a candidate scored by the cost of
+/// the solve at it: P4Pf's hypotheses from four noisy points can all miss, as with a narrow
+/// field of view, where the perspective that fixes the focal length is faint.
+const GRID: usize = 7;
+
+impl Solver {
+    /// The solve of pixels through `camera` with its focal length unknown, in `range`.
+    pub(super) fn pixels_focal(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        camera: &Camera,
+        weights: Option<&[f64]>,
+        range: FocalRange,
+    ) -> Result<Solution, PnpError> {
+        let (f0, _) = camera.focal_lengths();
+        let (lo, hi) = range.scales(f0)?;
+        // The inputs checked (and the solve at the camera's focal length, one of the starts).
+        let mut p = Problem::pixels(world, pixels, camera);
+        if let Some(w) = weights {
+            p = p.weights(w);
+        }
+        let first = self.solve(&p)?;
+        self.finish_focal(world, pixels, camera, weights, (lo, hi), first, true)
+    }
+
+    /// [`Solver::refine`] of pixels through `camera` with its focal length unknown: the pose
+    /// refined from `initial` at the camera's focal length, then over pose and focal length.
+    pub(super) fn refine_pixels_focal(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        camera: &Camera,
+        weights: Option<&[f64]>,
+        range: FocalRange,
+        initial: &Isometry3<f64>,
+    ) -> Result<Solution, PnpError> {
+        let (f0, _) = camera.focal_lengths();
+        let (lo, hi) = range.scales(f0)?;
+        let mut p = Problem::pixels(world, pixels, camera);
+        if let Some(w) = weights {
+            p = p.weights(w);
+        }
+        let first = self.refine(&p, initial)?;
+        self.finish_focal(world, pixels, camera, weights, (lo, hi), first, false)
+    }
+
+    /// From `first`, the solution at the camera's focal length: with `search`, the other starts
+    /// (module docs); `refine_focal` from each, the lowest within `(lo, hi)` as the solution.
+    #[allow(clippy::too_many_arguments)]
+    fn finish_focal(
+        &self,
+        world: &[Point3<f64>],
+        pixels: &[Point2<f64>],
+        camera: &Camera,
+        weights: Option<&[f64]>,
+        (lo, hi): (f64, f64),
+        first: Solution,
+        search: bool,
+    ) -> Result<Solution, PnpError> {
+        let plain = |scale: f64| -> Result<Solution, PnpError> {
+            let cam = camera.with_focal_scale(scale);
+            let mut p = Problem::pixels(world, pixels, &cam);
+            if let Some(w) = weights {
+                p = p.weights(w);
+            }
+            self.solve(&p)
+        };
+        // The candidates: P4Pf's best few, and the grid, each scored by the solve at it.
+        let mut scored: Vec<(f64, f64, Solution)> = Vec::new();
+        if search {
+            let mut scales: Vec<f64> = candidates(world, pixels, camera, weights, (lo, hi))
+                .into_iter()
+                .take(STARTS)
+                .collect();
+            let (llo, lhi) = (lo.ln(), hi.ln());
+            scales.extend(
+                (0..GRID).map(|k| (llo + (lhi - llo) * (k as f64 + 0.5) / GRID as f64).exp()),
+            );
+            for s in scales {
+                if (s - 1.0).abs() <= 1e-3 || scored.iter().any(|o| (s / o.0 - 1.0).abs() <= 1e-3) {
+                    continue;
+                }
+                if let Ok(sol) = plain(s) {
+                    scored.push((s, sol.cost, sol));
+                }
+            }
+            scored.sort_by(|a, b| a.1.total_cmp(&b.1));
+            scored.truncate(STARTS - 1);
+        }
+        let inputs = FocalInputs {
+            world,
+            pixels,
+            weights,
+            camera,
+        };
+        let mut best: Option<(FocalOutcome, Solution)> = None;
+        let mut consider = |sol: Solution, scale: f64| {
+            let out = refine_focal(&inputs, &sol.rotation, &sol.translation, scale);
+            if let Some(o) = out.filter(|o| o.scale >= lo && o.scale <= hi && o.cost.is_finite()) {
+                if best.as_ref().is_none_or(|(b, _)| o.cost < b.cost) {
+                    best = Some((o, sol));
+                }
+            }
+        };
+        consider(first, 1.0);
+        for (s, _, sol) in scored {
+            consider(sol, s);
+        }
+        let Some((o, mut sol)) = best else {
+            // No start refined within the range: the camera's focal length stands.
+            let mut sol = first;
+            sol.focal = Some(camera.focal_lengths());
+            return Ok(sol);
+        };
+        let (fx, fy) = camera.focal_lengths();
+        sol.rotation = o.r;
+        sol.translation = o.t;
+        sol.cost = o.cost;
+        let wsum = weights.map_or(sol.used as f64, |w| w.iter().filter(|x| **x > 0.0).sum());
+        sol.reprojection_rmse = if wsum > 0.0 {
+            (o.cost / wsum).sqrt() / (fx.max(fy) * o.scale)
+        } else {
+            f64::INFINITY
+        };
+        sol.reprojection_iterations += o.iterations;
+        sol.converged = o.converged;
+        sol.focal = Some((fx * o.scale, fy * o.scale));
+        sol.covariance = None;
+        if self.covariance.is_some() {
+            let cam = camera.with_focal_scale(o.scale);
+            let mut p = Problem::pixels(world, pixels, &cam);
+            if let Some(w) = weights {
+                p = p.weights(w);
+            }
+            let pose =
+                Isometry3::from_parts(o.t.into(), nalgebra::UnitQuaternion::from_matrix(&o.r));
+            // The pose's covariance at the estimated focal length (the focal length's own
+            // uncertainty is not propagated).
+            if let Ok(s) = self.refine(&p, &pose) {
+                sol.covariance = s.covariance;
+            }
+        }
+        Ok(sol)
+    }
+}
+
+/// Candidate focal scales from P4Pf on spread four-point subsets, best first (by the pixel cost
+/// of each hypothesis on every correspondence), within `(lo, hi)`.
+fn candidates(
+    world: &[Point3<f64>],
+    pixels: &[Point2<f64>],
+    camera: &Camera,
+    weights: Option<&[f64]>,
+    (lo, hi): (f64, f64),
+) -> Vec<f64> {
+    let (f0, _) = camera.focal_lengths();
+    // The correspondences that undistort at the camera's focal length, as pixels relative to
+    // the principal point of the equivalent pinhole camera.
+    let mut idx: Vec<usize> = Vec::new();
+    let mut centred: Vec<Point2<f64>> = Vec::new();
+    for (i, px) in pixels.iter().enumerate() {
+        if weights.is_some_and(|w| !(w[i] > 0.0)) {
+            continue;
+        }
+        if let Ok(n) = camera.undistort(*px) {
+            idx.push(i);
+            centred.push(Point2::new(n.x * f0, n.y * f0));
+        }
+    }
+    let n = idx.len();
+    if n < 4 {
+        return Vec::new();
+    }
+    let mut scored: Vec<(f64, f64)> = Vec::new();
+    let mut state = 0x9e37_79b9_7f4a_7c15_u64 ^ n as u64;
+    let mut next = |m: usize| {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((state >> 33) as usize) % m
+    };
+    for _ in 0..SUBSETS {
+        let mut s = [0usize; 4];
+        let mut k = 0;
+        let mut attempts = 0;
+        while k < 4 && attempts < 64 {
+            attempts += 1;
+            let c = next(n);
+            if !s[..k].contains(&c) {
+                s[k] = c;
+                k += 1;
+            }
+        }
+        if k < 4 {
+            continue;
+        }
+        let w4 = s.map(|j| world[idx[j]]);
+        let m4 = s.map(|j| centred[j]);
+        for sol in p4pf(&w4, &m4) {
+            let scale = sol.focal / f0;
+            if !(scale >= lo && scale <= hi) {
+                continue;
+            }
+            let cost = hypothesis_cost(
+                world,
+                &idx,
+                &centred,
+                &sol.rotation,
+                &sol.translation,
+                sol.focal,
+            );
+            scored.push((cost, scale));
+        }
+    }
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+    scored.into_iter().map(|(_, s)| s).collect()
+}
+
+/// The pinhole pixel cost of a hypothesis on the correspondences `idx` (each term capped at
+/// `(0.1 f)^2`, so that a few points far off do not decide it).
+fn hypothesis_cost(
+    world: &[Point3<f64>],
+    idx: &[usize],
+    centred: &[Point2<f64>],
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+    f: f64,
+) -> f64 {
+    let cap = (0.1 * f) * (0.1 * f);
+    idx.iter()
+        .zip(centred)
+        .map(|(&i, m)| {
+            let p = r * world[i].coords + t;
+            if !(p.z > 0.0) {
+                return cap;
+            }
+            let (du, dv) = (f * p.x / p.z - m.x, f * p.y / p.z - m.y);
+            (du * du + dv * dv).min(cap)
+        })
+        .sum()
+}

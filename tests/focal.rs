@@ -1,0 +1,203 @@
+//! An unknown focal length ([`eopnp::Problem::unknown_focal`]): with every correspondence an
+//! inlier, the pixel cost over pose and focal length of the default solve never above that of an
+//! independent Levenberg-Marquardt started at the ground truth (`eopnp_testkit::lm_refine_focal`,
+//! relative 1e-9), focal lengths 300 to 3,000 px, N = 6, 10, 100 and 1000, sigma = 1 px, the
+//! camera given with a focal length up to a factor 2 off; noise-free problems give the focal
+//! length to 1e-9 relative; the typed errors.
+
+use eopnp::camera::Camera;
+use eopnp::{Gravity, PnpError, Problem, Solver};
+use eopnp_testkit::{lm_refine_focal, rng_from_seed, rot_err_deg, trial_seed};
+use nalgebra::{Point2, Point3, Vector3};
+use rand::Rng;
+
+/// The target: the default solve's cost at most the reference's times `1 + REL`.
+const REL: f64 = 1e-9;
+
+struct Case {
+    world: Vec<Point3<f64>>,
+    pixels: Vec<Point2<f64>>,
+    r: nalgebra::Matrix3<f64>,
+    t: Vector3<f64>,
+    f: f64,
+    c: Point2<f64>,
+}
+
+fn gauss(rng: &mut rand_pcg::Pcg64) -> f64 {
+    let u1: f64 = rng.random_range(f64::MIN_POSITIVE..1.0);
+    let u2: f64 = rng.random_range(0.0..1.0);
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+}
+
+/// A camera of focal length 300 to 3,000 px (log-uniform), a 640 x 480 image, a random
+/// rotation; `n` points 2 to 10 units away within the field of view; `sigma` px of noise.
+fn case(seed: u64, n: usize, sigma: f64) -> Case {
+    let mut rng = rng_from_seed(seed);
+    let f = 10f64.powf(rng.random_range(300f64.log10()..3000f64.log10()));
+    let r = eopnp_testkit::haar_rotation(&mut rng);
+    let t = Vector3::new(
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+    );
+    let c = Point2::new(320.0, 240.0);
+    let (mut world, mut pixels) = (Vec::new(), Vec::new());
+    while world.len() < n {
+        let z = rng.random_range(2.0..10.0);
+        let (u, v) = (rng.random_range(0.0..640.0), rng.random_range(0.0..480.0));
+        let cam = Vector3::new((u - c.x) / f * z, (v - c.y) / f * z, z);
+        world.push(Point3::from(r.transpose() * (cam - t)));
+        pixels.push(Point2::new(
+            u + sigma * gauss(&mut rng),
+            v + sigma * gauss(&mut rng),
+        ));
+    }
+    Case {
+        world,
+        pixels,
+        r,
+        t,
+        f,
+        c,
+    }
+}
+
+#[test]
+fn the_solve_reaches_the_maximum_likelihood_pose_and_focal_length() {
+    for &(n, trials) in &[(6usize, 200u64), (10, 200), (100, 200), (1000, 200)] {
+        let mut worst = f64::NEG_INFINITY;
+        for trial in 0..trials {
+            let seed = trial_seed(&format!("focal-ml-{n}"), trial);
+            let c = case(seed, n, 1.0);
+            // The guess: up to a factor 2 off either way.
+            let mut rng = rng_from_seed(seed ^ 9);
+            let guess = c.f * 2f64.powf(rng.random_range(-1.0..1.0));
+            let camera = Camera::pinhole(guess, guess, c.c.x, c.c.y).unwrap();
+            let sol = Solver::default()
+                .solve(&Problem::pixels(&c.world, &c.pixels, &camera).unknown_focal())
+                .unwrap_or_else(|e| panic!("N = {n} seed {seed}: {e}"));
+            let reference = lm_refine_focal(&c.world, &c.pixels, &c.r, &c.t, c.f, c.c);
+            let rel = (sol.cost - reference.cost) / reference.cost;
+            worst = worst.max(rel);
+            assert!(
+                rel <= REL,
+                "N = {n} seed {seed}: cost {:e} above the reference's {:e} (f {} vs {})",
+                sol.cost,
+                reference.cost,
+                sol.focal.unwrap().0,
+                reference.f
+            );
+        }
+        println!("N = {n}: worst (cost - reference) / reference = {worst:e}");
+    }
+}
+
+#[test]
+fn noise_free_problems_give_the_focal_length() {
+    for &n in &[5usize, 6, 10, 100] {
+        for trial in 0..50u64 {
+            let seed = trial_seed(&format!("focal-exact-{n}"), trial);
+            let c = case(seed, n, 0.0);
+            let mut rng = rng_from_seed(seed ^ 9);
+            let guess = c.f * 2f64.powf(rng.random_range(-1.0..1.0));
+            let camera = Camera::pinhole(guess, guess, c.c.x, c.c.y).unwrap();
+            let sol = Solver::default()
+                .solve(&Problem::pixels(&c.world, &c.pixels, &camera).unknown_focal())
+                .unwrap_or_else(|e| panic!("N = {n} seed {seed}: {e}"));
+            let (fx, fy) = sol.focal.unwrap();
+            assert!(
+                (fx / c.f - 1.0).abs() <= 1e-9,
+                "N = {n} seed {seed}: f {fx} vs {}",
+                c.f
+            );
+            assert_eq!(fx, fy);
+            assert!(
+                rot_err_deg(&sol.rotation, &c.r) <= 1e-8,
+                "N = {n} seed {seed}"
+            );
+        }
+    }
+}
+
+/// A distorting camera: the focal length found through the model, distortion fixed.
+#[test]
+fn a_distorting_camera_keeps_its_distortion() {
+    for trial in 0..30u64 {
+        let seed = trial_seed("focal-distortion", trial);
+        let c = case(seed, 30, 0.0);
+        let truth =
+            Camera::from_colmap("SIMPLE_RADIAL", 640, 480, vec![c.f, c.c.x, c.c.y, -0.05]).unwrap();
+        // Pixels through the distorting camera.
+        let pixels: Vec<Point2<f64>> = c
+            .world
+            .iter()
+            .map(|x| {
+                let p = c.r * x.coords + c.t;
+                truth.project(Point2::new(p.x / p.z, p.y / p.z))
+            })
+            .collect();
+        let guess = Camera::from_colmap(
+            "SIMPLE_RADIAL",
+            640,
+            480,
+            vec![c.f * 0.7, c.c.x, c.c.y, -0.05],
+        )
+        .unwrap();
+        let sol = Solver::default()
+            .solve(&Problem::pixels(&c.world, &pixels, &guess).unknown_focal())
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let (fx, _) = sol.focal.unwrap();
+        assert!(
+            (fx / c.f - 1.0).abs() <= 1e-9,
+            "seed {seed}: f {fx} vs {}",
+            c.f
+        );
+    }
+}
+
+#[test]
+fn unsupported_inputs_are_typed_errors() {
+    let c = case(1, 20, 0.0);
+    let camera = Camera::pinhole(c.f, c.f, c.c.x, c.c.y).unwrap();
+    let invalid = PnpError::InvalidOption {
+        option: "unknown_focal",
+    };
+    let image: Vec<Point2<f64>> = c
+        .pixels
+        .iter()
+        .map(|p| Point2::new((p.x - c.c.x) / c.f, (p.y - c.c.y) / c.f))
+        .collect();
+    let solver = Solver::default();
+    assert_eq!(
+        solver
+            .solve(&Problem::normalised(&c.world, &image).unknown_focal())
+            .err(),
+        Some(invalid.clone())
+    );
+    let g = Gravity::new(Vector3::y(), Vector3::y(), 1.0).unwrap();
+    let p = Problem::pixels(&c.world, &c.pixels, &camera);
+    assert_eq!(
+        solver.solve(&p.unknown_focal().gravity(g)).err(),
+        Some(invalid.clone())
+    );
+    for (lo, hi) in [
+        (0.0, 100.0),
+        (500.0, 100.0),
+        (-1.0, 10.0),
+        (1.0, f64::INFINITY),
+        (f64::NAN, 1.0),
+    ] {
+        assert_eq!(
+            solver.solve(&p.unknown_focal_within(lo, hi)).err(),
+            Some(invalid.clone()),
+            "{lo} {hi}"
+        );
+    }
+    // Within a range that holds the truth: found.
+    let sol = solver
+        .solve(&p.unknown_focal_within(0.5 * c.f, 2.0 * c.f))
+        .unwrap();
+    assert!((sol.focal.unwrap().0 / c.f - 1.0).abs() < 1e-9);
+    // Without an unknown focal length, no estimate.
+    assert_eq!(solver.solve(&p).unwrap().focal, None);
+}
