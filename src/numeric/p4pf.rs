@@ -14,7 +14,9 @@
 //! matrix `L(z)` whose null vector at a root is `(x, y, 1)`. Every `l_i` is `w` times the depth
 //! of point `i` over that of point 1, so only positive roots and null vectors are sought. Each
 //! solution is polished by Newton's method on the three quadrics and Gauss-Newton on all four,
-//! turned into `R` (the nearest rotation to `M`'s normalised rows), `t` and `f`, and kept if it
+//! turned into `R` (from `M`'s first two rows, well determined, and their cross product), `f`
+//! (from the third row's component along `R`'s third: that row is weak and noisy when the
+//! perspective is faint) and `t` (linear least squares on the four projections), and kept if it
 //! reprojects the four points to [`REPROJECTION_MAX`] of their spread (duplicates once).
 //!
 //! Image points are scaled by their mean distance from the principal point and the world's
@@ -153,24 +155,33 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
         let my = Matrix3::from_columns(&[1, 2, 3].map(|k| m[k] * l[k - 1] - m[0]));
         let mm = my * a_inv / sw;
         let (ra, rb, rc) = (mm.row(0), mm.row(1), mm.row(2));
-        let (na, nb, nc) = (ra.norm(), rb.norm(), rc.norm());
-        if !(na > 0.0 && nb > 0.0 && nc > 0.0) || mm.determinant() <= 0.0 {
+        let (na, nb) = (ra.norm(), rb.norm());
+        if !(na > 0.0 && nb > 0.0) {
             continue;
         }
-        let s = ((na * na + nb * nb) / 2.0).sqrt();
-        let w = nc / s;
-        let raw = Matrix3::from_rows(&[ra / s, rb / s, rc / (s * w)]);
-        let Some(rotation) = nearest_rotation(&raw) else {
+        // R from the first two rows (well determined), the third their cross product; the
+        // third row of M (weak when the perspective is faint, and noisy) gives only `w`, its
+        // component along R's third row.
+        let r1 = (ra / na).transpose();
+        let r2 = (rb / nb).transpose();
+        let Some(rotation) =
+            nearest_rotation(&Matrix3::from_columns(&[r1, r2, r1.cross(&r2)]).transpose())
+        else {
             continue;
         };
-        // The last column of P: m_1 - M X_1 = s diag(1, 1, w) t.
-        let p4 = m[0] - mm * world[0].coords;
-        let translation = Vector3::new(p4.x / s, p4.y / s, p4.z / (s * w));
+        let s = (na + nb) / 2.0;
+        let w = rc.transpose().dot(&rotation.row(2).transpose()) / s;
+        if !(w > 0.0 && w.is_finite()) {
+            continue;
+        }
         let focal = si / w;
+        // t by least squares from the four projections at (R, f): linear in t.
+        let Some(translation) = translation_at(world, image, &rotation, focal) else {
+            continue;
+        };
         let ok = rotation.iter().all(|v| v.is_finite())
             && translation.iter().all(|v| v.is_finite())
-            && focal.is_finite()
-            && focal > 0.0;
+            && focal.is_finite();
         let sol = P4pfSolution {
             rotation,
             translation,
@@ -181,6 +192,30 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
         }
     }
     out
+}
+
+/// The translation that projects the four points closest to their images at the rotation
+/// `r` and focal length `f`, by linear least squares on `f (r_k . X + t_k) = u_k (r_3 . X + t_z)`
+/// (`k` = x, y): eight equations in `t`.
+fn translation_at(
+    world: &[Point3<f64>; 4],
+    image: &[Point2<f64>; 4],
+    r: &Matrix3<f64>,
+    f: f64,
+) -> Option<Vector3<f64>> {
+    let mut ata = Matrix3::zeros();
+    let mut atb = Vector3::zeros();
+    for (x, m) in world.iter().zip(image) {
+        let q = r * x.coords;
+        for (row, rhs) in [
+            (Vector3::new(f, 0.0, -m.x), m.x * q.z - f * q.x),
+            (Vector3::new(0.0, f, -m.y), m.y * q.z - f * q.y),
+        ] {
+            ata += row * row.transpose();
+            atb += row * rhs;
+        }
+    }
+    ata.try_inverse().map(|inv| inv * atb)
 }
 
 /// The largest distance of the four points' projections under `s` from their image points,

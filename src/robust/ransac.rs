@@ -302,6 +302,10 @@ impl Ransac {
         problem: &Problem<'_>,
     ) -> Result<RansacSolution, PnpError> {
         let (world, weights) = (problem.world, problem.weights);
+        if let Some(range) = problem.unknown_focal {
+            let (points, camera) = crate::solver::focal_input(problem)?;
+            return self.estimate_focal(solver, camera, world, points, weights, range);
+        }
         match problem.observations {
             Observations::Normalised { points, focal } => {
                 self.estimate_normalised(solver, world, points, focal, weights, problem.gravity)
@@ -637,6 +641,7 @@ fn inlier_weight(inliers: &[bool], weights: Option<&[f64]>, i: usize) -> f64 {
 }
 
 mod chance;
+mod focal;
 mod rig;
 mod score;
 mod upright;

@@ -141,3 +141,38 @@ fn degenerate_inputs_give_no_solution() {
     // Every image point at the principal point.
     assert!(p4pf(&world, &[Point2::origin(); 4]).is_empty());
 }
+
+/// Noisy samples (1 px, focal lengths 300 to 3,000 px): most give a hypothesis with the focal
+/// length within 5 % and every point within 10 px. (Before the rotation was taken from `M`'s
+/// first two rows alone, the noisy third row bent it: 178 of 200 samples of a narrow-angle
+/// camera gave no hypothesis within the 5 % reprojection filter.)
+#[test]
+fn noisy_samples_give_good_hypotheses() {
+    let mut rng = Pcg64::seed_from_u64(44);
+    let (mut good, mut total) = (0, 0);
+    for _ in 0..2000 {
+        let (world, image, _, _, f) = instance(&mut rng);
+        if planarity(&world) < 1e-2 {
+            continue;
+        }
+        let noisy = image.map(|p| {
+            Point2::new(
+                p.x + rng.random_range(-1.0..1.0),
+                p.y + rng.random_range(-1.0..1.0),
+            )
+        });
+        total += 1;
+        let sols = p4pf(&world, &noisy);
+        let hit = sols.iter().any(|s| {
+            (s.focal / f - 1.0).abs() < 0.05
+                && world.iter().zip(&image).all(|(x, m)| {
+                    let p = s.rotation * x.coords + s.translation;
+                    let (u, v) = (s.focal * p.x / p.z, s.focal * p.y / p.z);
+                    ((u - m.x).powi(2) + (v - m.y).powi(2)).sqrt() < 10.0
+                })
+        });
+        good += usize::from(hit);
+    }
+    println!("{good} of {total} noisy samples gave a good hypothesis");
+    assert!(good * 10 >= total * 8, "{good} of {total}");
+}
