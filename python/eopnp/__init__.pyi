@@ -341,6 +341,11 @@ class Solution:
     @property
     def sigma(self) -> float | None:
         """The image noise standard deviation the covariance assumes, or None."""
+    @property
+    def focal(self) -> tuple[float, float] | None:
+        """The camera's estimated focal lengths ``(fx, fy)`` in pixels with ``estimate_focal=True``
+        (the given camera's scaled alike), or None.
+        """
     def as_dict(self) -> dict[str, Any]:
         """Every field as a dict (arrays for R, t, rvec, q, covariance)."""
 
@@ -788,6 +793,8 @@ def solve(
     *,
     camera: Camera | None = None,
     gravity: Gravity | None = None,
+    estimate_focal: bool = False,
+    focal_range: tuple[float, float] | None = None,
     options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
@@ -810,6 +817,13 @@ def solve(
             and, in the default mode, the refinement minimises the pixel reprojection error
             through the camera model, distortion included. Pixels that cannot be undistorted
             are left out and counted in ``Solution.skipped``.
+        gravity: a ``Gravity``: the known vertical; the pose is the maximum a posteriori one
+            with it as a prior (``GravityMismatchError`` if the images contradict it).
+        estimate_focal: the camera's focal length is unknown (``camera`` required; its focal
+            length is the starting guess): estimated with the pose, within a tenth and ten times
+            the guess, returned in ``Solution.focal``.
+        focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
+            ``estimate_focal``).
         options: a ``SolverOptions`` (or a dict of its fields): refinement, planar branch,
             iteration limits, robust ``loss``, ``covariance``. None: the defaults.
         **keywords: the options of ``SolverOptions`` as keyword arguments instead
@@ -1072,6 +1086,8 @@ def solve_ransac(
     camera: Camera | None = None,
     focal: float | tuple[float, float] | None = None,
     gravity: Gravity | None = None,
+    estimate_focal: bool = False,
+    focal_range: tuple[float, float] | None = None,
     ransac: _RansacArg = None,
     options: _Options = None,
     refinement: _Refinement = "ml",
@@ -1095,6 +1111,13 @@ def solve_ransac(
             lens model. Pixels that cannot be undistorted are outliers.
         focal: ``(fx, fy)`` (or one ``f``) in pixels, for normalised ``image``: the threshold
             applies to ``sqrt(fx^2 dx^2 + fy^2 dy^2)``. Exactly one of ``camera`` and ``focal``.
+        gravity: a ``Gravity``: the known vertical; samples of two points (the upright
+            two-point pose), the final fit with it as a prior.
+        estimate_focal: the camera's focal length is unknown (``camera`` required, its focal
+            length the starting guess): samples of four points solved by P4Pf, the fits and the
+            final pose refined with the focal length; ``Solution.focal`` holds it.
+        focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
+            ``estimate_focal``; default a tenth to ten times the guess).
         ransac: a ``RansacOptions``, a dict of its fields, or None (defaults: 4 px threshold,
             confidence 0.999, at most 10000 samples, seed 0).
         options: a ``SolverOptions`` (or a dict of its fields): the options of the EOPnP fits,

@@ -15,7 +15,7 @@ use crate::errors::{option_error, pnp_error};
 use crate::gravity::{gravity_arg, PyGravity};
 use crate::options::{solver_arg, KEYWORDS};
 use crate::solution::PySolution;
-use crate::solve::{check_finite, problem_with};
+use crate::solve::{check_finite, focal_arg as unknown_focal_arg, problem_with, with_focal};
 
 /// RANSAC options (the Rust ``eopnp::ransac::Ransac``); every argument is also a settable
 /// attribute. Out-of-range values raise ``InvalidOptionError`` when used.
@@ -304,6 +304,13 @@ fn rmse_px(
 ///         lens model. Pixels that cannot be undistorted are outliers.
 ///     focal: ``(fx, fy)`` (or one ``f``) in pixels, for normalised ``image``: the threshold
 ///         applies to ``sqrt(fx^2 dx^2 + fy^2 dy^2)``. Exactly one of ``camera`` and ``focal``.
+///     gravity: a ``Gravity``: the known vertical; samples of two points (the upright
+///         two-point pose), the final fit with it as a prior.
+///     estimate_focal: the camera's focal length is unknown (``camera`` required, its focal
+///         length the starting guess): samples of four points solved by P4Pf, the fits and the
+///         final pose refined with the focal length; ``Solution.focal`` holds it.
+///     focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
+///         ``estimate_focal``; default a tenth to ten times the guess).
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None (defaults: 4 px threshold,
 ///         confidence 0.999, at most 10000 samples, seed 0).
 ///     options: a ``SolverOptions`` (or a dict of its fields): the options of the EOPnP fits,
@@ -332,7 +339,7 @@ fn rmse_px(
 ///     TypeError: as ``solve``.
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, focal = None, gravity = None,
-    ransac = None, options = None, **keywords))]
+    estimate_focal = false, focal_range = None, ransac = None, options = None, **keywords))]
 // One Rust parameter per Python parameter: the problem (world, image, weights), its camera or
 // focal lengths, and the RANSAC and solver options (`options=`, `**keywords`).
 #[allow(clippy::too_many_arguments)]
@@ -343,12 +350,15 @@ pub(crate) fn solve_ransac<'py>(
     camera: Option<&Bound<'py, PyCamera>>,
     focal: Option<&Bound<'py, PyAny>>,
     gravity: Option<&Bound<'py, PyGravity>>,
+    estimate_focal: bool,
+    focal_range: Option<(f64, f64)>,
     ransac: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
     let py = world.py();
     let g = gravity_arg(gravity);
+    let unknown = unknown_focal_arg(estimate_focal, focal_range);
     let solver = solver_arg(py, "solve_ransac", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
@@ -377,12 +387,15 @@ pub(crate) fn solve_ransac<'py>(
                 check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
                 py.detach(|| {
                     let p = problem_with(Problem::pixels(&w, &img, cam), wts.as_deref(), g);
-                    ransac.estimate(&solver, &p)
+                    ransac.estimate(&solver, &with_focal(p, unknown))
                 })
             }
             (None, Some(f)) => py.detach(|| {
                 let p = Problem::normalised(&w, &img).focal(f.0, f.1);
-                ransac.estimate(&solver, &problem_with(p, wts.as_deref(), g))
+                ransac.estimate(
+                    &solver,
+                    &with_focal(problem_with(p, wts.as_deref(), g), unknown),
+                )
             }),
         };
     let r = result.map_err(|e| pnp_error(py, &e))?;
@@ -414,6 +427,11 @@ pub(crate) fn ransac_rmse_px(
     cam: Option<&Camera>,
     focal: Option<(f64, f64)>,
 ) -> f64 {
+    // With an estimated focal length, the refinement of the inliers reports their RMS error
+    // (through the camera at that focal length).
+    if let Some((fx, fy)) = r.solution.focal {
+        return r.solution.reprojection_rmse * fx.max(fy);
+    }
     let focal = cam.map_or(focal.unwrap_or((1.0, 1.0)), Camera::focal_lengths);
     rmse_px(sol, w, img, &r.inliers, cam, focal)
 }

@@ -98,6 +98,8 @@ pub(crate) struct PySolution {
     /// Row-major covariance and sigma (boxed: most solutions have none, and a batch moves
     /// every solution twice, into its list and into its Python object).
     cov: Option<Box<([f64; 36], f64)>>,
+    /// The estimated focal lengths with an unknown focal length (``estimate_focal=True``).
+    foc: Option<(f64, f64)>,
 }
 
 const SOURCES: [&str; 12] = [
@@ -172,6 +174,7 @@ impl From<&Solution> for PySolution {
                 }
                 Box::new((m, c.sigma))
             }),
+            foc: s.focal,
         }
     }
 }
@@ -253,6 +256,13 @@ impl PySolution {
         self.cov.as_ref().map(|c| c.1)
     }
 
+    /// The camera's estimated focal lengths ``(fx, fy)`` in pixels with ``estimate_focal=True``
+    /// (the given camera's scaled alike), or None.
+    #[getter]
+    fn focal(&self) -> Option<(f64, f64)> {
+        self.foc
+    }
+
     /// Every field as a dict (arrays for R, t, rvec, q, covariance).
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -274,6 +284,7 @@ impl PySolution {
         d.set_item("skipped", self.skipped)?;
         d.set_item("covariance", self.covariance(py))?;
         d.set_item("sigma", self.sigma())?;
+        d.set_item("focal", self.foc)?;
         Ok(d)
     }
 
@@ -318,6 +329,8 @@ impl PySolution {
                         == o.cov
                             .as_deref()
                             .map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
+                    && self.foc.map(|(a, b)| (a.to_bits(), b.to_bits()))
+                        == o.foc.map(|(a, b)| (a.to_bits(), b.to_bits()))
             }
             Err(_) => false,
         }
@@ -344,6 +357,7 @@ impl PySolution {
             ),
             (self.used, self.skipped),
             self.cov.as_deref().map(|(m, s)| (m.to_vec(), *s)),
+            self.foc,
         );
         Ok((rebuild, PyTuple::new(py, [state.into_pyobject(py)?])?))
     }
@@ -360,12 +374,13 @@ type State = (
     (u32, u32, bool),
     (usize, usize),
     Option<(Vec<f64>, f64)>,
+    Option<(f64, f64)>,
 );
 
 /// Rebuilds a `Solution` from `__reduce__`'s state (private; for pickle).
 #[pyfunction]
 pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
-    let (r, t, q, rvec, costs, flags, source, iters, counts, cov) = state;
+    let (r, t, q, rvec, costs, flags, source, iters, counts, cov, foc) = state;
     let arr = |v: Vec<f64>, n: usize| -> PyResult<Vec<f64>> {
         if v.len() == n {
             Ok(v)
@@ -403,5 +418,6 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
         used: counts.0,
         skipped: counts.1,
         cov,
+        foc,
     })
 }

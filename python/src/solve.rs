@@ -16,6 +16,24 @@ use crate::options::{solver_arg, KEYWORDS, REFINE_KEYWORDS};
 use crate::pose::pose_arg;
 use crate::solution::PySolution;
 
+/// An unknown focal length (``estimate_focal=``, ``focal_range=``): `None` when not estimated,
+/// else the range in pixels, if given.
+pub(crate) type FocalArg = Option<Option<(f64, f64)>>;
+
+/// The ``estimate_focal`` and ``focal_range`` arguments (a range alone implies the estimate).
+pub(crate) fn focal_arg(estimate: bool, range: Option<(f64, f64)>) -> FocalArg {
+    (estimate || range.is_some()).then_some(range)
+}
+
+/// `p` with an unknown focal length when asked for.
+pub(crate) fn with_focal(p: Problem<'_>, focal: FocalArg) -> Problem<'_> {
+    match focal {
+        None => p,
+        Some(None) => p.unknown_focal(),
+        Some(Some((lo, hi))) => p.unknown_focal_within(lo, hi),
+    }
+}
+
 /// `p` with its optional weights and known vertical.
 pub(crate) fn problem_with<'a>(
     p: Problem<'a>,
@@ -81,6 +99,13 @@ pub(crate) fn check_finite(
 ///         and, in the default mode, the refinement minimises the pixel reprojection error
 ///         through the camera model, distortion included. Pixels that cannot be undistorted
 ///         are left out and counted in ``Solution.skipped``.
+///     gravity: a ``Gravity``: the known vertical; the pose is the maximum a posteriori one
+///         with it as a prior (``GravityMismatchError`` if the images contradict it).
+///     estimate_focal: the camera's focal length is unknown (``camera`` required; its focal
+///         length is the starting guess): estimated with the pose, within a tenth and ten times
+///         the guess, returned in ``Solution.focal``.
+///     focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
+///         ``estimate_focal``).
 ///     options: a ``SolverOptions`` (or a dict of its fields): refinement, planar branch,
 ///         iteration limits, robust ``loss``, ``covariance``. None: the defaults.
 ///     **keywords: the options of ``SolverOptions`` as keyword arguments instead
@@ -100,7 +125,7 @@ pub(crate) fn check_finite(
 ///     TypeError: an unknown keyword, or both ``options`` and option keywords.
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, gravity = None,
-    options = None, **keywords))]
+    estimate_focal = false, focal_range = None, options = None, **keywords))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     py: Python<'_>,
@@ -109,6 +134,8 @@ pub(crate) fn solve(
     weights: Option<&Bound<'_, PyAny>>,
     camera: Option<&Bound<'_, PyCamera>>,
     gravity: Option<&Bound<'_, PyGravity>>,
+    estimate_focal: bool,
+    focal_range: Option<(f64, f64)>,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
@@ -117,23 +144,18 @@ pub(crate) fn solve(
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
     let g = gravity_arg(gravity);
+    let focal = focal_arg(estimate_focal, focal_range);
     let result = match camera {
         None => py.detach(|| {
-            solver.solve(&problem_with(
-                Problem::normalised(&w, &img),
-                wts.as_deref(),
-                g,
-            ))
+            let p = problem_with(Problem::normalised(&w, &img), wts.as_deref(), g);
+            solver.solve(&with_focal(p, focal))
         }),
         Some(cam) => {
             let cam = &cam.get().inner;
             check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
             py.detach(|| {
-                solver.solve(&problem_with(
-                    Problem::pixels(&w, &img, cam),
-                    wts.as_deref(),
-                    g,
-                ))
+                let p = problem_with(Problem::pixels(&w, &img, cam), wts.as_deref(), g);
+                solver.solve(&with_focal(p, focal))
             })
         }
     };

@@ -141,7 +141,10 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
     let quadric = |n: usize| -> [f64; 10] { core::array::from_fn(|i| q[10 * n + i]) };
     let four = [quadric(0), quadric(1), quadric(2), quadric(3)];
     let three = [four[0], four[1], four[2]];
-    for mu in e3q3(&three) {
+    // Roots whose depth ratios are clearly negative (l_k < -1 before the polish; the polish can
+    // move a root of a near-double pair far, so the screen is loose) are not polished: on
+    // noisy samples, 6.4 -> 5.4 us per call.
+    for mu in e3q3(&three, &|v| v.iter().all(|x| *x > -2.0)) {
         // Gauss-Newton on all four: two solutions of the three close together (a near-double
         // root of the octic, where Newton on the three converges slowly) are told apart by the
         // fourth.
@@ -418,8 +421,14 @@ fn permuted(q: &[f64; 10], perm: [usize; 3]) -> [f64; 10] {
 /// variable is the one whose other two's `x^2, xy, y^2` coefficients form the best-conditioned
 /// 3 x 3 system. Each solution is polished by Newton's method on the three, kept if it then
 /// solves them (to `1e-8` of each one's terms) and reported once.
+///
+/// `wanted` screens the solutions before their polish (P4Pf: every depth ratio positive); a
+/// solution it rejects then is not returned.
 #[must_use]
-pub fn e3q3(quadrics: &[[f64; 10]; 3]) -> ArrayVec<[f64; 3], MAX_P4PF_SOLUTIONS> {
+pub fn e3q3(
+    quadrics: &[[f64; 10]; 3],
+    wanted: &dyn Fn(&[f64; 3]) -> bool,
+) -> ArrayVec<[f64; 3], MAX_P4PF_SOLUTIONS> {
     let mut out = ArrayVec::new();
     // Hide each variable in turn: the best-conditioned 3 x 3 system of the other two's squares.
     let perms = [[0, 1, 2], [1, 2, 0], [2, 0, 1]];
@@ -487,6 +496,13 @@ pub fn e3q3(quadrics: &[[f64; 10]; 3]) -> ArrayVec<[f64; 3], MAX_P4PF_SOLUTIONS>
             continue;
         }
         let sol = [v[0] / v[2], v[1] / v[2], z];
+        let mut orig = [0.0; 3];
+        for kk in 0..3 {
+            orig[perm[kk]] = sol[kk];
+        }
+        if !wanted(&orig) {
+            continue;
+        }
         let sol = polish(&qs, sol);
         if !solves(&qs, &sol) {
             continue;

@@ -36,8 +36,8 @@ pub(crate) struct FocalOutcome {
     pub converged: bool,
 }
 
-/// Iteration cap.
-const MAX_ITERATIONS: u32 = 200;
+/// Iteration cap of a refinement to convergence.
+pub(crate) const MAX_ITERATIONS: u32 = 200;
 /// Stop when the step is below this relative to the parameters (`|t| + 1` and 1 for the
 /// rotation and the log-scale).
 const XTOL: f64 = 1e-12;
@@ -130,13 +130,15 @@ fn normal(
 }
 
 /// Levenberg-Marquardt over pose and focal scale from `(r0, t0, a0)` (`x_cam = R X + t`, the
-/// focal lengths `a0` times the camera's). Returns `None` if the start has a point at depth 0
-/// (or a non-finite residual).
+/// focal lengths `a0` times the camera's), at most `max_iterations` iterations ([`MAX_ITERATIONS`]
+/// to convergence; RANSAC's local fits take a few, their result only re-scored). Returns `None`
+/// if the start has a point at depth 0 (or a non-finite residual).
 pub(crate) fn refine_focal(
     inp: &FocalInputs<'_>,
     r0: &Matrix3<f64>,
     t0: &Vector3<f64>,
     a0: f64,
+    max_iterations: u32,
 ) -> Option<FocalOutcome> {
     // Conditioning: world points relative to their weighted centroid.
     let (mut sum, mut wsum) = (Vector3::zeros(), 0.0);
@@ -160,7 +162,7 @@ pub(crate) fn refine_focal(
     let mut lam = 1e-6;
     let mut converged = false;
     let mut iterations = 0;
-    for it in 1..=MAX_ITERATIONS {
+    for it in 1..=max_iterations {
         iterations = it;
         // Marquardt: the damping scaled by the diagonal.
         let mut hd = h;

@@ -15,7 +15,7 @@ use super::Solver;
 use crate::camera::Camera;
 use crate::error::PnpError;
 use crate::numeric::p4pf::p4pf;
-use crate::pipeline::refine_focal::{refine_focal, FocalInputs, FocalOutcome};
+use crate::pipeline::refine_focal::{refine_focal, FocalInputs, FocalOutcome, MAX_ITERATIONS};
 use crate::pipeline::Solution;
 use crate::problem::{FocalRange, Problem};
 
@@ -122,7 +122,13 @@ impl Solver {
         };
         let mut best: Option<(FocalOutcome, Solution)> = None;
         let mut consider = |sol: Solution, scale: f64| {
-            let out = refine_focal(&inputs, &sol.rotation, &sol.translation, scale);
+            let out = refine_focal(
+                &inputs,
+                &sol.rotation,
+                &sol.translation,
+                scale,
+                MAX_ITERATIONS,
+            );
             if let Some(o) = out.filter(|o| o.scale >= lo && o.scale <= hi && o.cost.is_finite()) {
                 if best.as_ref().is_none_or(|(b, _)| o.cost < b.cost) {
                     best = Some((o, sol));

@@ -24,6 +24,9 @@ use crate::Solver;
 
 /// Inliers a fit needs (as with a known focal length).
 const MIN_FIT_POINTS: usize = 6;
+/// Levenberg-Marquardt iterations of a local or final fit (their results are re-scored and
+/// re-classified; the returned solution is refined to convergence).
+const FIT_ITERATIONS: u32 = 8;
 
 /// A hypothesis: pose, focal scale (over the camera's), MSAC cost and inliers.
 #[derive(Clone, Copy)]
@@ -170,7 +173,7 @@ impl Ransac {
                 weights: Some(&mask),
                 camera,
             };
-            refine_focal(&inp, r, t, scale)
+            refine_focal(&inp, r, t, scale, FIT_ITERATIONS)
                 .filter(|o| o.scale >= lo && o.scale <= hi && o.cost.is_finite())
                 .map(|o| (o.r, o.t, o.scale))
         };

@@ -42,7 +42,14 @@ fn noise_free_problems_give_the_true_focal_length() {
             weights: None,
             camera: &guess,
         };
-        let out = refine_focal(&inp, &r0, &(t + Vector3::new(0.1, 0.0, 0.3)), 1.0).unwrap();
+        let out = refine_focal(
+            &inp,
+            &r0,
+            &(t + Vector3::new(0.1, 0.0, 0.3)),
+            1.0,
+            MAX_ITERATIONS,
+        )
+        .unwrap();
         assert!(out.converged, "trial {trial}");
         assert!(
             (out.scale * 1.2 - 1.0).abs() < 1e-9,
