@@ -66,7 +66,8 @@ const NEWTON_ITERATIONS: usize = 10;
 /// The octic's near-real complex pairs (imaginary part at most this times `1 + |z|`) count as
 /// roots: where two solutions of the three quadrics nearly coincide (points close to
 /// coplanar), the rounding of the octic's coefficients can turn the pair next to the true
-/// solution complex; Gauss-Newton on the four quadrics then finds it from the pair's real part.
+/// solution complex, and Newton's method on the three quadrics finds it from the pair's real
+/// part (one of `verify`'s 5,000 instances).
 const NEAR_REAL: f64 = 1e-2;
 /// Gauss-Newton iterations on the four quadrics after that.
 const GAUSS_NEWTON_ITERATIONS: usize = 10;
@@ -398,20 +399,39 @@ fn gradient(q: &[f64; 10], v: &[f64; 3]) -> Vector3<f64> {
     )
 }
 
-/// The quadric `q` with its variables renamed: variable `k` of the result is variable `perm[k]`
-/// of `q`.
-fn permuted(q: &[f64; 10], perm: [usize; 3]) -> [f64; 10] {
-    let mut out = [0.0; 10];
-    for (e, c) in EXPONENTS.iter().zip(q) {
-        let mut new = [0u8; 3];
-        for k in 0..3 {
-            new[k] = e[perm[k]];
+/// The variable orders tried by [`e3q3`]: each hides its last variable (`z`, `x`, `y`).
+const PERMS: [[usize; 3]; 3] = [[0, 1, 2], [1, 2, 0], [2, 0, 1]];
+
+/// `PERMUTED[p][i]`: where coefficient `i` of a quadric goes when its variables are renamed by
+/// `PERMS[p]` (variable `k` of the result is variable `PERMS[p][k]` of the quadric).
+const PERMUTED: [[usize; 10]; 3] = {
+    let mut table = [[0usize; 10]; 3];
+    let mut p = 0;
+    while p < 3 {
+        let mut i = 0;
+        while i < 10 {
+            let e = EXPONENTS[i];
+            let new = [e[PERMS[p][0]], e[PERMS[p][1]], e[PERMS[p][2]]];
+            let mut j = 0;
+            while !(EXPONENTS[j][0] == new[0]
+                && EXPONENTS[j][1] == new[1]
+                && EXPONENTS[j][2] == new[2])
+            {
+                j += 1;
+            }
+            table[p][i] = j;
+            i += 1;
         }
-        let i = EXPONENTS
-            .iter()
-            .position(|x| *x == new)
-            .expect("a permutation of a monomial of degree <= 2 is one");
-        out[i] = *c;
+        p += 1;
+    }
+    table
+};
+
+/// The quadric `q` with its variables renamed by `PERMS[p]`.
+fn permuted(q: &[f64; 10], p: usize) -> [f64; 10] {
+    let mut out = [0.0; 10];
+    for (i, c) in q.iter().enumerate() {
+        out[PERMUTED[p][i]] = *c;
     }
     out
 }
@@ -419,7 +439,7 @@ fn permuted(q: &[f64; 10], perm: [usize; 3]) -> [f64; 10] {
 /// The real solutions of three quadrics in `(x, y, z)` (coefficients
 /// `[xx, xy, yy, xz, yz, zz, x, y, z, 1]`), by the E3Q3 elimination (module docs): the hidden
 /// variable is the one whose other two's `x^2, xy, y^2` coefficients form the best-conditioned
-/// 3 x 3 system. Each solution is polished by Newton's method on the three, kept if it then
+/// 3 x 3 system (by Hadamard's ratio). Each solution is polished by Newton's method on the three, kept if it then
 /// solves them (to `1e-8` of each one's terms) and reported once.
 ///
 /// `wanted` screens the solutions before their polish (P4Pf: every depth ratio positive); a
@@ -430,27 +450,29 @@ pub fn e3q3(
     wanted: &dyn Fn(&[f64; 3]) -> bool,
 ) -> ArrayVec<[f64; 3], MAX_P4PF_SOLUTIONS> {
     let mut out = ArrayVec::new();
-    // Hide each variable in turn: the best-conditioned 3 x 3 system of the other two's squares.
-    let perms = [[0, 1, 2], [1, 2, 0], [2, 0, 1]];
-    let mut best: Option<([usize; 3], Matrix3<f64>, f64)> = None;
-    for perm in perms {
-        let qs = quadrics.map(|q| permuted(&q, perm));
+    // Hide each variable in turn: the best-conditioned 3 x 3 system of the other two's squares,
+    // by the ratio of its determinant to the product of its rows' norms (Hadamard's bound: 1 for
+    // orthogonal rows, 0 for a singular system).
+    let mut best: Option<(usize, [[f64; 10]; 3], Matrix3<f64>, f64)> = None;
+    for p in 0..3 {
+        let qs = quadrics.map(|q| permuted(&q, p));
         let c = Matrix3::from_fn(|i, j| qs[i][j]);
-        let rc = crate::numeric::mat3::rcond3(&c);
-        if best.as_ref().is_none_or(|b| rc > b.2) {
-            best = Some((perm, c, rc));
+        let rows = c.row(0).norm() * c.row(1).norm() * c.row(2).norm();
+        let ratio = c.determinant().abs() / rows;
+        if best.as_ref().is_none_or(|b| ratio > b.3) {
+            best = Some((p, qs, c, ratio));
         }
     }
-    let Some((perm, c, rc)) = best else {
+    let Some((p, qs, c, ratio)) = best else {
         return out;
     };
-    if !(rc > 1e-12) {
+    if !(ratio > 1e-12) {
         return out;
     }
+    let perm = PERMS[p];
     let Some(ci) = c.try_inverse() else {
         return out;
     };
-    let qs = quadrics.map(|q| permuted(&q, perm));
     // [x^2, xy, y^2] = -C^-1 (lx(z) x + ly(z) y + k(z)).
     let mut mcoef = [0.0; 21];
     for i in 0..3 {
