@@ -318,3 +318,16 @@ pub const P4PF_QUADRICS_OPS: KernelOps = KernelOps {
     naive_add: 181,
     naive_terms: 219,
 };
+/// Exponents `[i, j, k]` of `x^i y^j z^k` for each quadric's 10 coefficients, in the order of `p4pf_quadrics`' outputs (and of `e3q3`'s quadrics).
+pub const P4PF_QUADRIC_EXPONENTS: [[u8; 3]; 10] = [
+    [2, 0, 0],
+    [1, 1, 0],
+    [0, 2, 0],
+    [1, 0, 1],
+    [0, 1, 1],
+    [0, 0, 2],
+    [1, 0, 0],
+    [0, 1, 0],
+    [0, 0, 1],
+    [0, 0, 0],
+];

@@ -31,7 +31,7 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::roots::real_roots_near;
 use super::rotation::nearest_rotation;
-use crate::kernels::{e3q3_octic, p4pf_quadrics};
+use crate::kernels::{e3q3_octic, p4pf_quadrics, P4PF_QUADRIC_EXPONENTS};
 
 /// At most 9 solutions: Bezout's bound for three quadrics, and the planar solution for nearly
 /// coplanar points.
@@ -364,20 +364,9 @@ fn planar(world: &[Point3<f64>; 4], m: &[Vector3<f64>; 4], si: f64) -> Option<P4
     })
 }
 
-/// The exponents of a quadric's coefficients `[xx, xy, yy, xz, yz, zz, x, y, z, 1]` (the order
-/// of `p4pf_quadrics`).
-const EXPONENTS: [[u8; 3]; 10] = [
-    [2, 0, 0],
-    [1, 1, 0],
-    [0, 2, 0],
-    [1, 0, 1],
-    [0, 1, 1],
-    [0, 0, 2],
-    [1, 0, 0],
-    [0, 1, 0],
-    [0, 0, 1],
-    [0, 0, 0],
-];
+/// The exponents of a quadric's coefficients `[xx, xy, yy, xz, yz, zz, x, y, z, 1]` (the
+/// order of `p4pf_quadrics`, whose table it is).
+const EXPONENTS: [[u8; 3]; 10] = P4PF_QUADRIC_EXPONENTS;
 
 /// A quadric `[xx, xy, yy, xz, yz, zz, x, y, z, 1]` at `v`.
 fn eval(q: &[f64; 10], v: &[f64; 3]) -> f64 {
@@ -427,6 +416,22 @@ const PERMUTED: [[usize; 10]; 3] = {
     table
 };
 
+/// `PERMUTED_INVERSE[p][j]`: the coefficient of a quadric that lands at `j` when its variables
+/// are renamed by `PERMS[p]`.
+const PERMUTED_INVERSE: [[usize; 10]; 3] = {
+    let mut table = [[0usize; 10]; 3];
+    let mut p = 0;
+    while p < 3 {
+        let mut i = 0;
+        while i < 10 {
+            table[p][PERMUTED[p][i]] = i;
+            i += 1;
+        }
+        p += 1;
+    }
+    table
+};
+
 /// The quadric `q` with its variables renamed by `PERMS[p]`.
 fn permuted(q: &[f64; 10], p: usize) -> [f64; 10] {
     let mut out = [0.0; 10];
@@ -453,22 +458,23 @@ pub fn e3q3(
     // Hide each variable in turn: the best-conditioned 3 x 3 system of the other two's squares,
     // by the ratio of its determinant to the product of its rows' norms (Hadamard's bound: 1 for
     // orthogonal rows, 0 for a singular system).
-    let mut best: Option<(usize, [[f64; 10]; 3], Matrix3<f64>, f64)> = None;
+    let mut best: Option<(usize, f64)> = None;
     for p in 0..3 {
-        let qs = quadrics.map(|q| permuted(&q, p));
-        let c = Matrix3::from_fn(|i, j| qs[i][j]);
+        let c = Matrix3::from_fn(|i, j| quadrics[i][PERMUTED_INVERSE[p][j]]);
         let rows = c.row(0).norm() * c.row(1).norm() * c.row(2).norm();
         let ratio = c.determinant().abs() / rows;
-        if best.as_ref().is_none_or(|b| ratio > b.3) {
-            best = Some((p, qs, c, ratio));
+        if best.is_none_or(|b| ratio > b.1) {
+            best = Some((p, ratio));
         }
     }
-    let Some((p, qs, c, ratio)) = best else {
+    let Some((p, ratio)) = best else {
         return out;
     };
     if !(ratio > 1e-12) {
         return out;
     }
+    let qs = quadrics.map(|q| permuted(&q, p));
+    let c = Matrix3::from_fn(|i, j| qs[i][j]);
     let perm = PERMS[p];
     let Some(ci) = c.try_inverse() else {
         return out;

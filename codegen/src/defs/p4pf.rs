@@ -127,6 +127,16 @@ pub fn p4pf_quadrics() -> Kernel {
             k.output(&format!("q{}_{mono}", n + 1), coefficient(qd, (x, y, z), e));
         }
     }
+    k.table(
+        "P4PF_QUADRIC_EXPONENTS",
+        "Exponents `[i, j, k]` of `x^i y^j z^k` for each quadric's 10 coefficients, in the order \
+         of `p4pf_quadrics`' outputs (and of `e3q3`'s quadrics).",
+        "[u8; 3]",
+        QUADRIC_EXPONENTS
+            .iter()
+            .map(|[i, j, l]| format!("[{i}, {j}, {l}]"))
+            .collect(),
+    );
     k.output_doc = "`[q1, q2, q3, q4]` (10 each): each quadric's coefficients of `x^2, xy, y^2, \
                     xz, yz, z^2, x, y, z, 1`."
         .into();

@@ -13,7 +13,7 @@ use rand_core::SeedableRng;
 use rand_pcg::Pcg64;
 
 use super::chance;
-use super::score::index;
+use super::score::{index, msac};
 use super::{needed_iterations, Ransac, RansacSolution, RansacStats, FINAL_STEPS, LO_STEPS};
 use crate::camera::Camera;
 use crate::error::{InputKind, PnpError};
@@ -128,19 +128,8 @@ impl Ransac {
             }
         };
         let score = |r: &Matrix3<f64>, t: &Vector3<f64>, scale: f64, bound: f64| {
-            let (mut cost, mut inliers) = (0.0, 0);
-            for &i in &usable {
-                let e2 = sq_err(r, t, scale, i, th2);
-                if e2 < th2 {
-                    cost += e2;
-                    inliers += 1;
-                } else {
-                    cost += th2;
-                }
-                if cost > bound {
-                    return None;
-                }
-            }
+            let errors = usable.iter().map(|&i| sq_err(r, t, scale, i, th2));
+            let (cost, inliers) = msac(errors, th2, bound)?;
             Some(Scored {
                 r: *r,
                 t: *t,

@@ -11,7 +11,7 @@ use rand_core::SeedableRng;
 use rand_pcg::Pcg64;
 
 use super::chance;
-use super::score::{sample2, sample3};
+use super::score::{msac, sample2, sample3};
 use super::upright::Upright;
 use super::{needed_iterations, Ransac, RansacSolution, RansacStats, FINAL_STEPS, LO_STEPS};
 use crate::error::PnpError;
@@ -64,19 +64,9 @@ impl Ransac {
             c.len()
         };
         let score = |r: &Matrix3<f64>, t: &Vector3<f64>, bound: f64| -> Option<Scored> {
-            let (mut cost, mut inliers) = (0.0, 0);
-            for k in 0..m {
-                let e2 = pixel_error2(&rays, input.rig, input.world, input.pixels, k, r, t);
-                if e2 < th2 {
-                    cost += e2;
-                    inliers += 1;
-                } else {
-                    cost += th2;
-                }
-                if cost > bound {
-                    return None;
-                }
-            }
+            let errors =
+                (0..m).map(|k| pixel_error2(&rays, input.rig, input.world, input.pixels, k, r, t));
+            let (cost, inliers) = msac(errors, th2, bound)?;
             Some(Scored {
                 r: *r,
                 t: *t,

@@ -52,20 +52,11 @@ impl ScoringSet<'_> {
         th2: f64,
         bound: f64,
     ) -> Option<Scored> {
-        let mut cost = 0.0;
-        let mut inliers = 0;
-        for i in 0..self.world.len() {
-            let e = self.sq_err(r, t, i);
-            if e < th2 {
-                cost += e;
-                inliers += 1;
-            } else {
-                cost += th2;
-            }
-            if cost > bound {
-                return None;
-            }
-        }
+        let (cost, inliers) = msac(
+            (0..self.world.len()).map(|i| self.sq_err(r, t, i)),
+            th2,
+            bound,
+        )?;
         Some(Scored {
             r: *r,
             t: *t,
@@ -205,6 +196,28 @@ impl FitBuffers {
 #[inline]
 pub(crate) fn index(rng: &mut Pcg64, n: usize) -> usize {
     ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize
+}
+
+/// The MSAC cost `sum min(e2, th2)` of the squared errors `errors` and the number below `th2`,
+/// or `None` as soon as the cost exceeds `bound` (the hypothesis cannot beat the best one).
+pub(super) fn msac(
+    errors: impl Iterator<Item = f64>,
+    th2: f64,
+    bound: f64,
+) -> Option<(f64, usize)> {
+    let (mut cost, mut inliers) = (0.0, 0);
+    for e2 in errors {
+        if e2 < th2 {
+            cost += e2;
+            inliers += 1;
+        } else {
+            cost += th2;
+        }
+        if cost > bound {
+            return None;
+        }
+    }
+    Some((cost, inliers))
 }
 
 /// Two distinct indices in `0..n`, or `None` (n < 2, or the bounded attempts ran out).
