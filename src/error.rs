@@ -133,7 +133,11 @@ pub enum PnpError {
     /// and >= 1; or the focal lengths given to [`crate::ransac::Ransac::estimate`] are not
     /// finite and > 0 (`"focal"`); or the initial pose given to [`crate::Solver::refine`] is
     /// not finite (`"initial"`); or the [`crate::Loss`] of [`crate::Solver::loss`] has an
-    /// unusable scale (`"loss"`, see [`crate::Loss::is_valid`]).
+    /// unusable scale (`"loss"`, see [`crate::Loss::is_valid`]); or a [`crate::Gravity`] with a
+    /// zero or non-finite direction or a `sigma_deg` not finite and positive (`"gravity"`); or an
+    /// unknown focal length ([`crate::Problem::unknown_focal`]) on input other than pixels through
+    /// one camera, with a known vertical, or with a range that is not `0 < min < max`
+    /// (`"unknown_focal"`).
     InvalidOption {
         /// The option's field name.
         option: &'static str,
