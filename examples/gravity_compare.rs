@@ -22,8 +22,8 @@ use eopnp::camera::Camera;
 use eopnp::ransac::{problem_seed, Ransac};
 use eopnp::{Gravity, Problem, Solver};
 use eopnp_testkit::{
-    axis_angle, median, rng_from_seed, rot_err_deg, unit_vector, ProblemOptions, RotationKind,
-    Scene,
+    axis_angle, gauss, median, rng_from_seed, rot_err_deg, unit_vector, ProblemOptions,
+    RotationKind, Scene,
 };
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use rand::Rng;
@@ -34,12 +34,6 @@ struct Case {
     pixels: Vec<Point2<f64>>,
     r: Matrix3<f64>,
     gravity: Gravity,
-}
-
-fn gauss(rng: &mut rand_pcg::Pcg64) -> f64 {
-    let u1: f64 = rng.random_range(f64::MIN_POSITIVE..1.0);
-    let u2: f64 = rng.random_range(0.0..1.0);
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
 }
 
 fn down_world() -> Vector3<f64> {

@@ -7,7 +7,7 @@
 
 use eopnp::camera::Camera;
 use eopnp::{Gravity, PnpError, Problem, Solver};
-use eopnp_testkit::{lm_refine_focal, rng_from_seed, rot_err_deg, trial_seed};
+use eopnp_testkit::{gauss, lm_refine_focal, rng_from_seed, rot_err_deg, trial_seed};
 use nalgebra::{Point2, Point3, Vector3};
 use rand::Rng;
 
@@ -21,12 +21,6 @@ struct Case {
     t: Vector3<f64>,
     f: f64,
     c: Point2<f64>,
-}
-
-fn gauss(rng: &mut rand_pcg::Pcg64) -> f64 {
-    let u1: f64 = rng.random_range(f64::MIN_POSITIVE..1.0);
-    let u2: f64 = rng.random_range(0.0..1.0);
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
 }
 
 /// A camera of focal length 300 to 3,000 px (log-uniform), a 640 x 480 image, a random

@@ -7,7 +7,7 @@
 use eopnp::camera::Camera;
 use eopnp::{Gravity, PnpError, Problem, Rig, Solver};
 use eopnp_testkit::{
-    axis_angle, lm_refine_vertical, rng_from_seed, rot_err_deg, trial_seed, unit_vector,
+    axis_angle, gauss, lm_refine_vertical, rng_from_seed, rot_err_deg, trial_seed, unit_vector,
     ProblemOptions, RotationKind, Scene,
 };
 use nalgebra::{Isometry3, Matrix3, Point2, Point3, Translation3, UnitQuaternion, Vector3};
@@ -38,13 +38,6 @@ fn measured(r: &Matrix3<f64>, sigma_deg: f64, rng: &mut rand_pcg::Pcg64) -> Vect
     let s = sigma_deg.to_radians();
     let w = a * (s * gauss(rng)) + b * (s * gauss(rng));
     axis_angle(&w.normalize(), w.norm()) * g
-}
-
-fn gauss(rng: &mut rand_pcg::Pcg64) -> f64 {
-    // Box-Muller.
-    let u1: f64 = rng.random_range(f64::MIN_POSITIVE..1.0);
-    let u2: f64 = rng.random_range(0.0..1.0);
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
 }
 
 /// The posterior cost of a pose: `cost + lambda |R g_w - g_c|^2`.

@@ -22,7 +22,9 @@ pub use lm::{
 pub use metrics::{max_of, mean, median, pose_of, rot_err_deg, trans_err_pct, trans_err_rel};
 pub use problem::{Problem, ProblemOptions, RotationKind, Scene};
 pub use rotation::{axis_angle, exp_so3, haar_rotation, rotation_near_180};
-pub use seed::{gauss3, name_hash, rng_from_seed, splitmix64, suite_seed, trial_seed, unit_vector};
+pub use seed::{
+    gauss, gauss3, name_hash, rng_from_seed, splitmix64, suite_seed, trial_seed, unit_vector,
+};
 
 /// Focal length of the synthetic camera, pixels (docs/algorithm.md section 7).
 pub const F: f64 = 800.0;

@@ -394,13 +394,7 @@ pub fn lm_refine_focal(
             if with_jac {
                 let dp = nalgebra::Matrix2x3::new(1.0, 0.0, -p.x / p.z, 0.0, 1.0, -p.y / p.z)
                     * (f / p.z);
-                let dw = -(dp * q.cross_matrix());
-                for k in 0..3 {
-                    jac[(2 * i, k)] = dw[(0, k)];
-                    jac[(2 * i + 1, k)] = dw[(1, k)];
-                    jac[(2 * i, 3 + k)] = dp[(0, k)];
-                    jac[(2 * i + 1, 3 + k)] = dp[(1, k)];
-                }
+                jacobian_rows(&mut jac, i, &dp, &q);
                 jac[(2 * i, 6)] = p.x / p.z;
                 jac[(2 * i + 1, 6)] = p.y / p.z;
             }

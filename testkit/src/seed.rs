@@ -46,7 +46,8 @@ pub fn rng_from_seed(seed: u64) -> Pcg64 {
     Pcg64::seed_from_u64(seed)
 }
 
-pub(crate) fn gauss(rng: &mut Pcg64) -> f64 {
+/// A standard normal number.
+pub fn gauss(rng: &mut Pcg64) -> f64 {
     rng.sample(StandardNormal)
 }
 
