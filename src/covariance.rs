@@ -46,6 +46,11 @@ pub struct PoseCovariance {
     pub matrix: Matrix6<f64>,
     /// The noise standard deviation used, in image units (given or estimated).
     pub sigma: f64,
+    /// With an unknown focal length ([`crate::Problem::unknown_focal`]): the standard deviation
+    /// of the estimated focal length (pixels, the first focal length; the others scale alike).
+    /// The pose's covariance is then its marginal one, the focal length's (and any other
+    /// refined intrinsic's) uncertainty included. `None` otherwise.
+    pub focal_sigma: Option<f64>,
 }
 
 /// Maps a normalised residual at a normalised point to image units.
@@ -113,8 +118,18 @@ pub(crate) fn pose_covariance(
         return None;
     }
     let cov_theta = h.cholesky()?.inverse() * (sigma * sigma);
-    // theta = 2 delta_q: scale the rotation rows and columns by 1/2.
-    let mut matrix = cov_theta;
+    from_rotation_vector(&cov_theta, sigma, None)
+}
+
+/// The [`PoseCovariance`] of the covariance `cov_theta` of `[theta, delta_t]` (`R = Exp(theta)
+/// R_hat`), or `None` if it is not finite: `theta = 2 delta_q` scales the rotation rows and
+/// columns by 1/2.
+pub(crate) fn from_rotation_vector(
+    cov_theta: &Matrix6<f64>,
+    sigma: f64,
+    focal_sigma: Option<f64>,
+) -> Option<PoseCovariance> {
+    let mut matrix = *cov_theta;
     for k in 0..6 {
         for l in 0..6 {
             let s = match (k < 3, l < 3) {
@@ -125,10 +140,13 @@ pub(crate) fn pose_covariance(
             matrix[(k, l)] *= s;
         }
     }
-    matrix
-        .iter()
-        .all(|x| x.is_finite())
-        .then_some(PoseCovariance { matrix, sigma })
+    (matrix.iter().all(|x| x.is_finite()) && focal_sigma.is_none_or(f64::is_finite)).then_some(
+        PoseCovariance {
+            matrix,
+            sigma,
+            focal_sigma,
+        },
+    )
 }
 
 fn skew(v: &Vector3<f64>) -> Matrix3<f64> {

@@ -47,6 +47,8 @@ pub struct Problem<'a> {
     pub(crate) weights: Option<&'a [f64]>,
     pub(crate) gravity: Option<Gravity>,
     pub(crate) unknown_focal: Option<FocalRange>,
+    pub(crate) refine_principal_point: bool,
+    pub(crate) refine_distortion: bool,
 }
 
 /// Where an unknown focal length is sought ([`Problem::unknown_focal`]).
@@ -113,6 +115,8 @@ impl<'a> Problem<'a> {
             weights: None,
             gravity: None,
             unknown_focal: None,
+            refine_principal_point: false,
+            refine_distortion: false,
         }
     }
 
@@ -130,6 +134,8 @@ impl<'a> Problem<'a> {
             weights: None,
             gravity: None,
             unknown_focal: None,
+            refine_principal_point: false,
+            refine_distortion: false,
         }
     }
 
@@ -190,6 +196,8 @@ impl<'a> Problem<'a> {
             weights: None,
             gravity: None,
             unknown_focal: None,
+            refine_principal_point: false,
+            refine_distortion: false,
         }
     }
 
@@ -214,10 +222,11 @@ impl<'a> Problem<'a> {
     /// The camera's focal length is unknown (pixels through a camera only, [`Problem::pixels`]):
     /// it is estimated with the pose, between a tenth and ten times the camera's, which is the
     /// starting guess (square pixels: a camera's two focal lengths scaled alike; the principal
-    /// point and the distortion as given). The solution carries it in
-    /// [`Solution::focal`](crate::Solution::focal); the pose and focal length minimise the pixel
-    /// error together (docs/algorithm.md, `refine_focal`). Normalised or rig input with it is
-    /// [`crate::PnpError::InvalidOption`] (`"unknown_focal"`).
+    /// point and the distortion as given, unless [`Problem::refine_principal_point`] or
+    /// [`Problem::refine_distortion`]). The solution carries the estimated camera in
+    /// [`Solution::camera`](crate::Solution::camera); the pose and focal length minimise the
+    /// pixel error together (docs/algorithm.md, `refine_intrinsics`). Normalised or rig input,
+    /// or a known vertical, with it is [`crate::PnpError::InvalidOption`] (`"unknown_focal"`).
     ///
     /// ```
     /// use eopnp::camera::Camera;
@@ -236,7 +245,7 @@ impl<'a> Problem<'a> {
     /// // The camera as far as known: the focal length a guess, 800 px.
     /// let guess = Camera::pinhole(800.0, 800.0, 320.0, 240.0)?;
     /// let sol = Solver::default().solve(&Problem::pixels(&world, &pixels, &guess).unknown_focal())?;
-    /// let (fx, _) = sol.focal.unwrap();
+    /// let (fx, _) = sol.camera.unwrap().focal_lengths();
     /// assert!((fx - 1200.0).abs() < 1e-6);
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
@@ -252,6 +261,34 @@ impl<'a> Problem<'a> {
     #[must_use]
     pub fn unknown_focal_within(mut self, min_px: f64, max_px: f64) -> Self {
         self.unknown_focal = Some(FocalRange::Pixels(min_px, max_px));
+        self
+    }
+
+    /// The principal point is refined with the pose (and the focal length when unknown), the
+    /// camera's the starting guess: pixels through a camera only (COLMAP's
+    /// `refine_principal_point`). The estimate is well determined only by many points over a
+    /// wide field of view; the solution carries it in
+    /// [`Solution::camera`](crate::Solution::camera). Normalised or rig input, or a known
+    /// vertical, with it is [`crate::PnpError::InvalidOption`] (`"refine_principal_point"`);
+    /// fewer correspondences than the free parameters' half is
+    /// [`crate::PnpError::TooFewPoints`].
+    #[must_use]
+    pub fn refine_principal_point(mut self) -> Self {
+        self.refine_principal_point = true;
+        self
+    }
+
+    /// The camera's distortion parameters (those after the principal point in
+    /// [`Camera::params`](crate::camera::Camera::params); none for the pinhole models) are
+    /// refined with the pose (and the focal length when unknown), the camera's the starting
+    /// guess: pixels through a camera only (COLMAP's `refine_extra_params`). The solution
+    /// carries them in [`Solution::camera`](crate::Solution::camera). Normalised or rig input,
+    /// or a known vertical, with it is [`crate::PnpError::InvalidOption`]
+    /// (`"refine_distortion"`); fewer correspondences than the free parameters' half is
+    /// [`crate::PnpError::TooFewPoints`].
+    #[must_use]
+    pub fn refine_distortion(mut self) -> Self {
+        self.refine_distortion = true;
         self
     }
 

@@ -78,7 +78,7 @@ fn the_solve_reaches_the_maximum_likelihood_pose_and_focal_length() {
                 "N = {n} seed {seed}: cost {:e} above the reference's {:e} (f {} vs {})",
                 sol.cost,
                 reference.cost,
-                sol.focal.unwrap().0,
+                sol.camera.unwrap().focal_lengths().0,
                 reference.f
             );
         }
@@ -98,7 +98,7 @@ fn noise_free_problems_give_the_focal_length() {
             let sol = Solver::default()
                 .solve(&Problem::pixels(&c.world, &c.pixels, &camera).unknown_focal())
                 .unwrap_or_else(|e| panic!("N = {n} seed {seed}: {e}"));
-            let (fx, fy) = sol.focal.unwrap();
+            let (fx, fy) = sol.camera.unwrap().focal_lengths();
             assert!(
                 (fx / c.f - 1.0).abs() <= 1e-9,
                 "N = {n} seed {seed}: f {fx} vs {}",
@@ -140,7 +140,7 @@ fn a_distorting_camera_keeps_its_distortion() {
         let sol = Solver::default()
             .solve(&Problem::pixels(&c.world, &pixels, &guess).unknown_focal())
             .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
-        let (fx, _) = sol.focal.unwrap();
+        let (fx, _) = sol.camera.unwrap().focal_lengths();
         assert!(
             (fx / c.f - 1.0).abs() <= 1e-9,
             "seed {seed}: f {fx} vs {}",
@@ -191,9 +191,9 @@ fn unsupported_inputs_are_typed_errors() {
     let sol = solver
         .solve(&p.unknown_focal_within(0.5 * c.f, 2.0 * c.f))
         .unwrap();
-    assert!((sol.focal.unwrap().0 / c.f - 1.0).abs() < 1e-9);
+    assert!((sol.camera.unwrap().focal_lengths().0 / c.f - 1.0).abs() < 1e-9);
     // Without an unknown focal length, no estimate.
-    assert_eq!(solver.solve(&p).unwrap().focal, None);
+    assert_eq!(solver.solve(&p).unwrap().camera, None);
 }
 
 /// RANSAC with an unknown focal length at 0, 50 and 80 % outliers (N = 100, 1 px, the camera
@@ -218,7 +218,7 @@ fn ransac_estimates_the_focal_length() {
                 .seed(seed)
                 .estimate(&Solver::default(), &problem)
                 .unwrap_or_else(|e| panic!("{outliers} seed {seed}: f {} guess {guess}: {e}", c.f));
-            let (fx, _) = r.solution.focal.unwrap();
+            let (fx, _) = r.solution.camera.unwrap().focal_lengths();
             assert!(
                 (fx / c.f - 1.0).abs() < 0.02,
                 "{outliers} seed {seed}: f {fx} vs {}",
@@ -285,7 +285,7 @@ fn the_bundled_model_with_its_focal_lengths_withheld() {
                 .unwrap()
                 .solution;
             for (kind, s) in [("plain", plain), ("ransac", robust)] {
-                let f = s.focal.unwrap().0;
+                let f = s.camera.unwrap().focal_lengths().0;
                 let (df, dr) = ((f / f_ref - 1.0).abs(), rot_err_deg(&s.rotation, &r_ref));
                 rows.push((*id, factor, kind, df, dr));
                 assert!(df <= 0.01, "image {id} x{factor} {kind}: f {f} vs {f_ref}");

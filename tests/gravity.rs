@@ -278,11 +278,7 @@ fn rig_case(seed: u64, n: usize, sigma_px: f64) -> RigCase {
             UnitQuaternion::from_euler_angles(0.0, yaw, 0.0),
         )
     };
-    let rig = Rig::new(vec![
-        (cam.clone(), mount(0.3, 0.7)),
-        (cam, mount(-0.3, -0.7)),
-    ])
-    .unwrap();
+    let rig = Rig::new(vec![(cam, mount(0.3, 0.7)), (cam, mount(-0.3, -0.7))]).unwrap();
     let rig_from_world = Isometry3::from_parts(
         Translation3::new(
             rng.random_range(-1.0..1.0),

@@ -247,7 +247,7 @@ fn one_camera_rig_is_the_central_problem() {
         );
         assert!(err <= 1e-10, "seed {seed}: {err:e} deg");
         // A rig of that camera alone, at the identity, is bit for bit the central solve.
-        let alone = Rig::new(vec![(c.rig.cameras()[1].clone(), Isometry3::identity())]).unwrap();
+        let alone = Rig::new(vec![(c.rig.cameras()[1], Isometry3::identity())]).unwrap();
         let zeros = vec![0u32; keep.len()];
         let s1 = Solver::default()
             .solve(&Problem::rig(&world, &pixels, &zeros, &alone))
@@ -366,7 +366,7 @@ fn bad_rig_input_is_a_typed_error() {
         UnitQuaternion::identity(),
     );
     assert_eq!(
-        Rig::new(vec![(c.rig.cameras()[0].clone(), nan_pose)]).unwrap_err(),
+        Rig::new(vec![(c.rig.cameras()[0], nan_pose)]).unwrap_err(),
         PnpError::InvalidOption {
             option: "cam_from_rig"
         }

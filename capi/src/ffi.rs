@@ -1010,10 +1010,7 @@ pub unsafe extern "C" fn eopnp_rig_create(
         let mut parts = Vec::with_capacity(count);
         for (k, (c, p)) in cams.iter().zip(poses).enumerate() {
             let cam = get(*c, &format!("cameras[{k}]"))?;
-            parts.push((
-                cam.camera.clone(),
-                isometry(p, &format!("cam_from_rig[{k}]"))?,
-            ));
+            parts.push((cam.camera, isometry(p, &format!("cam_from_rig[{k}]"))?));
         }
         *out = Box::into_raw(Box::new(EopnpRig {
             rig: Rig::new(parts)?,
@@ -1439,7 +1436,7 @@ pub unsafe extern "C" fn eopnp_model_camera(
             .cameras
             .get(&camera_id)
             .ok_or_else(|| Failure::from(colmap::RegisterError::UnknownCamera(camera_id)))?;
-        new_camera(out, cam.clone())
+        new_camera(out, *cam)
     })
 }
 

@@ -525,8 +525,8 @@ fn rig_solve_is_the_librarys() {
         )
     };
     let rig = Rig::new(vec![
-        (cam.clone(), iso_of(&pose_of(&left))),
-        (cam.clone(), iso_of(&pose_of(&right))),
+        (cam, iso_of(&pose_of(&left))),
+        (cam, iso_of(&pose_of(&right))),
     ])
     .unwrap();
     let s = synthetic(31, 24, 0.0);

@@ -98,14 +98,18 @@ impl From<Camera> for CameraFields {
             model: c.model,
             width: c.width,
             height: c.height,
-            params: c.params,
+            params: c.params().to_vec(),
         }
     }
 }
 
+/// The most parameters of a supported model (`OPENCV_THIN_PRISM_TILTED`'s 18).
+const MAX_PARAMS: usize = 18;
+
 /// A camera: model, image size and parameters (validated on construction; with feature
-/// `serde`, deserialization validates the same way).
-#[derive(Clone, Debug, PartialEq)]
+/// `serde`, deserialization validates the same way). The parameters are stored inline, so a
+/// camera is `Copy` (a [`crate::Solution`] carries an estimated one).
+#[derive(Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
     derive(serde::Serialize, serde::Deserialize),
@@ -115,7 +119,19 @@ pub struct Camera {
     model: CameraModel,
     width: u64,
     height: u64,
-    params: Vec<f64>,
+    /// The model's parameters first, zeros after them.
+    params: [f64; MAX_PARAMS],
+}
+
+impl core::fmt::Debug for Camera {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Camera")
+            .field("model", &self.model)
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("params", &self.params())
+            .finish()
+    }
 }
 
 impl Camera {
@@ -145,12 +161,21 @@ impl Camera {
                 model.params_info()
             )));
         }
-        let cam = Camera {
+        let mut stored = [0.0; MAX_PARAMS];
+        stored[..params.len()].copy_from_slice(&params);
+        Camera {
             model,
             width,
             height,
-            params,
-        };
+            params: stored,
+        }
+        .validated()
+    }
+
+    /// `self` if its focal lengths are positive and its tilt (`OPENCV_THIN_PRISM_TILTED`)
+    /// below `pi/2` (finiteness is the caller's check).
+    fn validated(self) -> Result<Self, CameraError> {
+        let cam = self;
         let (fx, fy) = cam.focal_lengths();
         if !(fx > 0.0 && fy > 0.0) {
             return Err(CameraError::InvalidParams(format!(
@@ -223,7 +248,7 @@ impl Camera {
     /// The parameters in COLMAP's order.
     #[must_use]
     pub fn params(&self) -> &[f64] {
-        &self.params
+        &self.params[..self.model.num_params()]
     }
 
     /// Focal lengths `(fx, fy)` in pixels (`(f, f)` for single-focal models): the scale from
@@ -238,10 +263,28 @@ impl Camera {
         }
     }
 
+    /// The indices in [`Camera::params`] of the principal point `(cx, cy)` and of the
+    /// distortion parameters (all those after the principal point).
+    pub(crate) fn intrinsic_groups(&self) -> ([usize; 2], core::ops::Range<usize>) {
+        let first = if self.model.single_focal() { 1 } else { 2 };
+        ([first, first + 1], first + 2..self.model.num_params())
+    }
+
+    /// This camera with the parameters `changed` (of [`Camera::params`]' length), or `None`
+    /// if they are not a valid camera ([`Camera::new`]'s checks).
+    pub(crate) fn with_params(&self, changed: &[f64]) -> Option<Camera> {
+        if changed.len() != self.model.num_params() || changed.iter().any(|p| !p.is_finite()) {
+            return None;
+        }
+        let mut c = *self;
+        c.params[..changed.len()].copy_from_slice(changed);
+        c.validated().ok()
+    }
+
     /// This camera with its focal length(s) multiplied by `scale` (finite and positive: the
     /// caller's promise), everything else equal.
     pub(crate) fn with_focal_scale(&self, scale: f64) -> Camera {
-        let mut c = self.clone();
+        let mut c = *self;
         c.params[0] *= scale;
         if !self.model.single_focal() {
             c.params[1] *= scale;

@@ -131,7 +131,7 @@ impl Camera {
     /// ```
     #[must_use]
     pub fn to_opencv(&self) -> Option<(Matrix3<f64>, Vec<f64>)> {
-        let p = &self.params;
+        let p = self.params();
         let dist = match self.model {
             CameraModel::SimplePinhole | CameraModel::Pinhole => vec![],
             CameraModel::SimpleRadial => vec![p[3], 0.0, 0.0, 0.0],
@@ -163,7 +163,7 @@ impl Camera {
     /// ```
     #[must_use]
     pub fn to_opencv_fisheye(&self) -> Option<(Matrix3<f64>, [f64; 4])> {
-        let p = &self.params;
+        let p = self.params();
         let dist = match self.model {
             CameraModel::OpenCvFisheye => [p[4], p[5], p[6], p[7]],
             CameraModel::SimpleRadialFisheye => [p[3], 0.0, 0.0, 0.0],

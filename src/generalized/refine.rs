@@ -336,14 +336,5 @@ pub(crate) fn covariance(
         }
     };
     let inv = jtj.cholesky()?.inverse();
-    // omega = 2 delta_q: the rotation block / 4, the cross blocks / 2.
-    let mut d = Matrix6::identity();
-    for i in 0..3 {
-        d[(i, i)] = 0.5;
-    }
-    let matrix = d * inv * d * (sigma * sigma);
-    matrix
-        .iter()
-        .all(|x| x.is_finite())
-        .then_some(PoseCovariance { matrix, sigma })
+    crate::covariance::from_rotation_vector(&(inv * (sigma * sigma)), sigma, None)
 }

@@ -14,7 +14,7 @@
 //! | `select` | [`select`] | the minimum with the smallest `f` among those with most points in front | yes (depth signs) |
 //! | `refine` | [`refine`] | default mode: Levenberg-Marquardt on the reprojection error | yes |
 //! | `refine_pixels` | [`refine_pixels`] | in place of `refine`, with a camera with distortion (or a robust loss): Levenberg-Marquardt on the pixel error through the camera | yes |
-//! | `refine_focal` | [`refine_focal`] | with an unknown focal length ([`crate::Problem::unknown_focal`]): Levenberg-Marquardt on the pixel error over pose and focal length | yes |
+//! | `refine_intrinsics` | [`refine_intrinsics`] | with free intrinsics ([`crate::Problem::unknown_focal`], [`crate::Problem::refine_principal_point`], [`crate::Problem::refine_distortion`]): Levenberg-Marquardt on the pixel error over pose and intrinsics | yes |
 //! | `vertical` | [`vertical`] | with a known vertical ([`crate::Gravity`]): from the maximum-likelihood pose to the maximum a posteriori one, and the mismatch test (run by `refine`'s and `refine_pixels`' driver) | yes |
 //! | `output` | [`output`] | back to the world frame; the [`Solution`] | yes |
 //!
@@ -40,7 +40,7 @@ pub(crate) mod options;
 pub(crate) mod output;
 pub(crate) mod planar;
 pub(crate) mod refine;
-pub(crate) mod refine_focal;
+pub(crate) mod refine_intrinsics;
 pub(crate) mod refine_pixels;
 pub(crate) mod refine_rig;
 pub(crate) mod search;

@@ -83,9 +83,10 @@ pub struct Solution {
     /// The pose's covariance, when [`crate::Solver::covariance`] asks for it (and the normal
     /// equations at the pose are positive definite); see [`crate::covariance`].
     pub covariance: Option<PoseCovariance>,
-    /// With an unknown focal length ([`crate::Problem::unknown_focal`]): the camera's estimated
-    /// focal lengths `(fx, fy)`, pixels (the given camera's scaled alike); `None` otherwise.
-    pub focal: Option<(f64, f64)>,
+    /// With estimated intrinsics ([`crate::Problem::unknown_focal`],
+    /// [`crate::Problem::refine_principal_point`], [`crate::Problem::refine_distortion`]): the
+    /// estimated camera, the given one with those intrinsics replaced; `None` otherwise.
+    pub camera: Option<crate::camera::Camera>,
 }
 
 impl Solution {
@@ -109,7 +110,7 @@ impl Solution {
             used: 0,
             skipped: 0,
             covariance: None,
-            focal: None,
+            camera: None,
         }
     }
 
@@ -459,7 +460,7 @@ impl Output<'_> {
             used: self.fr.n_active,
             skipped: 0,
             covariance: None,
-            focal: None,
+            camera: None,
         };
         // Reprojection mode promises the maximum-likelihood pose; a pose with a point at depth
         // 0 has an infinite reprojection error and is not one (found by fuzzing, with an image

@@ -302,9 +302,17 @@ impl Ransac {
         problem: &Problem<'_>,
     ) -> Result<RansacSolution, PnpError> {
         let (world, weights) = (problem.world, problem.weights);
-        if let Some(range) = problem.unknown_focal {
-            let (points, camera) = crate::solver::focal_input(problem)?;
-            return self.estimate_focal(solver, camera, world, points, weights, range);
+        if let Some((points, camera, free)) = crate::solver::intrinsics_input(problem)? {
+            let out = match free.range {
+                Some(range) => {
+                    self.estimate_focal(solver, camera, world, points, weights, range)?
+                }
+                None => self.estimate_pixels(solver, camera, world, points, weights, None)?,
+            };
+            if !(free.free.principal_point || free.free.distortion) {
+                return Ok(out);
+            }
+            return self.refit_intrinsics(solver, (world, points, weights), camera, free, out);
         }
         match problem.observations {
             Observations::Normalised { points, focal } => {
@@ -642,6 +650,7 @@ fn inlier_weight(inliers: &[bool], weights: Option<&[f64]>, i: usize) -> f64 {
 
 mod chance;
 mod focal;
+mod intrinsics;
 mod rig;
 mod score;
 mod upright;

@@ -8,6 +8,7 @@ use crate::camera::{Camera, Projector};
 use crate::covariance::{pose_covariance, Metric, NoiseModel};
 use crate::error::PnpError;
 use crate::gravity::Gravity;
+use crate::pipeline::refine_intrinsics::Free;
 use crate::pipeline::vertical::Vertical;
 use crate::pipeline::{
     self, Loss, Options, PixelInputs, PlanarDetection, Refinement, ReprojOptions, Solution,
@@ -15,7 +16,8 @@ use crate::pipeline::{
 };
 use crate::problem::{Observations, Problem};
 
-mod focal;
+mod intrinsics;
+pub(crate) use intrinsics::FreeIntrinsics;
 mod rig;
 mod undistort;
 
@@ -317,9 +319,8 @@ impl Solver {
     ) -> Result<Solution, PnpError> {
         let this = self.for_problem(problem);
         let (world, weights) = (problem.world, problem.weights);
-        if let Some(range) = problem.unknown_focal {
-            let (points, camera) = focal_input(problem)?;
-            return this.refine_pixels_focal(world, points, camera, weights, range, initial);
+        if let Some((points, camera, free)) = intrinsics_input(problem)? {
+            return this.refine_pixels_intrinsics(world, points, camera, weights, free, initial);
         }
         match problem.observations {
             Observations::Normalised { points, .. } => {
@@ -361,9 +362,8 @@ impl Solver {
     ) -> Result<Solution, PnpError> {
         let this = self.for_problem(problem);
         let (world, weights) = (problem.world, problem.weights);
-        if let Some(range) = problem.unknown_focal {
-            let (points, camera) = focal_input(problem)?;
-            let sol = this.pixels_focal(world, points, camera, weights, range)?;
+        if let Some((points, camera, free)) = intrinsics_input(problem)? {
+            let sol = this.pixels_intrinsics(world, points, camera, weights, free)?;
             if let Some(all) = all {
                 all.clear();
                 all.push(sol);
@@ -648,18 +648,42 @@ fn rig_problem<'a>(
     }
 }
 
-/// The pixels and camera of a problem with an unknown focal length, or
-/// [`PnpError::InvalidOption`] (`"unknown_focal"`): only pixels through a camera, without a known
-/// vertical, can have one.
-pub(crate) fn focal_input<'a>(
+/// A problem's pixels, camera and free intrinsics ([`intrinsics_input`]).
+pub(crate) type IntrinsicsInput<'a> = (&'a [Point2<f64>], &'a Camera, FreeIntrinsics);
+
+/// The pixels, the camera and the free intrinsics of a problem that estimates intrinsics
+/// ([`Problem::unknown_focal`], [`Problem::refine_principal_point`],
+/// [`Problem::refine_distortion`]); `None` when it estimates none;
+/// [`PnpError::InvalidOption`] (naming the first option asked for) unless its input is pixels
+/// through a camera, without a known vertical.
+pub(crate) fn intrinsics_input<'a>(
     problem: &Problem<'a>,
-) -> Result<(&'a [Point2<f64>], &'a Camera), PnpError> {
+) -> Result<Option<IntrinsicsInput<'a>>, PnpError> {
+    let free = Free {
+        focal: problem.unknown_focal.is_some(),
+        principal_point: problem.refine_principal_point,
+        distortion: problem.refine_distortion,
+    };
+    if !free.any() {
+        return Ok(None);
+    }
     match problem.observations {
-        Observations::Pixels { points, camera } if problem.gravity.is_none() => {
-            Ok((points, camera))
-        }
+        Observations::Pixels { points, camera } if problem.gravity.is_none() => Ok(Some((
+            points,
+            camera,
+            FreeIntrinsics {
+                free,
+                range: problem.unknown_focal,
+            },
+        ))),
         _ => Err(PnpError::InvalidOption {
-            option: "unknown_focal",
+            option: if free.focal {
+                "unknown_focal"
+            } else if free.principal_point {
+                "refine_principal_point"
+            } else {
+                "refine_distortion"
+            },
         }),
     }
 }

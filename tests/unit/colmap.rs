@@ -194,7 +194,7 @@ fn registration_rmse_is_the_pixel_rmse_of_its_pose() {
             points: points.clone(),
             ..Model::default()
         };
-        model.cameras.insert(1, cam.clone());
+        model.cameras.insert(1, cam);
         for id in 1..=3u32 {
             let r = Rotation3::from_euler_angles(0.2 * rnd(), 0.2 * rnd(), 0.2 * rnd());
             let t = Vector3::new(rnd(), rnd(), 10.0 + rnd());

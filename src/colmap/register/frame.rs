@@ -79,7 +79,7 @@ fn frame_images<'m>(model: &'m Model, frame: &Frame) -> Result<FrameImages<'m>, 
             },
         )?;
         out.images.push(img);
-        out.cameras.push((cam.clone(), pose.isometry()));
+        out.cameras.push((*cam, pose.isometry()));
     }
     if out.images.is_empty() {
         return Err(RegisterError::EmptyFrame(frame.id));

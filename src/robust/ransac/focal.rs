@@ -1,7 +1,7 @@
 //! RANSAC with an unknown focal length ([`crate::Problem::unknown_focal`]): samples of four
 //! correspondences solved by P4Pf ([`crate::numeric::p4pf`]; poses with their focal lengths,
 //! those outside the range dropped), MSAC scoring of the pixel error through the camera at each
-//! hypothesis' focal length, local optimisation and the final fit by `refine_focal` (pose and
+//! hypothesis' focal length, local optimisation and the final fit by `refine_intrinsics` (pose and
 //! focal length together) on the inliers, the final solution the unknown-focal refinement of
 //! the final inliers ([`crate::Solver::refine`]), and the same a contrario consensus as with a
 //! known focal length.
@@ -18,7 +18,7 @@ use super::{needed_iterations, Ransac, RansacSolution, RansacStats, FINAL_STEPS,
 use crate::camera::Camera;
 use crate::error::{InputKind, PnpError};
 use crate::numeric::p4pf::p4pf;
-use crate::pipeline::refine_focal::{refine_focal, FocalInputs};
+use crate::pipeline::refine_intrinsics::{refine_intrinsics, Free, IntrinsicsInputs};
 use crate::problem::{FocalRange, Problem};
 use crate::Solver;
 
@@ -139,7 +139,7 @@ impl Ransac {
             })
         };
         let mut mask = vec![0.0; n];
-        // `refine_focal` on the points within `thr2` of `(r, t, scale)` (the caller's weights).
+        // `refine_intrinsics` (the focal length free) on the points within `thr2` of `(r, t, scale)` (the caller's weights).
         let mut fit = |r: &Matrix3<f64>, t: &Vector3<f64>, scale: f64, thr2: f64| {
             let mut count = 0;
             for (i, m) in mask.iter_mut().enumerate() {
@@ -156,15 +156,20 @@ impl Ransac {
             if count < MIN_FIT_POINTS.min(usable.len()) {
                 return None;
             }
-            let inp = FocalInputs {
+            let inp = IntrinsicsInputs {
                 world,
                 pixels,
                 weights: Some(&mask),
-                camera,
+                free: Free {
+                    focal: true,
+                    ..Free::default()
+                },
             };
-            refine_focal(&inp, r, t, scale, FIT_ITERATIONS)
-                .filter(|o| o.scale >= lo && o.scale <= hi && o.cost.is_finite())
-                .map(|o| (o.r, o.t, o.scale))
+            let start = camera.with_focal_scale(scale);
+            refine_intrinsics(&inp, r, t, &start, FIT_ITERATIONS)
+                .map(|o| (o.r, o.t, o.camera.focal_lengths().0 / f0, o.cost))
+                .filter(|&(_, _, s, cost)| s >= lo && s <= hi && cost.is_finite())
+                .map(|(r, t, s, _)| (r, t, s))
         };
 
         let mut stats = RansacStats::default();

@@ -1,21 +1,27 @@
-//! Solves with an unknown focal length ([`crate::Problem::unknown_focal`]): the focal length and
-//! the pose that minimise the pixel error together.
+//! Solves with free intrinsics: an unknown focal length ([`crate::Problem::unknown_focal`]),
+//! a refined principal point or distortion ([`crate::Problem::refine_principal_point`],
+//! [`crate::Problem::refine_distortion`]): the intrinsics and the pose that minimise the pixel
+//! error together.
 //!
-//! The search (docs/algorithm.md, `refine_focal`): P4Pf ([`crate::numeric::p4pf`]) on
-//! [`SUBSETS`] four-point subsets spread over the correspondences gives candidate focal lengths,
-//! each scored by its hypothesis' pixel cost on every correspondence; the best
-//! [`STARTS`] - 1 of them within the range, and the camera's own focal length, each start a
-//! full solve at that focal length (EOPnP and the maximum-likelihood refinement: the global pose
-//! for it), and `refine_focal` runs from each to a minimum over pose and focal length together.
-//! The lowest wins.
+//! With an unknown focal length, the search (docs/algorithm.md, `refine_intrinsics`): P4Pf
+//! ([`crate::numeric::p4pf`]) on [`SUBSETS`] four-point subsets spread over the
+//! correspondences gives candidate focal lengths, each scored by its hypothesis' pixel cost on
+//! every correspondence; the best [`STARTS`] - 1 of them within the range, and the camera's own
+//! focal length, each start a full solve at that focal length (EOPnP and the maximum-likelihood
+//! refinement: the global pose for it), and `refine_intrinsics` runs from each to a minimum
+//! over pose and intrinsics together. The lowest wins. With a known focal length, the one start
+//! is the solve through the given camera.
 
 use nalgebra::{Isometry3, Matrix3, Point2, Point3, Vector3};
 
 use super::Solver;
 use crate::camera::Camera;
+use crate::covariance::{from_rotation_vector, NoiseModel};
 use crate::error::PnpError;
 use crate::numeric::p4pf::p4pf;
-use crate::pipeline::refine_focal::{refine_focal, FocalInputs, FocalOutcome, MAX_ITERATIONS};
+use crate::pipeline::refine_intrinsics::{
+    covariance, refine_intrinsics, Free, IntrinsicsInputs, IntrinsicsOutcome, MAX_ITERATIONS,
+};
 use crate::pipeline::Solution;
 use crate::problem::{FocalRange, Problem};
 
@@ -29,57 +35,106 @@ const STARTS: usize = 4;
 /// field of view, where the perspective that fixes the focal length is faint.
 const GRID: usize = 7;
 
+/// The free intrinsics of a solve: which, and the focal length's range (its scale over the
+/// camera's; `(1, 1)` when it is known).
+#[derive(Clone, Copy)]
+pub(crate) struct FreeIntrinsics {
+    pub free: Free,
+    pub range: Option<FocalRange>,
+}
+
+impl FreeIntrinsics {
+    /// The focal scale's range, checked, for a camera of first focal length `f0`.
+    fn scales(self, f0: f64) -> Result<(f64, f64), PnpError> {
+        self.range.map_or(Ok((1.0, 1.0)), |r| r.scales(f0))
+    }
+}
+
+/// `TooFewPoints` unless the correspondences of weight > 0 determine the pose and the free
+/// intrinsics (two equations each).
+fn check_count(
+    world: &[Point3<f64>],
+    weights: Option<&[f64]>,
+    camera: &Camera,
+    free: Free,
+) -> Result<(), PnpError> {
+    let (centre, dist) = camera.intrinsic_groups();
+    let params = 6
+        + usize::from(free.focal)
+        + if free.principal_point {
+            centre.len()
+        } else {
+            0
+        }
+        + if free.distortion { dist.len() } else { 0 };
+    let got = weights.map_or(world.len(), |w| w.iter().filter(|x| **x > 0.0).count());
+    let need = params.div_ceil(2);
+    if got < need {
+        return Err(PnpError::TooFewPoints { got, need });
+    }
+    Ok(())
+}
+
 impl Solver {
-    /// The solve of pixels through `camera` with its focal length unknown, in `range`.
-    pub(super) fn pixels_focal(
+    /// The solve of pixels through `camera` with the intrinsics `free` estimated.
+    pub(super) fn pixels_intrinsics(
         &self,
         world: &[Point3<f64>],
         pixels: &[Point2<f64>],
         camera: &Camera,
         weights: Option<&[f64]>,
-        range: FocalRange,
+        free: FreeIntrinsics,
     ) -> Result<Solution, PnpError> {
         let (f0, _) = camera.focal_lengths();
-        let (lo, hi) = range.scales(f0)?;
+        let range = free.scales(f0)?;
         // The inputs checked (and the solve at the camera's focal length, one of the starts).
         let mut p = Problem::pixels(world, pixels, camera);
         if let Some(w) = weights {
             p = p.weights(w);
         }
         let first = self.solve(&p)?;
-        self.finish_focal(world, pixels, camera, weights, (lo, hi), first, true)
+        check_count(world, weights, camera, free.free)?;
+        let search = free.free.focal;
+        self.finish_intrinsics(
+            world, pixels, camera, weights, free.free, range, first, search,
+        )
     }
 
-    /// [`Solver::refine`] of pixels through `camera` with its focal length unknown: the pose
-    /// refined from `initial` at the camera's focal length, then over pose and focal length.
-    pub(super) fn refine_pixels_focal(
+    /// [`Solver::refine`] of pixels through `camera` with the intrinsics `free` estimated: the
+    /// pose refined from `initial` through the given camera, then over pose and intrinsics.
+    pub(super) fn refine_pixels_intrinsics(
         &self,
         world: &[Point3<f64>],
         pixels: &[Point2<f64>],
         camera: &Camera,
         weights: Option<&[f64]>,
-        range: FocalRange,
+        free: FreeIntrinsics,
         initial: &Isometry3<f64>,
     ) -> Result<Solution, PnpError> {
         let (f0, _) = camera.focal_lengths();
-        let (lo, hi) = range.scales(f0)?;
+        let range = free.scales(f0)?;
         let mut p = Problem::pixels(world, pixels, camera);
         if let Some(w) = weights {
             p = p.weights(w);
         }
         let first = self.refine(&p, initial)?;
-        self.finish_focal(world, pixels, camera, weights, (lo, hi), first, false)
+        check_count(world, weights, camera, free.free)?;
+        self.finish_intrinsics(
+            world, pixels, camera, weights, free.free, range, first, false,
+        )
     }
 
-    /// From `first`, the solution at the camera's focal length: with `search`, the other starts
-    /// (module docs); `refine_focal` from each, the lowest within `(lo, hi)` as the solution.
+    /// From `first`, the solution through the given camera: with `search`, the other focal
+    /// lengths' starts (module docs); `refine_intrinsics` from each, the lowest with its focal
+    /// scale within `(lo, hi)` as the solution.
     #[allow(clippy::too_many_arguments)]
-    fn finish_focal(
+    fn finish_intrinsics(
         &self,
         world: &[Point3<f64>],
         pixels: &[Point2<f64>],
         camera: &Camera,
         weights: Option<&[f64]>,
+        free: Free,
         (lo, hi): (f64, f64),
         first: Solution,
         search: bool,
@@ -114,22 +169,28 @@ impl Solver {
             scored.sort_by(|a, b| a.1.total_cmp(&b.1));
             scored.truncate(STARTS - 1);
         }
-        let inputs = FocalInputs {
+        let inputs = IntrinsicsInputs {
             world,
             pixels,
             weights,
-            camera,
+            free,
         };
-        let mut best: Option<(FocalOutcome, Solution)> = None;
+        let (f0, _) = camera.focal_lengths();
+        let within = |o: &IntrinsicsOutcome| {
+            let scale = o.camera.focal_lengths().0 / f0;
+            scale >= lo && scale <= hi && o.cost.is_finite()
+        };
+        let mut best: Option<(IntrinsicsOutcome, Solution)> = None;
         let mut consider = |sol: Solution, scale: f64| {
-            let out = refine_focal(
+            let start = camera.with_focal_scale(scale);
+            let out = refine_intrinsics(
                 &inputs,
                 &sol.rotation,
                 &sol.translation,
-                scale,
+                &start,
                 MAX_ITERATIONS,
             );
-            if let Some(o) = out.filter(|o| o.scale >= lo && o.scale <= hi && o.cost.is_finite()) {
+            if let Some(o) = out.filter(within) {
                 if best.as_ref().is_none_or(|(b, _)| o.cost < b.cost) {
                     best = Some((o, sol));
                 }
@@ -140,39 +201,34 @@ impl Solver {
             consider(sol, s);
         }
         let Some((o, mut sol)) = best else {
-            // No start refined within the range: the camera's focal length stands.
+            // No start refined within the range: the given camera stands.
             let mut sol = first;
-            sol.focal = Some(camera.focal_lengths());
+            sol.camera = Some(*camera);
             return Ok(sol);
         };
-        let (fx, fy) = camera.focal_lengths();
         sol.rotation = o.r;
         sol.translation = o.t;
         sol.cost = o.cost;
         let wsum = weights.map_or(sol.used as f64, |w| w.iter().filter(|x| **x > 0.0).sum());
+        let (fx, fy) = o.camera.focal_lengths();
         sol.reprojection_rmse = if wsum > 0.0 {
-            (o.cost / wsum).sqrt() / (fx.max(fy) * o.scale)
+            (o.cost / wsum).sqrt() / fx.max(fy)
         } else {
             f64::INFINITY
         };
         sol.reprojection_iterations += o.iterations;
         sol.converged = o.converged;
-        sol.focal = Some((fx * o.scale, fy * o.scale));
-        sol.covariance = None;
-        if self.covariance.is_some() {
-            let cam = camera.with_focal_scale(o.scale);
-            let mut p = Problem::pixels(world, pixels, &cam);
-            if let Some(w) = weights {
-                p = p.weights(w);
-            }
-            let pose =
-                Isometry3::from_parts(o.t.into(), nalgebra::UnitQuaternion::from_matrix(&o.r));
-            // The pose's covariance at the estimated focal length (the focal length's own
-            // uncertainty is not propagated).
-            if let Ok(s) = self.refine(&p, &pose) {
-                sol.covariance = s.covariance;
-            }
-        }
+        sol.camera = Some(o.camera);
+        // The marginal covariance of the pose with the intrinsics free, and the focal length's
+        // standard deviation.
+        sol.covariance = self.covariance.and_then(|noise| {
+            let sigma = match noise {
+                NoiseModel::Sigma(s) => Some(s),
+                NoiseModel::Estimated => None,
+            };
+            let (pose, focal_sigma, sigma) = covariance(&inputs, &o, sigma)?;
+            from_rotation_vector(&pose, sigma, focal_sigma)
+        });
         Ok(sol)
     }
 }
