@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """RANSAC with an unknown focal length: eopnp's ``solve_ransac(..., estimate_focal=True)``
 side by side with pycolmap's ``estimate_and_refine_absolute_pose`` (``estimate_focal_length``
-and ``refine_focal_length`` on), on the same problems, one thread.
+and ``refine_focal_length`` on), on the same problems, one thread; and PoseLib's P4Pf minimal
+solver (``poselib.p4pf``) alone, its Python bindings having no robust estimator with an unknown
+focal length (``estimate_absolute_pose`` takes a known camera).
 
-    pip install numpy pycolmap eopnp      # eopnp: the wheel of python/
+    pip install numpy pycolmap poselib eopnp      # eopnp: the wheel of python/
     python3 scripts/compare_focal_peers.py [--problems 200] [--n 100] [--levels 0 0.5 0.8]
         [--seed 7] [--threshold 4] [--passes 3]
 
@@ -18,6 +20,13 @@ own here). Errors: the focal length's relative error and the rotation error (lar
 between corresponding axes, degrees) against the truth; a problem without a pose counts as an
 infinite error. Time per problem: the median over ``--passes`` passes of (one pass over the
 level's problems) / (number of problems), inputs converted outside the timed calls.
+
+PoseLib's P4Pf: on each problem of the first level, four correspondences drawn from those kept
+(not replaced by outliers), their pixels centred on the principal point, to
+``poselib.p4pf(x, X, filter_solutions=True)``; the solutions' count, the focal error of the one
+nearest the truth (an oracle's choice: what a RANSAC sample of four inliers can give at best)
+and the time per call (median over ``--passes`` passes). No RANSAC row: it would be a loop of
+this script's own, not PoseLib's.
 """
 import os
 
@@ -28,6 +37,7 @@ import argparse
 import time
 
 import numpy as np
+import poselib
 import pycolmap
 
 import eopnp
@@ -58,7 +68,35 @@ def problem(rng, n, outliers):
     k = int(round(outliers * n))
     idx = rng.permutation(n)[:k]
     pixels[idx] = rng.uniform([0, 0], [640, 480], (k, 2))
-    return dict(world=world, pixels=pixels, R=R, t=t, f=f)
+    kept = np.setdiff1d(np.arange(n), idx)
+    return dict(world=world, pixels=pixels, R=R, t=t, f=f, kept=kept)
+
+
+def poselib_p4pf(probs, rng, passes):
+    """PoseLib's P4Pf on four kept correspondences of each problem: median solutions per call,
+    median (and 90th percentile) focal error of the solution nearest the truth, problems without
+    a solution, median time per call."""
+    samples = []
+    for p in probs:
+        four = rng.choice(p["kept"], 4, replace=False)
+        x = np.ascontiguousarray(p["pixels"][four] - [320.0, 240.0])
+        samples.append((x, np.ascontiguousarray(p["world"][four]), p["f"]))
+    counts, errs, none = [], [], 0
+    for x, X, f in samples:
+        _, fs = poselib.p4pf(x, X, True)
+        counts.append(len(fs))
+        if not fs:
+            none += 1
+            errs.append(np.inf)
+            continue
+        errs.append(min(abs(g / f - 1) for g in fs))
+    times = []
+    for _ in range(passes):
+        t0 = time.perf_counter()
+        for x, X, _ in samples:
+            poselib.p4pf(x, X, True)
+        times.append((time.perf_counter() - t0) / len(samples))
+    return np.median(counts), np.median(errs), np.quantile(errs, 0.9, method="higher"), none, np.median(times)
 
 
 def main():
@@ -77,9 +115,11 @@ def main():
     print()
     print("| outliers | library | focal error | rotation error | failures | time per problem | pycolmap / eopnp |")
     print("|---|---|---|---|---|---|---|")
+    first = None
     for level in a.levels:
         rng = np.random.default_rng([a.seed, int(level * 100)])
         probs = [problem(rng, a.n, level) for _ in range(a.problems)]
+        first = first or probs
         for p in probs:
             p["eopnp_cam"] = eopnp.Camera("SIMPLE_PINHOLE", [1.3 * p["f"], 320.0, 240.0], 640, 480)
 
@@ -136,6 +176,16 @@ def main():
                 f"| {level:.0%} | {name} | {100 * fe:.3f} % | {re_:.4f} deg | {fails} | "
                 f"{1e3 * tm:.3f} ms | {f'{ratio:.1f}x' if name == 'pycolmap' else ''} |"
             )
+    count, med, p90, none, tm = poselib_p4pf(first, np.random.default_rng([a.seed, 1]), a.passes)
+    print()
+    print(
+        f"PoseLib {poselib.__version__} P4Pf (poselib.p4pf) alone, 4 correspondences of each of the "
+        f"{len(first)} problems of the first level (no outliers among them), 1 px noise:"
+    )
+    print()
+    print("| solutions per call | focal error, nearest solution | 90th percentile | no solution | time per call |")
+    print("|---|---|---|---|---|")
+    print(f"| {count:g} | {100 * med:.2f} % | {100 * p90:.2f} % | {none} | {1e6 * tm:.1f} µs |")
 
 
 if __name__ == "__main__":

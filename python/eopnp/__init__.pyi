@@ -886,6 +886,8 @@ def refine(
     weights: _ArrayLike | None = None,
     camera: Camera | None = None,
     gravity: Gravity | None = None,
+    estimate_focal: bool = False,
+    focal_range: tuple[float, float] | None = None,
     options: _Options = None,
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
@@ -910,6 +912,12 @@ def refine(
         weights: optional non-negative weight per point, shape (N,), as ``solve``.
         camera: a ``Camera``: ``image`` holds observed pixels; the refinement minimises the
             pixel residuals through the camera model, as ``solve``.
+        gravity: a ``Gravity``: the known vertical, a prior of the refinement, as ``solve``.
+        estimate_focal: the camera's focal length is unknown (``camera`` required; its focal
+            length is the starting guess): refined with the pose from ``initial`` and the
+            guess, within a tenth and ten times the guess, returned in ``Solution.focal``.
+        focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
+            ``estimate_focal``).
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve``. Its ``planar``
             and ``exhaustive`` (of the global search) have no effect here, and ``refine``
             always ends with the Levenberg-Marquardt refinement: ``refinement="algebraic"``
@@ -931,6 +939,9 @@ def solve_batch(
     problems: Sequence[_Problem],
     *,
     camera: Camera | Sequence[Camera] | None = None,
+    gravity: Gravity | Sequence[Gravity | None] | None = None,
+    estimate_focal: bool = False,
+    focal_range: tuple[float, float] | None = None,
     options: _Options = None,
     threads: int | None = None,
     refinement: _Refinement = "ml",
@@ -954,6 +965,12 @@ def solve_batch(
             ``solve``'s arguments (weights may be None).
         camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
             of one ``Camera`` per problem (image points in pixels).
+        gravity: None, a ``Gravity`` for every problem, or a sequence of one ``Gravity`` (or
+            None) per problem: the known vertical, as ``solve``'s.
+        estimate_focal: every problem's focal length is unknown, as ``solve``'s (``camera``
+            required: each problem's camera's focal length is its starting guess).
+        focal_range: ``(min_px, max_px)``, as ``solve``'s, for every problem (implies
+            ``estimate_focal``).
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
             problem.
         threads: None (rayon's global pool: one thread per core, or ``RAYON_NUM_THREADS``) or
@@ -971,7 +988,10 @@ def solve_batch(
         InvalidInputError: a malformed batch (not a sequence of 2- or 3-tuples, an array of the
             wrong shape; the message names the problem's index), before anything is solved.
         InputTypeError: an array that is not real numbers.
-        InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+        InvalidOptionError: an option out of range, a bad ``camera``, ``gravity`` or
+            ``threads``; an unknown focal length without ``camera``, with a known vertical or
+            an empty ``focal_range`` (``option`` "unknown_focal"): raised, as by ``solve``,
+            not returned per problem.
         TypeError: as ``solve``.
     """
 
@@ -981,6 +1001,9 @@ def solve_batch_arrays(
     weights: _ArrayLike | None = None,
     *,
     camera: Camera | Sequence[Camera] | None = None,
+    gravity: Gravity | Sequence[Gravity | None] | None = None,
+    estimate_focal: bool = False,
+    focal_range: tuple[float, float] | None = None,
     options: _Options = None,
     threads: int | None = None,
     refinement: _Refinement = "ml",
@@ -1008,6 +1031,12 @@ def solve_batch_arrays(
             exactly as if the points were dropped; or use ``solve_batch``.
         camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
             of B ``Camera`` (pixels).
+        gravity: None, a ``Gravity`` for every problem, or a sequence of B ``Gravity`` (or
+            None), as ``solve``'s.
+        estimate_focal: every problem's focal length is unknown, as ``solve``'s (``camera``
+            required); the estimates in ``BatchResult.focal``.
+        focal_range: ``(min_px, max_px)``, as ``solve``'s, for every problem (implies
+            ``estimate_focal``).
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
             problem.
         threads: as ``solve_batch``.
@@ -1017,15 +1046,17 @@ def solve_batch_arrays(
     Returns:
         BatchResult: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost`` (B,), ``reprojection_rmse``
         (B,), ``ok`` (B,) bool, ``covariance`` (B, 6, 6) and ``sigma`` (B,) with a
-        ``covariance`` option (else None), and ``errors``: {index: the exception ``solve``
-        would raise for that problem} (its rows are NaN and ``ok`` False). Row ``i`` equals
-        ``solve(world[i], image[i], weights[i], ...)`` exactly, whatever the thread count.
+        ``covariance`` option (else None), ``focal`` (B, 2) with ``estimate_focal`` (else None),
+        and ``errors``: {index: the exception ``solve`` would raise for that problem} (its rows
+        are NaN and ``ok`` False). Row ``i`` equals ``solve(world[i], image[i], weights[i],
+        ...)`` exactly, whatever the thread count.
 
     Raises:
         InvalidInputError: an array of the wrong shape (world not (B, N, 3), image not
             (B, N, 2) or weights not (B, N) with world's B and N), before anything is solved.
         InputTypeError: an array that is not real numbers.
-        InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+        InvalidOptionError: an option out of range, a bad ``camera``, ``gravity`` or
+            ``threads``; an unknown focal length as ``solve_batch`` (raised).
         TypeError: as ``solve``.
     """
 
@@ -1034,6 +1065,9 @@ def solve_ransac_batch(
     *,
     camera: Camera | Sequence[Camera] | None = None,
     focal: float | tuple[float, float] | None = None,
+    gravity: Gravity | Sequence[Gravity | None] | None = None,
+    estimate_focal: bool = False,
+    focal_range: tuple[float, float] | None = None,
     ransac: _RansacArg = None,
     options: _Options = None,
     threads: int | None = None,
@@ -1056,6 +1090,11 @@ def solve_ransac_batch(
             None with ``focal``.
         focal: ``(fx, fy)`` (or one ``f``) in pixels for every problem, for normalised image
             points (exactly one of ``camera`` and ``focal``).
+        gravity: None, a ``Gravity`` for every problem, or a sequence of one ``Gravity`` (or
+            None) per problem, as ``solve_ransac``'s.
+        estimate_focal: every problem's focal length is unknown, as ``solve_ransac``'s
+            (``camera`` required).
+        focal_range: ``(min_px, max_px)``, as ``solve_ransac``'s, for every problem.
         ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve_ransac``, for every
             problem.
@@ -1534,6 +1573,7 @@ def solve_generalized_batch(
     problems: Sequence[_RigProblem],
     *,
     rig: Rig | Sequence[Rig],
+    gravity: Gravity | Sequence[Gravity | None] | None = None,
     options: _Options = None,
     threads: int | None = None,
     refinement: _Refinement = "ml",
@@ -1557,6 +1597,9 @@ def solve_generalized_batch(
             camera_idxs, weights)`` tuples, as ``solve_generalized``'s arguments (pixels first;
             weights may be None).
         rig: a ``Rig`` for every problem, or a sequence of one ``Rig`` per problem.
+        gravity: None, a ``Gravity`` for every problem, or a sequence of one ``Gravity`` (or
+            None) per problem: the known vertical in the rig's frame, as
+            ``solve_generalized``'s.
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve_generalized``, for
             every problem.
         threads: as ``solve_batch``.
@@ -1573,7 +1616,7 @@ def solve_generalized_batch(
             wrong shape; the message names the problem's index), before anything is solved.
         InputTypeError: an array that is not real numbers, camera indices that are not
             integers.
-        InvalidOptionError: an option out of range, a bad ``rig`` or ``threads``.
+        InvalidOptionError: an option out of range, a bad ``rig``, ``gravity`` or ``threads``.
         TypeError: as ``solve``.
     """
 
@@ -1581,6 +1624,7 @@ def solve_generalized_ransac_batch(
     problems: Sequence[_RigProblem],
     *,
     rig: Rig | Sequence[Rig],
+    gravity: Gravity | Sequence[Gravity | None] | None = None,
     ransac: _RansacArg = None,
     options: _Options = None,
     threads: int | None = None,
@@ -1601,6 +1645,8 @@ def solve_generalized_ransac_batch(
     Args:
         problems: as ``solve_generalized_batch``.
         rig: a ``Rig`` for every problem, or a sequence of one ``Rig`` per problem.
+        gravity: None, a ``Gravity`` for every problem, or a sequence of one ``Gravity`` (or
+            None) per problem, as ``solve_generalized_ransac``'s.
         ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
         options: a ``SolverOptions`` (or a dict of its fields), as
             ``solve_generalized_ransac``, for every problem.

@@ -31,10 +31,22 @@ class BatchResult:
         ok: shape (B,), bool: the problem was solved.
         covariance: the 6x6 pose covariances, shape (B, 6, 6), or None (no ``covariance=``).
         sigma: the noise standard deviations the covariances assume, shape (B,), or None.
+        focal: the estimated focal lengths ``(fx, fy)`` (``Solution.focal``), shape (B, 2),
+            with ``estimate_focal=`` (NaN rows where a problem failed), or None.
         errors: {index: exception} for the problems that failed (``PnpError`` instances).
     """
 
-    __slots__ = ("R", "t", "cost", "reprojection_rmse", "ok", "covariance", "sigma", "errors")
+    __slots__ = (
+        "R",
+        "t",
+        "cost",
+        "reprojection_rmse",
+        "ok",
+        "covariance",
+        "sigma",
+        "errors",
+        "focal",
+    )
 
     R: npt.NDArray[np.float64]
     t: npt.NDArray[np.float64]
@@ -44,6 +56,7 @@ class BatchResult:
     covariance: npt.NDArray[np.float64] | None
     sigma: npt.NDArray[np.float64] | None
     errors: dict[int, PnpError]
+    focal: npt.NDArray[np.float64] | None
 
     def __init__(
         self,
@@ -55,6 +68,7 @@ class BatchResult:
         covariance: npt.NDArray[np.float64] | None,
         sigma: npt.NDArray[np.float64] | None,
         errors: dict[int, PnpError],
+        focal: npt.NDArray[np.float64] | None = None,
     ) -> None:
         self.R = R
         self.t = t
@@ -64,6 +78,7 @@ class BatchResult:
         self.covariance = covariance
         self.sigma = sigma
         self.errors = errors
+        self.focal = focal
 
     def __len__(self) -> int:
         return len(self.ok)
@@ -89,6 +104,7 @@ class BatchResult:
                 self.covariance,
                 self.sigma,
                 self.errors,
+                self.focal,
             ),
         )
 

@@ -37,13 +37,13 @@ use std::sync::{Arc, Condvar, Mutex, PoisonError};
 use eopnp::camera::Camera;
 use eopnp::ransac::problem_seed as seed_of;
 use eopnp::ransac::{Ransac, RansacSolution};
-use eopnp::Problem;
+use eopnp::{Gravity, Problem};
 use eopnp::{PnpError, Rig, Solution, Solver};
 use nalgebra::{Point2, Point3};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
-use pyo3::types::{PyDict, PyList, PyModule, PyTuple};
+use pyo3::types::{PyDict, PyList, PyModule, PyString, PyTuple};
 use rayon::ThreadPool;
 
 use crate::camera::PyCamera;
@@ -51,11 +51,14 @@ use crate::convert::{contiguous_array, points2, points3, readonly, shape_str, ve
 use crate::errors::{
     error, option_error, pnp_error, raise_option_error, shape_error, InvalidInputError,
 };
+use crate::gravity::PyGravity;
 use crate::options::{options_arg, solver_arg, KEYWORDS};
 use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
 use crate::rig::{rig_error, PyRig, RigError, RigObs};
-use crate::solution::PySolution;
-use crate::solve::check_finite;
+use crate::solution::{estimated_focal, PySolution};
+use crate::solve::{
+    check_finite, focal_arg as unknown_focal_arg, problem_with, with_focal, FocalArg,
+};
 
 fn problems_error(py: Python<'_>, message: String) -> PyErr {
     error::<InvalidInputError>(py, "Shape", message, vec![("argument", "problems".into())])
@@ -106,6 +109,62 @@ fn cameras<'py>(
     Ok((cams, (0..n).map(Some).collect()))
 }
 
+/// `gravity=`: None, one `Gravity` for every problem, or a sequence of one `Gravity` (or None)
+/// per problem; each problem's known vertical.
+fn gravities(
+    py: Python<'_>,
+    gravity: Option<&Bound<'_, PyAny>>,
+    n: usize,
+) -> PyResult<Vec<Option<Gravity>>> {
+    let Some(g) = gravity.filter(|g| !g.is_none()) else {
+        return Ok(vec![None; n]);
+    };
+    if let Ok(one) = g.cast::<PyGravity>() {
+        return Ok(vec![Some(one.get().inner); n]);
+    }
+    if g.is_instance_of::<PyString>() {
+        return Err(bad_gravity(g, n));
+    }
+    let bad = || bad_gravity(g, n);
+    let list: Vec<Bound<'_, PyAny>> = g.try_iter().map_err(|_| bad())?.collect::<PyResult<_>>()?;
+    if list.len() != n {
+        return Err(option_error(
+            py,
+            "gravity",
+            format!(
+                "gravity: {} entries for {n} problems (give one Gravity or one per problem)",
+                list.len()
+            ),
+        ));
+    }
+    list.iter()
+        .map(|x| {
+            if x.is_none() {
+                Ok(None)
+            } else {
+                x.cast::<PyGravity>()
+                    .map(|g| Some(g.get().inner))
+                    .map_err(|_| bad())
+            }
+        })
+        .collect()
+}
+
+/// The error of a `gravity=` that is not None, a `Gravity` or a sequence of them.
+fn bad_gravity(g: &Bound<'_, PyAny>, n: usize) -> PyErr {
+    option_error(
+        g.py(),
+        "gravity",
+        format!(
+            "gravity must be None, a Gravity or a sequence of {n} Gravity or None (one per \
+             problem), got {}",
+            g.get_type()
+                .name()
+                .map_or_else(|_| "?".into(), |s| s.to_string())
+        ),
+    )
+}
+
 /// A problem's array as the check left it: a C-contiguous `float64` array of `len` rows, read
 /// when its chunk is copied, or its rows already converted (any other array-like, through
 /// `convert`'s general path).
@@ -147,6 +206,8 @@ struct Entry<'py> {
     weights: Option<Source<'py, f64>>,
     /// Index into the batch's cameras.
     camera: Option<usize>,
+    /// The known vertical (`gravity=`).
+    gravity: Option<Gravity>,
 }
 
 /// A list batch, checked: its problems and cameras.
@@ -163,6 +224,7 @@ impl<'py> ListBatch<'py> {
         py: Python<'py>,
         problems: &Bound<'py, PyAny>,
         camera: Option<&Bound<'py, PyAny>>,
+        gravity: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Self> {
         let items: Vec<Bound<'py, PyAny>> = problems
             .try_iter()
@@ -176,8 +238,9 @@ impl<'py> ListBatch<'py> {
             })?
             .collect::<PyResult<_>>()?;
         let (cameras, which) = cameras(py, camera, items.len())?;
+        let verticals = gravities(py, gravity, items.len())?;
         let mut entries = Vec::with_capacity(items.len());
-        for (i, (item, camera)) in items.iter().zip(which).enumerate() {
+        for (i, ((item, camera), gravity)) in items.iter().zip(which).zip(verticals).enumerate() {
             let Some(parts) = problem_parts(item) else {
                 return Err(problems_error(
                     py,
@@ -205,6 +268,7 @@ impl<'py> ListBatch<'py> {
                 image,
                 weights,
                 camera,
+                gravity,
             });
         }
         Ok(ListBatch { entries, cameras })
@@ -267,6 +331,7 @@ struct Item {
     image: Range<usize>,
     weights: Option<Range<usize>>,
     camera: Option<usize>,
+    gravity: Option<Gravity>,
 }
 
 /// A chunk of a list batch, copied: the index of its first problem, its problems' points (one
@@ -290,6 +355,7 @@ impl<'b> Chunk<'b> {
             image: &self.image[it.image.clone()],
             weights: it.weights.clone().map(|w| &self.weights[w]),
             camera: it.camera.map(|c| cameras[c]),
+            gravity: it.gravity,
         })
     }
 }
@@ -359,6 +425,7 @@ impl<'py> ListBatch<'py> {
                 image: mr,
                 weights: kr,
                 camera: e.camera,
+                gravity: e.gravity,
             });
         }
         Ok(Chunk {
@@ -506,13 +573,15 @@ struct Input<'a> {
     image: &'a [Point2<f64>],
     weights: Option<&'a [f64]>,
     camera: Option<&'a Camera>,
+    gravity: Option<Gravity>,
 }
 
 impl<'a> Input<'a> {
     /// The crate's problem (normalised points with `focal`, or pixels through the camera),
-    /// after the package's own check of pixel input (a NaN pixel is rejected, as `solve`
-    /// rejects it; the library would skip it as one that cannot be undistorted).
-    fn problem(&self, focal: (f64, f64)) -> Result<Problem<'a>, PnpError> {
+    /// with its weights, known vertical and unknown focal length (`unknown`), after the
+    /// package's own check of pixel input (a NaN pixel is rejected, as `solve` rejects it; the
+    /// library would skip it as one that cannot be undistorted).
+    fn problem(&self, focal: (f64, f64), unknown: FocalArg) -> Result<Problem<'a>, PnpError> {
         let p = match self.camera {
             Some(c) => {
                 check_finite(self.world, self.image, self.weights)?;
@@ -520,15 +589,15 @@ impl<'a> Input<'a> {
             }
             None => Problem::normalised(self.world, self.image).focal(focal.0, focal.1),
         };
-        Ok(match self.weights {
-            Some(w) => p.weights(w),
-            None => p,
-        })
+        Ok(with_focal(
+            problem_with(p, self.weights, self.gravity),
+            unknown,
+        ))
     }
 
     /// `solve` on this problem.
-    fn solve(&self, solver: &Solver) -> Result<Solution, PnpError> {
-        solver.solve(&self.problem((1.0, 1.0))?)
+    fn solve(&self, solver: &Solver, unknown: FocalArg) -> Result<Solution, PnpError> {
+        solver.solve(&self.problem((1.0, 1.0), unknown)?)
     }
 }
 
@@ -691,6 +760,12 @@ fn threads_of(pool: Option<&ThreadPool>) -> usize {
 ///         ``solve``'s arguments (weights may be None).
 ///     camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
 ///         of one ``Camera`` per problem (image points in pixels).
+///     gravity: None, a ``Gravity`` for every problem, or a sequence of one ``Gravity`` (or
+///         None) per problem: the known vertical, as ``solve``'s.
+///     estimate_focal: every problem's focal length is unknown, as ``solve``'s (``camera``
+///         required: each problem's camera's focal length is its starting guess).
+///     focal_range: ``(min_px, max_px)``, as ``solve``'s, for every problem (implies
+///         ``estimate_focal``).
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
 ///         problem.
 ///     threads: None (rayon's global pool: one thread per core, or ``RAYON_NUM_THREADS``) or
@@ -708,20 +783,29 @@ fn threads_of(pool: Option<&ThreadPool>) -> usize {
 ///     InvalidInputError: a malformed batch (not a sequence of 2- or 3-tuples, an array of the
 ///         wrong shape; the message names the problem's index), before anything is solved.
 ///     InputTypeError: an array that is not real numbers.
-///     InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+///     InvalidOptionError: an option out of range, a bad ``camera``, ``gravity`` or
+///         ``threads``; an unknown focal length without ``camera``, with a known vertical or
+///         an empty ``focal_range`` (``option`` "unknown_focal"): raised, as by ``solve``,
+///         not returned per problem.
 ///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (problems, *, camera = None, options = None, threads = None, **keywords))]
+#[pyo3(signature = (problems, *, camera = None, gravity = None, estimate_focal = false,
+    focal_range = None, options = None, threads = None, **keywords))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_batch<'py>(
     py: Python<'py>,
     problems: &Bound<'py, PyAny>,
     camera: Option<&Bound<'py, PyAny>>,
+    gravity: Option<&Bound<'py, PyAny>>,
+    estimate_focal: bool,
+    focal_range: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
     keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = solver_arg(py, "solve_batch", options, keywords, KEYWORDS)?;
-    let batch = ListBatch::new(py, problems, camera)?;
+    let unknown = unknown_focal_arg(estimate_focal, focal_range)?;
+    let batch = ListBatch::new(py, problems, camera, gravity)?;
     let pool = pool(py, threads)?;
     let n = batch.entries.len();
     let len = chunk_len(n, threads_of(pool.as_deref()));
@@ -737,12 +821,18 @@ pub(crate) fn solve_batch<'py>(
         |k| batch.copy(k * len..((k + 1) * len).min(n), &mut rest),
         |chunk: Chunk<'_>, out: &mut [Option<Result<PySolution, PnpError>>]| {
             for (slot, p) in out.iter_mut().zip(chunk.inputs(&cams)) {
-                *slot = Some(p.solve(&solver).map(|s| PySolution::from(&s)));
+                *slot = Some(p.solve(&solver, unknown).map(|s| PySolution::from(&s)));
             }
         },
     );
     buffers.give_back();
     done?;
+    raise_option_error(
+        py,
+        results
+            .iter()
+            .filter_map(|r| r.as_ref().and_then(|r| r.as_ref().err())),
+    )?;
     let out = PyList::empty(py);
     for r in results {
         match r.expect("every chunk solved") {
@@ -863,6 +953,7 @@ struct Rows<'a> {
     rmse: &'a mut [f64],
     ok: &'a mut [bool],
     cov: Option<(&'a mut [f64], &'a mut [f64])>,
+    focal: Option<&'a mut [f64]>,
     errors: &'a mut Vec<(usize, PnpError)>,
 }
 
@@ -882,6 +973,12 @@ struct Rows<'a> {
 ///         exactly as if the points were dropped; or use ``solve_batch``.
 ///     camera: None (normalised image points), a ``Camera`` for every problem, or a sequence
 ///         of B ``Camera`` (pixels).
+///     gravity: None, a ``Gravity`` for every problem, or a sequence of B ``Gravity`` (or
+///         None), as ``solve``'s.
+///     estimate_focal: every problem's focal length is unknown, as ``solve``'s (``camera``
+///         required); the estimates in ``BatchResult.focal``.
+///     focal_range: ``(min_px, max_px)``, as ``solve``'s, for every problem (implies
+///         ``estimate_focal``).
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
 ///         problem.
 ///     threads: as ``solve_batch``.
@@ -891,24 +988,30 @@ struct Rows<'a> {
 /// Returns:
 ///     BatchResult: ``R`` (B, 3, 3), ``t`` (B, 3), ``cost`` (B,), ``reprojection_rmse``
 ///     (B,), ``ok`` (B,) bool, ``covariance`` (B, 6, 6) and ``sigma`` (B,) with a
-///     ``covariance`` option (else None), and ``errors``: {index: the exception ``solve``
-///     would raise for that problem} (its rows are NaN and ``ok`` False). Row ``i`` equals
-///     ``solve(world[i], image[i], weights[i], ...)`` exactly, whatever the thread count.
+///     ``covariance`` option (else None), ``focal`` (B, 2) with ``estimate_focal`` (else None),
+///     and ``errors``: {index: the exception ``solve`` would raise for that problem} (its rows
+///     are NaN and ``ok`` False). Row ``i`` equals ``solve(world[i], image[i], weights[i],
+///     ...)`` exactly, whatever the thread count.
 ///
 /// Raises:
 ///     InvalidInputError: an array of the wrong shape (world not (B, N, 3), image not
 ///         (B, N, 2) or weights not (B, N) with world's B and N), before anything is solved.
 ///     InputTypeError: an array that is not real numbers.
-///     InvalidOptionError: an option out of range, a bad ``camera`` or ``threads``.
+///     InvalidOptionError: an option out of range, a bad ``camera``, ``gravity`` or
+///         ``threads``; an unknown focal length as ``solve_batch`` (raised).
 ///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (world, image, weights = None, *, camera = None, options = None,
-    threads = None, **keywords))]
+#[pyo3(signature = (world, image, weights = None, *, camera = None, gravity = None,
+    estimate_focal = false, focal_range = None, options = None, threads = None, **keywords))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_batch_arrays<'py>(
     world: &Bound<'py, PyAny>,
     image: &Bound<'py, PyAny>,
     weights: Option<&Bound<'py, PyAny>>,
     camera: Option<&Bound<'py, PyAny>>,
+    gravity: Option<&Bound<'py, PyAny>>,
+    estimate_focal: bool,
+    focal_range: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
     keywords: Option<&Bound<'py, PyDict>>,
@@ -931,6 +1034,8 @@ pub(crate) fn solve_batch_arrays<'py>(
     };
     let (cams, which) = cameras(py, camera, b)?;
     let cams: Vec<&Camera> = cams.iter().map(|c| &c.get().inner).collect();
+    let verticals = gravities(py, gravity, b)?;
+    let unknown = unknown_focal_arg(estimate_focal, focal_range)?;
     let pool = pool(py, threads)?;
     let len = chunk_len(b, threads_of(pool.as_deref()));
 
@@ -950,8 +1055,9 @@ pub(crate) fn solve_batch_arrays<'py>(
         a
     };
     let cov_out = want_cov.then(|| (output(py, &[b, 6, 6]), output(py, &[b])));
+    let focal_out = unknown.is_some().then(|| output(py, &[b, 2]));
     // SAFETY: new arrays, referenced by nothing else until they are returned.
-    let (r, t, cost, rmse, ok, cov) = unsafe {
+    let (r, t, cost, rmse, ok, cov, focal) = unsafe {
         (
             r_out.as_slice_mut().expect("new array"),
             t_out.as_slice_mut().expect("new array"),
@@ -964,6 +1070,9 @@ pub(crate) fn solve_batch_arrays<'py>(
                     s.as_slice_mut().expect("new array"),
                 )
             }),
+            focal_out
+                .as_ref()
+                .map(|f| f.as_slice_mut().expect("new array")),
         )
     };
     let chunks = b.div_ceil(len);
@@ -976,6 +1085,10 @@ pub(crate) fn solve_batch_arrays<'py>(
             .collect(),
         None => (0..chunks).map(|_| None).collect(),
     };
+    let focals: Vec<Option<&mut [f64]>> = match focal {
+        Some(f) => f.chunks_mut(2 * len).map(Some).collect(),
+        None => (0..chunks).map(|_| None).collect(),
+    };
     let sinks: Vec<Rows<'_>> = r
         .chunks_mut(9 * len)
         .zip(t.chunks_mut(3 * len))
@@ -983,16 +1096,20 @@ pub(crate) fn solve_batch_arrays<'py>(
         .zip(rmse.chunks_mut(len))
         .zip(ok.chunks_mut(len))
         .zip(covs)
+        .zip(focals)
         .zip(errors.iter_mut())
-        .map(|((((((r, t), cost), rmse), ok), cov), errors)| Rows {
-            r,
-            t,
-            cost,
-            rmse,
-            ok,
-            cov,
-            errors,
-        })
+        .map(
+            |(((((((r, t), cost), rmse), ok), cov), focal), errors)| Rows {
+                r,
+                t,
+                cost,
+                rmse,
+                ok,
+                cov,
+                focal,
+                errors,
+            },
+        )
         .collect();
     let (ws, ms) = (
         w.as_slice().expect("contiguous"),
@@ -1041,6 +1158,7 @@ pub(crate) fn solve_batch_arrays<'py>(
                 rmse,
                 ok,
                 mut cov,
+                mut focal,
                 errors,
             } = out;
             for j in 0..ok.len() {
@@ -1050,8 +1168,16 @@ pub(crate) fn solve_batch_arrays<'py>(
                     image: &input.image[j * n..(j + 1) * n],
                     weights: input.weights.map(|x| &x[j * n..(j + 1) * n]),
                     camera: which[i].map(|c| cams[c]),
+                    gravity: verticals[i],
                 };
-                let res = p.solve(&solver);
+                let res = p.solve(&solver, unknown);
+                if let Some(f) = focal.as_deref_mut() {
+                    let f = &mut f[2 * j..2 * (j + 1)];
+                    match res.as_ref().ok().and_then(estimated_focal) {
+                        Some((fx, fy)) => f.copy_from_slice(&[fx, fy]),
+                        None => f.fill(f64::NAN),
+                    }
+                }
                 let cov = cov
                     .as_mut()
                     .map(|(c, s)| (&mut c[36 * j..36 * (j + 1)], &mut s[j]));
@@ -1073,6 +1199,7 @@ pub(crate) fn solve_batch_arrays<'py>(
     buffers.give_back();
     done?;
     drop((w, m, wt));
+    raise_option_error(py, errors.iter().flatten().map(|(_, e)| e))?;
 
     let errs = PyDict::new(py);
     for (i, e) in errors.iter().flatten() {
@@ -1085,10 +1212,13 @@ pub(crate) fn solve_batch_arrays<'py>(
         Some((c, s)) => (c.into_any(), s.into_any()),
         None => (py.None().into_bound(py), py.None().into_bound(py)),
     };
-    module
-        .bind(py)
-        .getattr("BatchResult")?
-        .call1((r_out, t_out, cost_out, rmse_out, ok_out, cov, sigma, errs))
+    let focal = match focal_out {
+        Some(f) => f.into_any(),
+        None => py.None().into_bound(py),
+    };
+    module.bind(py).getattr("BatchResult")?.call1((
+        r_out, t_out, cost_out, rmse_out, ok_out, cov, sigma, errs, focal,
+    ))
 }
 
 /// Robust estimation of many independent problems in parallel (``solve_ransac`` on each),
@@ -1101,6 +1231,11 @@ pub(crate) fn solve_batch_arrays<'py>(
 ///         None with ``focal``.
 ///     focal: ``(fx, fy)`` (or one ``f``) in pixels for every problem, for normalised image
 ///         points (exactly one of ``camera`` and ``focal``).
+///     gravity: None, a ``Gravity`` for every problem, or a sequence of one ``Gravity`` (or
+///         None) per problem, as ``solve_ransac``'s.
+///     estimate_focal: every problem's focal length is unknown, as ``solve_ransac``'s
+///         (``camera`` required).
+///     focal_range: ``(min_px, max_px)``, as ``solve_ransac``'s, for every problem.
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve_ransac``, for every
 ///         problem.
@@ -1116,12 +1251,17 @@ pub(crate) fn solve_batch_arrays<'py>(
 /// Raises:
 ///     As ``solve_batch``; InvalidOptionError also for neither or both of camera and focal.
 #[pyfunction]
-#[pyo3(signature = (problems, *, camera = None, focal = None, ransac = None, options = None,
-    threads = None, **keywords))]
+#[pyo3(signature = (problems, *, camera = None, focal = None, gravity = None,
+    estimate_focal = false, focal_range = None, ransac = None, options = None, threads = None,
+    **keywords))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_ransac_batch<'py>(
     problems: &Bound<'py, PyAny>,
     camera: Option<&Bound<'py, PyAny>>,
     focal: Option<&Bound<'py, PyAny>>,
+    gravity: Option<&Bound<'py, PyAny>>,
+    estimate_focal: bool,
+    focal_range: Option<&Bound<'_, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
@@ -1130,6 +1270,7 @@ pub(crate) fn solve_ransac_batch<'py>(
     let py = problems.py();
     let solver = solver_arg(py, "solve_ransac_batch", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
+    let unknown = unknown_focal_arg(estimate_focal, focal_range)?;
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
     let has_camera = camera.is_some_and(|c| !c.is_none());
     if has_camera == focal.is_some() {
@@ -1141,7 +1282,7 @@ pub(crate) fn solve_ransac_batch<'py>(
                 .into(),
         ));
     }
-    let batch = ListBatch::new(py, problems, camera)?;
+    let batch = ListBatch::new(py, problems, camera, gravity)?;
     let pool = pool(py, threads)?;
     let n = batch.entries.len();
     let len = chunk_len(n, threads_of(pool.as_deref()));
@@ -1157,7 +1298,14 @@ pub(crate) fn solve_ransac_batch<'py>(
         |k| batch.copy(k * len..((k + 1) * len).min(n), &mut rest),
         |chunk: Chunk<'_>, out: &mut [Option<Estimate>]| {
             for (j, (slot, p)) in out.iter_mut().zip(chunk.inputs(&cams)).enumerate() {
-                *slot = Some(estimate(&ransac, &solver, chunk.start + j, &p, focal));
+                *slot = Some(estimate(
+                    &ransac,
+                    &solver,
+                    chunk.start + j,
+                    &p,
+                    focal,
+                    unknown,
+                ));
             }
         },
     );
@@ -1189,8 +1337,9 @@ fn estimate(
     index: usize,
     p: &Input<'_>,
     focal: Option<(f64, f64)>,
+    unknown: FocalArg,
 ) -> Estimate {
-    let problem = p.problem(focal.unwrap_or((1.0, 1.0)))?;
+    let problem = p.problem(focal.unwrap_or((1.0, 1.0)), unknown)?;
     let r = ransac
         .seed(seed_of(ransac.seed, index))
         .estimate(solver, &problem)?;
@@ -1283,6 +1432,7 @@ impl<'py> RigBatch<'py> {
         py: Python<'py>,
         problems: &Bound<'py, PyAny>,
         rig: &Bound<'py, PyAny>,
+        gravity: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Self> {
         let expected = "(points2D, points3D, camera_idxs) or (points2D, points3D, camera_idxs, \
                         weights) tuple";
@@ -1293,9 +1443,10 @@ impl<'py> RigBatch<'py> {
             })?
             .collect::<PyResult<_>>()?;
         let (rigs, which) = rigs(py, rig, items.len())?;
+        let verticals = gravities(py, gravity, items.len())?;
         let mut entries = Vec::with_capacity(items.len());
         let mut indices = Vec::with_capacity(items.len());
-        for (i, (item, r)) in items.iter().zip(which).enumerate() {
+        for (i, ((item, r), gravity)) in items.iter().zip(which).zip(verticals).enumerate() {
             let Some([Some(p2), Some(p3), Some(idx), w]) = rig_parts(item) else {
                 return Err(problems_error(
                     py,
@@ -1326,6 +1477,7 @@ impl<'py> RigBatch<'py> {
                 image,
                 weights,
                 camera: Some(r),
+                gravity,
             });
         }
         Ok(RigBatch {
@@ -1352,7 +1504,7 @@ impl Chunk<'_> {
             cameras: &indices[self.start + j],
             weights: it.weights.clone().map(|w| &self.weights[w]),
             rig: rigs[it.camera.expect("a rig batch's problems have a rig")],
-            gravity: None,
+            gravity: it.gravity,
         })
     }
 }
@@ -1409,6 +1561,9 @@ fn run_rig_batch<'py, T: Send>(
 ///         camera_idxs, weights)`` tuples, as ``solve_generalized``'s arguments (pixels first;
 ///         weights may be None).
 ///     rig: a ``Rig`` for every problem, or a sequence of one ``Rig`` per problem.
+///     gravity: None, a ``Gravity`` for every problem, or a sequence of one ``Gravity`` (or
+///         None) per problem: the known vertical in the rig's frame, as
+///         ``solve_generalized``'s.
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve_generalized``, for
 ///         every problem.
 ///     threads: as ``solve_batch``.
@@ -1425,20 +1580,22 @@ fn run_rig_batch<'py, T: Send>(
 ///         wrong shape; the message names the problem's index), before anything is solved.
 ///     InputTypeError: an array that is not real numbers, camera indices that are not
 ///         integers.
-///     InvalidOptionError: an option out of range, a bad ``rig`` or ``threads``.
+///     InvalidOptionError: an option out of range, a bad ``rig``, ``gravity`` or ``threads``.
 ///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (problems, *, rig, options = None, threads = None, **keywords))]
+#[pyo3(signature = (problems, *, rig, gravity = None, options = None, threads = None,
+    **keywords))]
 pub(crate) fn solve_generalized_batch<'py>(
     py: Python<'py>,
     problems: &Bound<'py, PyAny>,
     rig: &Bound<'py, PyAny>,
+    gravity: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
     keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = solver_arg(py, "solve_generalized_batch", options, keywords, KEYWORDS)?;
-    let batch = RigBatch::new(py, problems, rig)?;
+    let batch = RigBatch::new(py, problems, rig, gravity)?;
     let results = run_rig_batch(py, &batch, threads, |_, p| {
         p.solve(&solver).map(|s| PySolution::from(&s))
     })?;
@@ -1460,6 +1617,8 @@ pub(crate) fn solve_generalized_batch<'py>(
 /// Args:
 ///     problems: as ``solve_generalized_batch``.
 ///     rig: a ``Rig`` for every problem, or a sequence of one ``Rig`` per problem.
+///     gravity: None, a ``Gravity`` for every problem, or a sequence of one ``Gravity`` (or
+///         None) per problem, as ``solve_generalized_ransac``'s.
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
 ///     options: a ``SolverOptions`` (or a dict of its fields), as
 ///         ``solve_generalized_ransac``, for every problem.
@@ -1475,12 +1634,14 @@ pub(crate) fn solve_generalized_batch<'py>(
 /// Raises:
 ///     As ``solve_generalized_batch``.
 #[pyfunction]
-#[pyo3(signature = (problems, *, rig, ransac = None, options = None, threads = None,
-    **keywords))]
+#[pyo3(signature = (problems, *, rig, gravity = None, ransac = None, options = None,
+    threads = None, **keywords))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_generalized_ransac_batch<'py>(
     py: Python<'py>,
     problems: &Bound<'py, PyAny>,
     rig: &Bound<'py, PyAny>,
+    gravity: Option<&Bound<'py, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
@@ -1494,7 +1655,7 @@ pub(crate) fn solve_generalized_ransac_batch<'py>(
         KEYWORDS,
     )?;
     let ransac = ransac_arg(py, ransac)?;
-    let batch = RigBatch::new(py, problems, rig)?;
+    let batch = RigBatch::new(py, problems, rig, gravity)?;
     let results = run_rig_batch(py, &batch, threads, |i, p| {
         let r = ransac.seed(seed_of(ransac.seed, i));
         p.estimate(&r, &solver)

@@ -14,7 +14,7 @@ use crate::convert::{points2, points3, vector};
 use crate::errors::{option_error, pnp_error};
 use crate::gravity::{gravity_arg, PyGravity};
 use crate::options::{solver_arg, KEYWORDS};
-use crate::solution::PySolution;
+use crate::solution::{estimated_focal, PySolution};
 use crate::solve::{check_finite, focal_arg as unknown_focal_arg, problem_with, with_focal};
 
 /// RANSAC options (the Rust ``eopnp::ransac::Ransac``); every argument is also a settable
@@ -351,14 +351,14 @@ pub(crate) fn solve_ransac<'py>(
     focal: Option<&Bound<'py, PyAny>>,
     gravity: Option<&Bound<'py, PyGravity>>,
     estimate_focal: bool,
-    focal_range: Option<(f64, f64)>,
+    focal_range: Option<&Bound<'_, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
     let py = world.py();
     let g = gravity_arg(gravity);
-    let unknown = unknown_focal_arg(estimate_focal, focal_range);
+    let unknown = unknown_focal_arg(estimate_focal, focal_range)?;
     let solver = solver_arg(py, "solve_ransac", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
@@ -429,7 +429,7 @@ pub(crate) fn ransac_rmse_px(
 ) -> f64 {
     // With an estimated focal length, the refinement of the inliers reports their RMS error
     // (through the camera at that focal length).
-    if let Some((fx, fy)) = r.solution.focal {
+    if let Some((fx, fy)) = estimated_focal(&r.solution) {
         return r.solution.reprojection_rmse * fx.max(fy);
     }
     let focal = cam.map_or(focal.unwrap_or((1.0, 1.0)), Camera::focal_lengths);

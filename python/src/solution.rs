@@ -174,9 +174,15 @@ impl From<&Solution> for PySolution {
                 }
                 Box::new((m, c.sigma))
             }),
-            foc: s.focal,
+            foc: estimated_focal(s),
         }
     }
+}
+
+/// The focal lengths `(fx, fy)` a solve with an unknown focal length estimated, or `None`: the
+/// one place the package reads them from the library's `Solution`.
+pub(crate) fn estimated_focal(s: &Solution) -> Option<(f64, f64)> {
+    s.focal
 }
 
 /// Six decimals, or six significant digits in exponent form for very large or small values.

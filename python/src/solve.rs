@@ -10,7 +10,7 @@ use pyo3::types::{PyDict, PyList};
 
 use crate::camera::PyCamera;
 use crate::convert::{points2, points3, vector};
-use crate::errors::pnp_error;
+use crate::errors::{option_error, pnp_error};
 use crate::gravity::{gravity_arg, PyGravity};
 use crate::options::{solver_arg, KEYWORDS, REFINE_KEYWORDS};
 use crate::pose::pose_arg;
@@ -20,9 +20,27 @@ use crate::solution::PySolution;
 /// else the range in pixels, if given.
 pub(crate) type FocalArg = Option<Option<(f64, f64)>>;
 
-/// The ``estimate_focal`` and ``focal_range`` arguments (a range alone implies the estimate).
-pub(crate) fn focal_arg(estimate: bool, range: Option<(f64, f64)>) -> FocalArg {
-    (estimate || range.is_some()).then_some(range)
+/// The ``estimate_focal`` and ``focal_range`` arguments (a range alone implies the estimate);
+/// a range that is not two numbers raises ``InvalidOptionError`` (``"unknown_focal"``, the
+/// library's option for a range that is not ``0 < min < max``).
+pub(crate) fn focal_arg(estimate: bool, range: Option<&Bound<'_, PyAny>>) -> PyResult<FocalArg> {
+    let range = match range.filter(|r| !r.is_none()) {
+        None => None,
+        Some(r) => match r.extract::<Vec<f64>>().as_deref() {
+            Ok(&[lo, hi]) => Some((lo, hi)),
+            _ => {
+                return Err(option_error(
+                    r.py(),
+                    "unknown_focal",
+                    format!(
+                        "focal_range must be (min_px, max_px), two numbers, got {}",
+                        r.repr().map_or_else(|_| "?".into(), |s| s.to_string())
+                    ),
+                ))
+            }
+        },
+    };
+    Ok((estimate || range.is_some()).then_some(range))
 }
 
 /// `p` with an unknown focal length when asked for.
@@ -135,7 +153,7 @@ pub(crate) fn solve(
     camera: Option<&Bound<'_, PyCamera>>,
     gravity: Option<&Bound<'_, PyGravity>>,
     estimate_focal: bool,
-    focal_range: Option<(f64, f64)>,
+    focal_range: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
@@ -144,7 +162,7 @@ pub(crate) fn solve(
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
     let g = gravity_arg(gravity);
-    let focal = focal_arg(estimate_focal, focal_range);
+    let focal = focal_arg(estimate_focal, focal_range)?;
     let result = match camera {
         None => py.detach(|| {
             let p = problem_with(Problem::normalised(&w, &img), wts.as_deref(), g);
@@ -247,6 +265,12 @@ pub(crate) fn _time_solve(
 ///     weights: optional non-negative weight per point, shape (N,), as ``solve``.
 ///     camera: a ``Camera``: ``image`` holds observed pixels; the refinement minimises the
 ///         pixel residuals through the camera model, as ``solve``.
+///     gravity: a ``Gravity``: the known vertical, a prior of the refinement, as ``solve``.
+///     estimate_focal: the camera's focal length is unknown (``camera`` required; its focal
+///         length is the starting guess): refined with the pose from ``initial`` and the
+///         guess, within a tenth and ten times the guess, returned in ``Solution.focal``.
+///     focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
+///         ``estimate_focal``).
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``. Its ``planar``
 ///         and ``exhaustive`` (of the global search) have no effect here, and ``refine``
 ///         always ends with the Levenberg-Marquardt refinement: ``refinement="algebraic"``
@@ -264,7 +288,7 @@ pub(crate) fn _time_solve(
 ///     not finite (the library's message) or not of the forms above.
 #[pyfunction]
 #[pyo3(signature = (world, image, initial, *, weights = None, camera = None, gravity = None,
-    options = None, **keywords))]
+    estimate_focal = false, focal_range = None, options = None, **keywords))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     world: &Bound<'_, PyAny>,
@@ -273,10 +297,13 @@ pub(crate) fn refine(
     weights: Option<&Bound<'_, PyAny>>,
     camera: Option<&Bound<'_, PyCamera>>,
     gravity: Option<&Bound<'_, PyGravity>>,
+    estimate_focal: bool,
+    focal_range: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
     let py = world.py();
+    let focal = focal_arg(estimate_focal, focal_range)?;
     let solver = solver_arg(py, "refine", options, keywords, REFINE_KEYWORDS)?;
     let initial = pose_arg(initial, "initial")?;
     let w = points3(world, "world")?;
@@ -286,14 +313,14 @@ pub(crate) fn refine(
     let result = match camera {
         None => py.detach(|| {
             let p = problem_with(Problem::normalised(&w, &img), wts.as_deref(), g);
-            solver.refine(&p, &initial)
+            solver.refine(&with_focal(p, focal), &initial)
         }),
         Some(cam) => {
             let cam = &cam.get().inner;
             check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
             py.detach(|| {
                 let p = problem_with(Problem::pixels(&w, &img, cam), wts.as_deref(), g);
-                solver.refine(&p, &initial)
+                solver.refine(&with_focal(p, focal), &initial)
             })
         }
     };
