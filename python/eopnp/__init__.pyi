@@ -267,6 +267,13 @@ class Solution:
             (pycolmap's ``return_covariance=True`` convention).
         sigma: the image noise standard deviation the covariance assumes (given or estimated;
             pixels for pixel input, normalised units otherwise), or None.
+        camera: with estimated intrinsics (``estimate_focal``, ``refine_principal_point``,
+            ``refine_distortion``), the estimated ``Camera`` (the given one with those
+            intrinsics replaced); None otherwise.
+        focal: the estimated camera's focal lengths ``(fx, fy)`` in pixels, or None.
+        focal_sigma: with ``estimate_focal`` and a covariance, the estimated focal length's
+            standard deviation in pixels (the covariance is then the pose's marginal one);
+            None otherwise.
     """
 
     @property
@@ -342,9 +349,17 @@ class Solution:
     def sigma(self) -> float | None:
         """The image noise standard deviation the covariance assumes, or None."""
     @property
+    def camera(self) -> Camera | None:
+        """The estimated camera with ``estimate_focal``, ``refine_principal_point`` or
+        ``refine_distortion`` (the given camera with those intrinsics replaced), or None.
+        """
+    @property
     def focal(self) -> tuple[float, float] | None:
-        """The camera's estimated focal lengths ``(fx, fy)`` in pixels with ``estimate_focal=True``
-        (the given camera's scaled alike), or None.
+        """The estimated camera's focal lengths ``(fx, fy)`` in pixels, or None."""
+    @property
+    def focal_sigma(self) -> float | None:
+        """The estimated focal length's standard deviation in pixels (``estimate_focal`` with a
+        covariance), or None.
         """
     def as_dict(self) -> dict[str, Any]:
         """Every field as a dict (arrays for R, t, rvec, q, covariance)."""
@@ -795,6 +810,8 @@ def solve(
     gravity: Gravity | None = None,
     estimate_focal: bool = False,
     focal_range: tuple[float, float] | None = None,
+    refine_principal_point: bool = False,
+    refine_distortion: bool = False,
     options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
@@ -821,9 +838,15 @@ def solve(
             with it as a prior (``GravityMismatchError`` if the images contradict it).
         estimate_focal: the camera's focal length is unknown (``camera`` required; its focal
             length is the starting guess): estimated with the pose, within a tenth and ten times
-            the guess, returned in ``Solution.focal``.
+            the guess, returned in ``Solution.camera``
+            (``Solution.focal``).
         focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
             ``estimate_focal``).
+        refine_principal_point: the principal point is refined with the pose (``camera``
+            required; its principal point the starting guess), returned in ``Solution.camera``.
+        refine_distortion: the camera's distortion parameters are refined with the pose
+            (``camera`` required; its parameters the starting guess), returned in
+            ``Solution.camera``.
         options: a ``SolverOptions`` (or a dict of its fields): refinement, planar branch,
             iteration limits, robust ``loss``, ``covariance``. None: the defaults.
         **keywords: the options of ``SolverOptions`` as keyword arguments instead
@@ -888,6 +911,8 @@ def refine(
     gravity: Gravity | None = None,
     estimate_focal: bool = False,
     focal_range: tuple[float, float] | None = None,
+    refine_principal_point: bool = False,
+    refine_distortion: bool = False,
     options: _Options = None,
     newton_iterations: int | None = None,
     newton_step_tolerance: float | None = None,
@@ -915,9 +940,15 @@ def refine(
         gravity: a ``Gravity``: the known vertical, a prior of the refinement, as ``solve``.
         estimate_focal: the camera's focal length is unknown (``camera`` required; its focal
             length is the starting guess): refined with the pose from ``initial`` and the
-            guess, within a tenth and ten times the guess, returned in ``Solution.focal``.
+            guess, within a tenth and ten times the guess, returned in ``Solution.camera``
+            (``Solution.focal``).
         focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
             ``estimate_focal``).
+        refine_principal_point: the principal point is refined with the pose (``camera``
+            required; its principal point the starting guess), returned in ``Solution.camera``.
+        refine_distortion: the camera's distortion parameters are refined with the pose
+            (``camera`` required; its parameters the starting guess), returned in
+            ``Solution.camera``.
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve``. Its ``planar``
             and ``exhaustive`` (of the global search) have no effect here, and ``refine``
             always ends with the Levenberg-Marquardt refinement: ``refinement="algebraic"``
@@ -942,6 +973,8 @@ def solve_batch(
     gravity: Gravity | Sequence[Gravity | None] | None = None,
     estimate_focal: bool = False,
     focal_range: tuple[float, float] | None = None,
+    refine_principal_point: bool = False,
+    refine_distortion: bool = False,
     options: _Options = None,
     threads: int | None = None,
     refinement: _Refinement = "ml",
@@ -971,6 +1004,8 @@ def solve_batch(
             required: each problem's camera's focal length is its starting guess).
         focal_range: ``(min_px, max_px)``, as ``solve``'s, for every problem (implies
             ``estimate_focal``).
+        refine_principal_point: every problem's principal point is refined, as ``solve``'s.
+        refine_distortion: every problem's distortion parameters are refined, as ``solve``'s.
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
             problem.
         threads: None (rayon's global pool: one thread per core, or ``RAYON_NUM_THREADS``) or
@@ -1068,6 +1103,8 @@ def solve_ransac_batch(
     gravity: Gravity | Sequence[Gravity | None] | None = None,
     estimate_focal: bool = False,
     focal_range: tuple[float, float] | None = None,
+    refine_principal_point: bool = False,
+    refine_distortion: bool = False,
     ransac: _RansacArg = None,
     options: _Options = None,
     threads: int | None = None,
@@ -1095,6 +1132,8 @@ def solve_ransac_batch(
         estimate_focal: every problem's focal length is unknown, as ``solve_ransac``'s
             (``camera`` required).
         focal_range: ``(min_px, max_px)``, as ``solve_ransac``'s, for every problem.
+        refine_principal_point: every problem's principal point is refined, as ``solve``'s.
+        refine_distortion: every problem's distortion parameters are refined, as ``solve``'s.
         ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve_ransac``, for every
             problem.
@@ -1127,6 +1166,8 @@ def solve_ransac(
     gravity: Gravity | None = None,
     estimate_focal: bool = False,
     focal_range: tuple[float, float] | None = None,
+    refine_principal_point: bool = False,
+    refine_distortion: bool = False,
     ransac: _RansacArg = None,
     options: _Options = None,
     refinement: _Refinement = "ml",
@@ -1154,9 +1195,14 @@ def solve_ransac(
             two-point pose), the final fit with it as a prior.
         estimate_focal: the camera's focal length is unknown (``camera`` required, its focal
             length the starting guess): samples of four points solved by P4Pf, the fits and the
-            final pose refined with the focal length; ``Solution.focal`` holds it.
+            final pose refined with the focal length; ``Solution.camera`` holds the camera.
         focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
             ``estimate_focal``; default a tenth to ten times the guess).
+        refine_principal_point: the principal point is refined with the pose (``camera``
+            required; its principal point the starting guess), returned in ``Solution.camera``.
+        refine_distortion: the camera's distortion parameters are refined with the pose
+            (``camera`` required; its parameters the starting guess), returned in
+            ``Solution.camera``.
         ransac: a ``RansacOptions``, a dict of its fields, or None (defaults: 4 px threshold,
             confidence 0.999, at most 10000 samples, seed 0).
         options: a ``SolverOptions`` (or a dict of its fields): the options of the EOPnP fits,

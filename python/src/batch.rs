@@ -57,7 +57,7 @@ use crate::ransac::{focal_arg, ransac_arg, ransac_info, ransac_rmse_px};
 use crate::rig::{rig_error, PyRig, RigError, RigObs};
 use crate::solution::{estimated_focal, PySolution};
 use crate::solve::{
-    check_finite, focal_arg as unknown_focal_arg, problem_with, with_focal, FocalArg,
+    check_finite, focal_arg as unknown_focal_arg, problem_with, with_intrinsics, IntrinsicsArg,
 };
 
 fn problems_error(py: Python<'_>, message: String) -> PyErr {
@@ -581,7 +581,7 @@ impl<'a> Input<'a> {
     /// with its weights, known vertical and unknown focal length (`unknown`), after the
     /// package's own check of pixel input (a NaN pixel is rejected, as `solve` rejects it; the
     /// library would skip it as one that cannot be undistorted).
-    fn problem(&self, focal: (f64, f64), unknown: FocalArg) -> Result<Problem<'a>, PnpError> {
+    fn problem(&self, focal: (f64, f64), unknown: IntrinsicsArg) -> Result<Problem<'a>, PnpError> {
         let p = match self.camera {
             Some(c) => {
                 check_finite(self.world, self.image, self.weights)?;
@@ -589,14 +589,14 @@ impl<'a> Input<'a> {
             }
             None => Problem::normalised(self.world, self.image).focal(focal.0, focal.1),
         };
-        Ok(with_focal(
+        Ok(with_intrinsics(
             problem_with(p, self.weights, self.gravity),
             unknown,
         ))
     }
 
     /// `solve` on this problem.
-    fn solve(&self, solver: &Solver, unknown: FocalArg) -> Result<Solution, PnpError> {
+    fn solve(&self, solver: &Solver, unknown: IntrinsicsArg) -> Result<Solution, PnpError> {
         solver.solve(&self.problem((1.0, 1.0), unknown)?)
     }
 }
@@ -766,6 +766,8 @@ fn threads_of(pool: Option<&ThreadPool>) -> usize {
 ///         required: each problem's camera's focal length is its starting guess).
 ///     focal_range: ``(min_px, max_px)``, as ``solve``'s, for every problem (implies
 ///         ``estimate_focal``).
+///     refine_principal_point: every problem's principal point is refined, as ``solve``'s.
+///     refine_distortion: every problem's distortion parameters are refined, as ``solve``'s.
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``, for every
 ///         problem.
 ///     threads: None (rayon's global pool: one thread per core, or ``RAYON_NUM_THREADS``) or
@@ -790,7 +792,8 @@ fn threads_of(pool: Option<&ThreadPool>) -> usize {
 ///     TypeError: as ``solve``.
 #[pyfunction]
 #[pyo3(signature = (problems, *, camera = None, gravity = None, estimate_focal = false,
-    focal_range = None, options = None, threads = None, **keywords))]
+    focal_range = None, refine_principal_point = false, refine_distortion = false,
+    options = None, threads = None, **keywords))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_batch<'py>(
     py: Python<'py>,
@@ -799,12 +802,15 @@ pub(crate) fn solve_batch<'py>(
     gravity: Option<&Bound<'py, PyAny>>,
     estimate_focal: bool,
     focal_range: Option<&Bound<'_, PyAny>>,
+    refine_principal_point: bool,
+    refine_distortion: bool,
     options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
     keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let solver = solver_arg(py, "solve_batch", options, keywords, KEYWORDS)?;
-    let unknown = unknown_focal_arg(estimate_focal, focal_range)?;
+    let unknown = unknown_focal_arg(estimate_focal, focal_range)?
+        .refining(refine_principal_point, refine_distortion);
     let batch = ListBatch::new(py, problems, camera, gravity)?;
     let pool = pool(py, threads)?;
     let n = batch.entries.len();
@@ -1055,7 +1061,7 @@ pub(crate) fn solve_batch_arrays<'py>(
         a
     };
     let cov_out = want_cov.then(|| (output(py, &[b, 6, 6]), output(py, &[b])));
-    let focal_out = unknown.is_some().then(|| output(py, &[b, 2]));
+    let focal_out = unknown.focal.is_some().then(|| output(py, &[b, 2]));
     // SAFETY: new arrays, referenced by nothing else until they are returned.
     let (r, t, cost, rmse, ok, cov, focal) = unsafe {
         (
@@ -1236,6 +1242,8 @@ pub(crate) fn solve_batch_arrays<'py>(
 ///     estimate_focal: every problem's focal length is unknown, as ``solve_ransac``'s
 ///         (``camera`` required).
 ///     focal_range: ``(min_px, max_px)``, as ``solve_ransac``'s, for every problem.
+///     refine_principal_point: every problem's principal point is refined, as ``solve``'s.
+///     refine_distortion: every problem's distortion parameters are refined, as ``solve``'s.
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None; ``seed`` is the base seed.
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve_ransac``, for every
 ///         problem.
@@ -1252,7 +1260,8 @@ pub(crate) fn solve_batch_arrays<'py>(
 ///     As ``solve_batch``; InvalidOptionError also for neither or both of camera and focal.
 #[pyfunction]
 #[pyo3(signature = (problems, *, camera = None, focal = None, gravity = None,
-    estimate_focal = false, focal_range = None, ransac = None, options = None, threads = None,
+    estimate_focal = false, focal_range = None, refine_principal_point = false,
+    refine_distortion = false, ransac = None, options = None, threads = None,
     **keywords))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_ransac_batch<'py>(
@@ -1262,6 +1271,8 @@ pub(crate) fn solve_ransac_batch<'py>(
     gravity: Option<&Bound<'py, PyAny>>,
     estimate_focal: bool,
     focal_range: Option<&Bound<'_, PyAny>>,
+    refine_principal_point: bool,
+    refine_distortion: bool,
     ransac: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
@@ -1270,7 +1281,8 @@ pub(crate) fn solve_ransac_batch<'py>(
     let py = problems.py();
     let solver = solver_arg(py, "solve_ransac_batch", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
-    let unknown = unknown_focal_arg(estimate_focal, focal_range)?;
+    let unknown = unknown_focal_arg(estimate_focal, focal_range)?
+        .refining(refine_principal_point, refine_distortion);
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
     let has_camera = camera.is_some_and(|c| !c.is_none());
     if has_camera == focal.is_some() {
@@ -1337,7 +1349,7 @@ fn estimate(
     index: usize,
     p: &Input<'_>,
     focal: Option<(f64, f64)>,
-    unknown: FocalArg,
+    unknown: IntrinsicsArg,
 ) -> Estimate {
     let problem = p.problem(focal.unwrap_or((1.0, 1.0)), unknown)?;
     let r = ransac

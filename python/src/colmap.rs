@@ -49,7 +49,7 @@ impl PyModel {
     fn cameras<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         for (id, c) in &self.inner.cameras {
-            d.set_item(*id, PyCamera { inner: c.clone() })?;
+            d.set_item(*id, PyCamera { inner: *c })?;
         }
         Ok(d)
     }
@@ -148,7 +148,7 @@ impl PyModel {
             .inner
             .image_and_camera(image_id)
             .map_err(|e| register_error(py, &e))?;
-        Ok(PyCamera { inner: cam.clone() })
+        Ok(PyCamera { inner: *cam })
     }
 
     /// The 2D-3D correspondences of an image: ``(world (N, 3), pixels (N, 2))``, the

@@ -15,7 +15,7 @@ use crate::errors::{option_error, pnp_error};
 use crate::gravity::{gravity_arg, PyGravity};
 use crate::options::{solver_arg, KEYWORDS};
 use crate::solution::{estimated_focal, PySolution};
-use crate::solve::{check_finite, focal_arg as unknown_focal_arg, problem_with, with_focal};
+use crate::solve::{check_finite, focal_arg as unknown_focal_arg, problem_with, with_intrinsics};
 
 /// RANSAC options (the Rust ``eopnp::ransac::Ransac``); every argument is also a settable
 /// attribute. Out-of-range values raise ``InvalidOptionError`` when used.
@@ -308,9 +308,14 @@ fn rmse_px(
 ///         two-point pose), the final fit with it as a prior.
 ///     estimate_focal: the camera's focal length is unknown (``camera`` required, its focal
 ///         length the starting guess): samples of four points solved by P4Pf, the fits and the
-///         final pose refined with the focal length; ``Solution.focal`` holds it.
+///         final pose refined with the focal length; ``Solution.camera`` holds the camera.
 ///     focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
 ///         ``estimate_focal``; default a tenth to ten times the guess).
+///     refine_principal_point: the principal point is refined with the pose (``camera``
+///         required; its principal point the starting guess), returned in ``Solution.camera``.
+///     refine_distortion: the camera's distortion parameters are refined with the pose
+///         (``camera`` required; its parameters the starting guess), returned in
+///         ``Solution.camera``.
 ///     ransac: a ``RansacOptions``, a dict of its fields, or None (defaults: 4 px threshold,
 ///         confidence 0.999, at most 10000 samples, seed 0).
 ///     options: a ``SolverOptions`` (or a dict of its fields): the options of the EOPnP fits,
@@ -339,7 +344,8 @@ fn rmse_px(
 ///     TypeError: as ``solve``.
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, focal = None, gravity = None,
-    estimate_focal = false, focal_range = None, ransac = None, options = None, **keywords))]
+    estimate_focal = false, focal_range = None,
+    refine_principal_point = false, refine_distortion = false, ransac = None, options = None, **keywords))]
 // One Rust parameter per Python parameter: the problem (world, image, weights), its camera or
 // focal lengths, and the RANSAC and solver options (`options=`, `**keywords`).
 #[allow(clippy::too_many_arguments)]
@@ -352,13 +358,16 @@ pub(crate) fn solve_ransac<'py>(
     gravity: Option<&Bound<'py, PyGravity>>,
     estimate_focal: bool,
     focal_range: Option<&Bound<'_, PyAny>>,
+    refine_principal_point: bool,
+    refine_distortion: bool,
     ransac: Option<&Bound<'py, PyAny>>,
     options: Option<&Bound<'py, PyAny>>,
     keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<(PySolution, Bound<'py, PyDict>)> {
     let py = world.py();
     let g = gravity_arg(gravity);
-    let unknown = unknown_focal_arg(estimate_focal, focal_range)?;
+    let unknown = unknown_focal_arg(estimate_focal, focal_range)?
+        .refining(refine_principal_point, refine_distortion);
     let solver = solver_arg(py, "solve_ransac", options, keywords, KEYWORDS)?;
     let ransac = ransac_arg(py, ransac)?;
     let focal = focal.map(|f| focal_arg(py, f)).transpose()?;
@@ -387,14 +396,14 @@ pub(crate) fn solve_ransac<'py>(
                 check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
                 py.detach(|| {
                     let p = problem_with(Problem::pixels(&w, &img, cam), wts.as_deref(), g);
-                    ransac.estimate(&solver, &with_focal(p, unknown))
+                    ransac.estimate(&solver, &with_intrinsics(p, unknown))
                 })
             }
             (None, Some(f)) => py.detach(|| {
                 let p = Problem::normalised(&w, &img).focal(f.0, f.1);
                 ransac.estimate(
                     &solver,
-                    &with_focal(problem_with(p, wts.as_deref(), g), unknown),
+                    &with_intrinsics(problem_with(p, wts.as_deref(), g), unknown),
                 )
             }),
         };

@@ -137,7 +137,7 @@ impl PyRig {
                     format!("cams_from_rig[{k}]: the pose is not finite"),
                 ));
             }
-            parts.push((camera.get().inner.clone(), pose));
+            parts.push((camera.get().inner, pose));
         }
         let inner = Rig::new(parts).map_err(|e| pnp_error(py, &e))?;
         Ok(PyRig { inner })
@@ -158,7 +158,7 @@ impl PyRig {
         self.inner
             .cameras()
             .iter()
-            .map(|c| PyCamera { inner: c.clone() })
+            .map(|c| PyCamera { inner: *c })
             .collect()
     }
 
@@ -285,7 +285,7 @@ pub(crate) fn _rig_from_state<'py>(py: Python<'py>, state: RigState<'py>) -> PyR
             Translation3::new(*x, *y, *z),
             UnitQuaternion::new_unchecked(Quaternion::new(*w, *i, *j, *k)),
         );
-        parts.push((c.get().inner.clone(), pose));
+        parts.push((c.get().inner, pose));
     }
     let inner = Rig::new(parts).map_err(|e| pnp_error(py, &e))?;
     Ok(PyRig { inner })

@@ -1,11 +1,16 @@
 //! `eopnp.Solution`: a pose and how it was found (the Rust `Solution`'s fields, flattened to
 //! plain numbers so that it pickles).
 
+use eopnp::camera::{Camera, CameraModel};
 use eopnp::{CandidateSource, Solution};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
+use crate::camera::PyCamera;
 use crate::convert::{array1, array2};
+
+/// A covariance: row-major 6 x 6, sigma, the focal length's standard deviation.
+type Covariance = ([f64; 36], f64, Option<f64>);
 
 /// A camera pose and how it was found (``x_cam = R @ X + t``, world to camera); from the
 /// generalized functions (``solve_generalized``, ...), the rig's pose (``x_rig = R @ X + t``,
@@ -42,6 +47,13 @@ use crate::convert::{array1, array2};
 ///         (pycolmap's ``return_covariance=True`` convention).
 ///     sigma: the image noise standard deviation the covariance assumes (given or estimated;
 ///         pixels for pixel input, normalised units otherwise), or None.
+///     camera: with estimated intrinsics (``estimate_focal``, ``refine_principal_point``,
+///         ``refine_distortion``), the estimated ``Camera`` (the given one with those
+///         intrinsics replaced); None otherwise.
+///     focal: the estimated camera's focal lengths ``(fx, fy)`` in pixels, or None.
+///     focal_sigma: with ``estimate_focal`` and a covariance, the estimated focal length's
+///         standard deviation in pixels (the covariance is then the pose's marginal one);
+///         None otherwise.
 #[pyclass(frozen, module = "eopnp", name = "Solution")]
 #[derive(Clone, Debug)]
 pub(crate) struct PySolution {
@@ -95,11 +107,12 @@ pub(crate) struct PySolution {
     /// Correspondences left out because their pixel could not be undistorted.
     #[pyo3(get)]
     skipped: usize,
-    /// Row-major covariance and sigma (boxed: most solutions have none, and a batch moves
-    /// every solution twice, into its list and into its Python object).
-    cov: Option<Box<([f64; 36], f64)>>,
-    /// The estimated focal lengths with an unknown focal length (``estimate_focal=True``).
-    foc: Option<(f64, f64)>,
+    /// Row-major covariance, sigma and the focal length's standard deviation (boxed: most
+    /// solutions have none, and a batch moves every solution twice, into its list and into
+    /// its Python object).
+    cov: Option<Box<Covariance>>,
+    /// The estimated camera with estimated intrinsics (boxed, as `cov`).
+    cam: Option<Box<Camera>>,
 }
 
 const SOURCES: [&str; 12] = [
@@ -172,9 +185,9 @@ impl From<&Solution> for PySolution {
                 for (k, v) in m.iter_mut().enumerate() {
                     *v = c.matrix[(k / 6, k % 6)];
                 }
-                Box::new((m, c.sigma))
+                Box::new((m, c.sigma, c.focal_sigma))
             }),
-            foc: estimated_focal(s),
+            cam: s.camera.map(Box::new),
         }
     }
 }
@@ -182,7 +195,26 @@ impl From<&Solution> for PySolution {
 /// The focal lengths `(fx, fy)` a solve with an unknown focal length estimated, or `None`: the
 /// one place the package reads them from the library's `Solution`.
 pub(crate) fn estimated_focal(s: &Solution) -> Option<(f64, f64)> {
-    s.focal
+    s.camera.map(|c| c.focal_lengths())
+}
+
+/// The covariance and the estimated camera of `s` as bits, for `__eq__`.
+#[allow(clippy::type_complexity)]
+fn intrinsics_bits(
+    s: &PySolution,
+) -> (
+    Option<(Vec<u64>, u64, Option<u64>)>,
+    Option<(CameraModel, u64, u64, Vec<u64>)>,
+) {
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    (
+        s.cov
+            .as_deref()
+            .map(|(m, sigma, f)| (bits(m), sigma.to_bits(), f.map(f64::to_bits))),
+        s.cam
+            .as_deref()
+            .map(|c| (c.model(), c.width(), c.height(), bits(c.params()))),
+    )
 }
 
 /// Six decimals, or six significant digits in exponent form for very large or small values.
@@ -253,7 +285,7 @@ impl PySolution {
     fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
         self.cov
             .as_deref()
-            .map(|(m, _)| array2(py, 6, 6, m).into_any())
+            .map(|(m, _, _)| array2(py, 6, 6, m).into_any())
     }
 
     /// The image noise standard deviation the covariance assumes, or None.
@@ -262,11 +294,24 @@ impl PySolution {
         self.cov.as_ref().map(|c| c.1)
     }
 
-    /// The camera's estimated focal lengths ``(fx, fy)`` in pixels with ``estimate_focal=True``
-    /// (the given camera's scaled alike), or None.
+    /// The estimated camera with ``estimate_focal``, ``refine_principal_point`` or
+    /// ``refine_distortion`` (the given camera with those intrinsics replaced), or None.
+    #[getter]
+    fn camera(&self) -> Option<PyCamera> {
+        self.cam.as_deref().map(|c| PyCamera { inner: *c })
+    }
+
+    /// The estimated camera's focal lengths ``(fx, fy)`` in pixels, or None.
     #[getter]
     fn focal(&self) -> Option<(f64, f64)> {
-        self.foc
+        self.cam.as_deref().map(|c| c.focal_lengths())
+    }
+
+    /// The estimated focal length's standard deviation in pixels (``estimate_focal`` with a
+    /// covariance), or None.
+    #[getter]
+    fn focal_sigma(&self) -> Option<f64> {
+        self.cov.as_deref().and_then(|c| c.2)
     }
 
     /// Every field as a dict (arrays for R, t, rvec, q, covariance).
@@ -290,7 +335,9 @@ impl PySolution {
         d.set_item("skipped", self.skipped)?;
         d.set_item("covariance", self.covariance(py))?;
         d.set_item("sigma", self.sigma())?;
-        d.set_item("focal", self.foc)?;
+        d.set_item("camera", self.camera())?;
+        d.set_item("focal", self.focal())?;
+        d.set_item("focal_sigma", self.focal_sigma())?;
         Ok(d)
     }
 
@@ -328,15 +375,7 @@ impl PySolution {
                         self.converged,
                     ) == (o.newton_iterations, o.reprojection_iterations, o.converged)
                     && (self.used, self.skipped) == (o.used, o.skipped)
-                    && self
-                        .cov
-                        .as_deref()
-                        .map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
-                        == o.cov
-                            .as_deref()
-                            .map(|(m, s)| (m.map(f64::to_bits), s.to_bits()))
-                    && self.foc.map(|(a, b)| (a.to_bits(), b.to_bits()))
-                        == o.foc.map(|(a, b)| (a.to_bits(), b.to_bits()))
+                    && intrinsics_bits(self) == intrinsics_bits(o)
             }
             Err(_) => false,
         }
@@ -362,8 +401,10 @@ impl PySolution {
                 self.converged,
             ),
             (self.used, self.skipped),
-            self.cov.as_deref().map(|(m, s)| (m.to_vec(), *s)),
-            self.foc,
+            self.cov.as_deref().map(|(m, s, f)| (m.to_vec(), *s, *f)),
+            self.cam
+                .as_deref()
+                .map(|c| (c.model().name(), c.width(), c.height(), c.params().to_vec())),
         );
         Ok((rebuild, PyTuple::new(py, [state.into_pyobject(py)?])?))
     }
@@ -379,14 +420,14 @@ type State = (
     String,
     (u32, u32, bool),
     (usize, usize),
-    Option<(Vec<f64>, f64)>,
-    Option<(f64, f64)>,
+    Option<(Vec<f64>, f64, Option<f64>)>,
+    Option<(String, u64, u64, Vec<f64>)>,
 );
 
 /// Rebuilds a `Solution` from `__reduce__`'s state (private; for pickle).
 #[pyfunction]
 pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
-    let (r, t, q, rvec, costs, flags, source, iters, counts, cov, foc) = state;
+    let (r, t, q, rvec, costs, flags, source, iters, counts, cov, cam) = state;
     let arr = |v: Vec<f64>, n: usize| -> PyResult<Vec<f64>> {
         if v.len() == n {
             Ok(v)
@@ -398,7 +439,16 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
     };
     let (r, t, q, rvec) = (arr(r, 9)?, arr(t, 3)?, arr(q, 4)?, arr(rvec, 3)?);
     let cov = match cov {
-        Some((m, s)) => Some(Box::new((arr(m, 36)?.try_into().expect("checked"), s))),
+        Some((m, s, f)) => Some(Box::new((arr(m, 36)?.try_into().expect("checked"), s, f))),
+        None => None,
+    };
+    let cam = match cam {
+        Some((model, w, h, params)) => {
+            let c = CameraModel::from_name(&model)
+                .and_then(|m| Camera::new(m, w, h, params))
+                .map_err(|_| pyo3::exceptions::PyValueError::new_err("bad Solution state"))?;
+            Some(Box::new(c))
+        }
         None => None,
     };
     let source = SOURCES
@@ -424,6 +474,6 @@ pub(crate) fn _solution_from_state(state: State) -> PyResult<PySolution> {
         used: counts.0,
         skipped: counts.1,
         cov,
-        foc,
+        cam,
     })
 }

@@ -16,14 +16,34 @@ use crate::options::{solver_arg, KEYWORDS, REFINE_KEYWORDS};
 use crate::pose::pose_arg;
 use crate::solution::PySolution;
 
-/// An unknown focal length (``estimate_focal=``, ``focal_range=``): `None` when not estimated,
-/// else the range in pixels, if given.
-pub(crate) type FocalArg = Option<Option<(f64, f64)>>;
+/// The intrinsics estimated with the pose: an unknown focal length (``estimate_focal=``,
+/// ``focal_range=``: `None` when not estimated, else the range in pixels, if given), the
+/// principal point (``refine_principal_point=``) and the distortion (``refine_distortion=``).
+#[derive(Clone, Copy, Default)]
+pub(crate) struct IntrinsicsArg {
+    pub(crate) focal: Option<Option<(f64, f64)>>,
+    pub(crate) principal_point: bool,
+    pub(crate) distortion: bool,
+}
+
+impl IntrinsicsArg {
+    /// These intrinsics, the principal point and the distortion refined when asked for.
+    pub(crate) fn refining(self, principal_point: bool, distortion: bool) -> Self {
+        IntrinsicsArg {
+            principal_point,
+            distortion,
+            ..self
+        }
+    }
+}
 
 /// The ``estimate_focal`` and ``focal_range`` arguments (a range alone implies the estimate);
 /// a range that is not two numbers raises ``InvalidOptionError`` (``"unknown_focal"``, the
 /// library's option for a range that is not ``0 < min < max``).
-pub(crate) fn focal_arg(estimate: bool, range: Option<&Bound<'_, PyAny>>) -> PyResult<FocalArg> {
+pub(crate) fn focal_arg(
+    estimate: bool,
+    range: Option<&Bound<'_, PyAny>>,
+) -> PyResult<IntrinsicsArg> {
     let range = match range.filter(|r| !r.is_none()) {
         None => None,
         Some(r) => match r.extract::<Vec<f64>>().as_deref() {
@@ -40,16 +60,26 @@ pub(crate) fn focal_arg(estimate: bool, range: Option<&Bound<'_, PyAny>>) -> PyR
             }
         },
     };
-    Ok((estimate || range.is_some()).then_some(range))
+    Ok(IntrinsicsArg {
+        focal: (estimate || range.is_some()).then_some(range),
+        ..IntrinsicsArg::default()
+    })
 }
 
-/// `p` with an unknown focal length when asked for.
-pub(crate) fn with_focal(p: Problem<'_>, focal: FocalArg) -> Problem<'_> {
-    match focal {
+/// `p` with the intrinsics `arg` estimated.
+pub(crate) fn with_intrinsics(p: Problem<'_>, arg: IntrinsicsArg) -> Problem<'_> {
+    let mut p = match arg.focal {
         None => p,
         Some(None) => p.unknown_focal(),
         Some(Some((lo, hi))) => p.unknown_focal_within(lo, hi),
+    };
+    if arg.principal_point {
+        p = p.refine_principal_point();
     }
+    if arg.distortion {
+        p = p.refine_distortion();
+    }
+    p
 }
 
 /// `p` with its optional weights and known vertical.
@@ -121,9 +151,15 @@ pub(crate) fn check_finite(
 ///         with it as a prior (``GravityMismatchError`` if the images contradict it).
 ///     estimate_focal: the camera's focal length is unknown (``camera`` required; its focal
 ///         length is the starting guess): estimated with the pose, within a tenth and ten times
-///         the guess, returned in ``Solution.focal``.
+///         the guess, returned in ``Solution.camera``
+///         (``Solution.focal``).
 ///     focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
 ///         ``estimate_focal``).
+///     refine_principal_point: the principal point is refined with the pose (``camera``
+///         required; its principal point the starting guess), returned in ``Solution.camera``.
+///     refine_distortion: the camera's distortion parameters are refined with the pose
+///         (``camera`` required; its parameters the starting guess), returned in
+///         ``Solution.camera``.
 ///     options: a ``SolverOptions`` (or a dict of its fields): refinement, planar branch,
 ///         iteration limits, robust ``loss``, ``covariance``. None: the defaults.
 ///     **keywords: the options of ``SolverOptions`` as keyword arguments instead
@@ -143,7 +179,8 @@ pub(crate) fn check_finite(
 ///     TypeError: an unknown keyword, or both ``options`` and option keywords.
 #[pyfunction]
 #[pyo3(signature = (world, image, weights = None, *, camera = None, gravity = None,
-    estimate_focal = false, focal_range = None, options = None, **keywords))]
+    estimate_focal = false, focal_range = None,
+    refine_principal_point = false, refine_distortion = false, options = None, **keywords))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     py: Python<'_>,
@@ -154,6 +191,8 @@ pub(crate) fn solve(
     gravity: Option<&Bound<'_, PyGravity>>,
     estimate_focal: bool,
     focal_range: Option<&Bound<'_, PyAny>>,
+    refine_principal_point: bool,
+    refine_distortion: bool,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
@@ -162,18 +201,19 @@ pub(crate) fn solve(
     let img = points2(image, "image")?;
     let wts = weights.map(|w| vector(w, "weights", false)).transpose()?;
     let g = gravity_arg(gravity);
-    let focal = focal_arg(estimate_focal, focal_range)?;
+    let focal =
+        focal_arg(estimate_focal, focal_range)?.refining(refine_principal_point, refine_distortion);
     let result = match camera {
         None => py.detach(|| {
             let p = problem_with(Problem::normalised(&w, &img), wts.as_deref(), g);
-            solver.solve(&with_focal(p, focal))
+            solver.solve(&with_intrinsics(p, focal))
         }),
         Some(cam) => {
             let cam = &cam.get().inner;
             check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
             py.detach(|| {
                 let p = problem_with(Problem::pixels(&w, &img, cam), wts.as_deref(), g);
-                solver.solve(&with_focal(p, focal))
+                solver.solve(&with_intrinsics(p, focal))
             })
         }
     };
@@ -268,9 +308,15 @@ pub(crate) fn _time_solve(
 ///     gravity: a ``Gravity``: the known vertical, a prior of the refinement, as ``solve``.
 ///     estimate_focal: the camera's focal length is unknown (``camera`` required; its focal
 ///         length is the starting guess): refined with the pose from ``initial`` and the
-///         guess, within a tenth and ten times the guess, returned in ``Solution.focal``.
+///         guess, within a tenth and ten times the guess, returned in ``Solution.camera``
+///         (``Solution.focal``).
 ///     focal_range: ``(min_px, max_px)``, the range of the unknown focal length (implies
 ///         ``estimate_focal``).
+///     refine_principal_point: the principal point is refined with the pose (``camera``
+///         required; its principal point the starting guess), returned in ``Solution.camera``.
+///     refine_distortion: the camera's distortion parameters are refined with the pose
+///         (``camera`` required; its parameters the starting guess), returned in
+///         ``Solution.camera``.
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``. Its ``planar``
 ///         and ``exhaustive`` (of the global search) have no effect here, and ``refine``
 ///         always ends with the Levenberg-Marquardt refinement: ``refinement="algebraic"``
@@ -288,7 +334,8 @@ pub(crate) fn _time_solve(
 ///     not finite (the library's message) or not of the forms above.
 #[pyfunction]
 #[pyo3(signature = (world, image, initial, *, weights = None, camera = None, gravity = None,
-    estimate_focal = false, focal_range = None, options = None, **keywords))]
+    estimate_focal = false, focal_range = None,
+    refine_principal_point = false, refine_distortion = false, options = None, **keywords))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     world: &Bound<'_, PyAny>,
@@ -299,11 +346,14 @@ pub(crate) fn refine(
     gravity: Option<&Bound<'_, PyGravity>>,
     estimate_focal: bool,
     focal_range: Option<&Bound<'_, PyAny>>,
+    refine_principal_point: bool,
+    refine_distortion: bool,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
     let py = world.py();
-    let focal = focal_arg(estimate_focal, focal_range)?;
+    let focal =
+        focal_arg(estimate_focal, focal_range)?.refining(refine_principal_point, refine_distortion);
     let solver = solver_arg(py, "refine", options, keywords, REFINE_KEYWORDS)?;
     let initial = pose_arg(initial, "initial")?;
     let w = points3(world, "world")?;
@@ -313,14 +363,14 @@ pub(crate) fn refine(
     let result = match camera {
         None => py.detach(|| {
             let p = problem_with(Problem::normalised(&w, &img), wts.as_deref(), g);
-            solver.refine(&with_focal(p, focal), &initial)
+            solver.refine(&with_intrinsics(p, focal), &initial)
         }),
         Some(cam) => {
             let cam = &cam.get().inner;
             check_finite(&w, &img, wts.as_deref()).map_err(|e| pnp_error(py, &e))?;
             py.detach(|| {
                 let p = problem_with(Problem::pixels(&w, &img, cam), wts.as_deref(), g);
-                solver.refine(&with_focal(p, focal), &initial)
+                solver.refine(&with_intrinsics(p, focal), &initial)
             })
         }
     };
