@@ -70,6 +70,12 @@ fn main() {
         rig_cameras: ptr::null(),
         focal_x: 0.0,
         focal_y: 0.0,
+        gravity_camera: ptr::null(),
+        gravity_world: ptr::null(),
+        gravity_sigma_deg: 0.0,
+        unknown_focal: false,
+        focal_min_px: 0.0,
+        focal_max_px: 0.0,
     };
     // SAFETY: all-zero is a valid `EopnpSolution`.
     let mut out: EopnpSolution = unsafe { std::mem::zeroed() };

@@ -44,9 +44,10 @@
 // any other value is a failure, whose message is then `eopnp_last_error_message()` and whose
 // details are `eopnp_last_error()` on the same thread.
 //
-// The codes from `EOPNP_TOO_FEW_POINTS` to `EOPNP_NO_CONSENSUS` are the variants of the Rust
-// library's `PnpError`, one to one. The others are this interface's own (bad pointers, bad
-// arguments) or the camera, COLMAP model and registration errors of the library.
+// The codes from `EOPNP_TOO_FEW_POINTS` to `EOPNP_NO_CONSENSUS`, and
+// `EOPNP_GRAVITY_MISMATCH` (added later, so numbered after the others), are the variants of
+// the Rust library's `PnpError`, one to one. The others are this interface's own (bad
+// pointers, bad arguments) or the camera, COLMAP model and registration errors of the library.
 typedef enum EopnpStatus {
   // Success.
   EOPNP_OK = 0,
@@ -96,6 +97,12 @@ typedef enum EopnpStatus {
   // A panic inside the library was caught at the boundary (a bug: please report it with
   // the message). The outputs are unspecified; the handles stay valid.
   EOPNP_PANIC = 18,
+  // `PnpError::GravityMismatch`: the images contradict the known vertical
+  // (`EopnpProblem::gravity_camera`): the vertical of the images' own pose and the measured
+  // one differ by more than their combined uncertainties allow. The message gives the angle
+  // in degrees and the distance in standard deviations. The vertical, its frames or its
+  // sigma are wrong, or the correspondences are; solve without it to see the images' pose.
+  EOPNP_GRAVITY_MISMATCH = 19,
 } EopnpStatus;
 
 // Which input an `EOPNP_NON_FINITE` error refers to (`EopnpErrorInfo::input`).
@@ -304,6 +311,32 @@ typedef struct EopnpProblem {
   double focal_x;
   // See `focal_x`.
   double focal_y;
+  // A known vertical: the direction of gravity (or any direction known in both frames)
+  // measured in the camera's frame (for a rig problem, the rig's), 3 doubles of any non-zero
+  // length; NULL (the zero-initialised default) for none. Set together with `gravity_world`
+  // and `gravity_sigma_deg`. The solve then returns the maximum a posteriori pose with the
+  // vertical as a prior, RANSAC samples two points, and images that contradict the vertical
+  // are `EOPNP_GRAVITY_MISMATCH` (the library's `Gravity`, `Problem::gravity`). Not with
+  // `unknown_focal`.
+  const double *gravity_camera;
+  // The same direction in the world's frame, 3 doubles of any non-zero length; NULL for
+  // none. Set together with `gravity_camera`.
+  const double *gravity_world;
+  // The standard deviation of the measured direction in degrees (finite, > 0, else
+  // `EOPNP_INVALID_OPTION`), with `gravity_camera`; must be 0 without it.
+  double gravity_sigma_deg;
+  // Pixels through `camera` only: the focal length is unknown and estimated with the pose,
+  // `camera` being the starting guess (principal point and distortion kept; its two focal
+  // lengths scaled alike). The solution's `focal_estimated`, `focal_x` and `focal_y` give it.
+  // With normalised or rig input, or with a vertical: `EOPNP_INVALID_OPTION`.
+  bool unknown_focal;
+  // With `unknown_focal`: the range of the (first) focal length sought, pixels
+  // (`0 < focal_min_px < focal_max_px`, else `EOPNP_INVALID_OPTION`). Both 0 (the
+  // zero-initialised default): a tenth to ten times the camera's. Must be 0 without
+  // `unknown_focal`.
+  double focal_min_px;
+  // See `focal_min_px`.
+  double focal_max_px;
 } EopnpProblem;
 
 // A solved pose and how it was found: the library's `Solution`. Written by the solve
@@ -349,6 +382,14 @@ typedef struct EopnpSolution {
   // `covariance` holds the pose's covariance (asked for by `eopnp_solver_set_covariance`,
   // and the normal equations positive definite).
   bool has_covariance;
+  // The focal length was estimated (`EopnpProblem::unknown_focal`): `focal_x`, `focal_y`
+  // hold it.
+  bool focal_estimated;
+  // With `focal_estimated`: the estimated focal length along x, pixels; 0 otherwise.
+  double focal_x;
+  // With `focal_estimated`: the estimated focal length along y, pixels (the guess camera's
+  // two focal lengths scaled alike); 0 otherwise.
+  double focal_y;
 } EopnpSolution;
 
 // Statistics of a RANSAC run (the library's `RansacStats`).

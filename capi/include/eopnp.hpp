@@ -27,6 +27,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -108,6 +109,9 @@ EOPNP_ERROR_CLASS(NoConsensusError)
 EOPNP_ERROR_CLASS(CameraError)
 /// A COLMAP model could not be read.
 EOPNP_ERROR_CLASS(ModelError)
+/// PnpError::GravityMismatch: the images contradict the known vertical (Problem::gravity);
+/// what() gives the angle in degrees and the distance in standard deviations.
+EOPNP_ERROR_CLASS(GravityMismatchError)
 /// A COLMAP image could not be registered (unknown image or camera).
 EOPNP_ERROR_CLASS(RegisterError)
 /// An output array too small.
@@ -142,6 +146,7 @@ namespace detail {
     case EOPNP_REGISTER_ERROR: throw RegisterError(status, msg, info);
     case EOPNP_BUFFER_TOO_SMALL: throw BufferTooSmallError(status, msg, info);
     case EOPNP_PANIC: throw InternalError(status, msg, info);
+    case EOPNP_GRAVITY_MISMATCH: throw GravityMismatchError(status, msg, info);
     default: throw Error(status, msg, info);
   }
 }
@@ -339,13 +344,57 @@ class Problem {
     p_.focal_y = fy;
     return *this;
   }
+  /// A known vertical: the direction of gravity (or any direction known in both frames)
+  /// measured in the camera's (rig's) frame, the same direction in the world's frame (any
+  /// non-zero lengths) and the measurement's standard deviation in degrees (finite, > 0). The
+  /// solve returns the maximum a posteriori pose with it as a prior; images that contradict it
+  /// throw GravityMismatchError, a zero direction or a bad sigma InvalidOptionError. The
+  /// directions are copied into the problem.
+  Problem& gravity(const std::array<double, 3>& in_camera, const std::array<double, 3>& in_world,
+                   double sigma_deg) {
+    gravity_camera_ = in_camera;
+    gravity_world_ = in_world;
+    has_gravity_ = true;
+    p_.gravity_sigma_deg = sigma_deg;
+    repoint();
+    return *this;
+  }
+  /// Pixels through a camera only: the focal length is unknown and estimated with the pose, the
+  /// camera's being the starting guess; sought between a tenth and ten times it, or between
+  /// `min_px` and `max_px` (0 < min_px < max_px). The solution's focal_estimated, focal_x and
+  /// focal_y give it (estimated_focal()). Not with a vertical (InvalidOptionError).
+  Problem& unknown_focal(double min_px = 0.0, double max_px = 0.0) {
+    p_.unknown_focal = true;
+    p_.focal_min_px = min_px;
+    p_.focal_max_px = max_px;
+    return *this;
+  }
   /// The number of correspondences.
   std::size_t size() const noexcept { return p_.n; }
   /// The C problem.
   const EopnpProblem& c() const noexcept { return p_; }
 
+  Problem(const Problem& o)
+      : p_(o.p_), gravity_camera_(o.gravity_camera_), gravity_world_(o.gravity_world_),
+        has_gravity_(o.has_gravity_) {
+    repoint();
+  }
+  Problem& operator=(const Problem& o) {
+    p_ = o.p_;
+    gravity_camera_ = o.gravity_camera_;
+    gravity_world_ = o.gravity_world_;
+    has_gravity_ = o.has_gravity_;
+    repoint();
+    return *this;
+  }
+
  private:
   Problem() : p_{} {}
+  /// The C problem's vertical pointed at this object's copies.
+  void repoint() noexcept {
+    p_.gravity_camera = has_gravity_ ? gravity_camera_.data() : nullptr;
+    p_.gravity_world = has_gravity_ ? gravity_world_.data() : nullptr;
+  }
 #ifdef EOPNP_HAS_SPAN
   static std::size_t count(std::span<const double> world, std::span<const double> image) {
     if (world.size() % 3 != 0 || image.size() % 2 != 0 || world.size() / 3 != image.size() / 2)
@@ -356,7 +405,17 @@ class Problem {
   }
 #endif
   EopnpProblem p_;
+  std::array<double, 3> gravity_camera_{};
+  std::array<double, 3> gravity_world_{};
+  bool has_gravity_ = false;
 };
+
+/// The focal lengths (fx, fy) a solution estimated (Problem::unknown_focal), or nothing when
+/// the focal length was known.
+inline std::optional<std::array<double, 2>> estimated_focal(const Solution& s) {
+  if (!s.focal_estimated) return std::nullopt;
+  return std::array<double, 2>{s.focal_x, s.focal_y};
+}
 
 // -------------------------------------------------------------------------------------------
 // Solver and RANSAC.

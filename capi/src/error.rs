@@ -13,9 +13,10 @@ use eopnp::{DegenerateKind, InputKind, PnpError};
 /// any other value is a failure, whose message is then `eopnp_last_error_message()` and whose
 /// details are `eopnp_last_error()` on the same thread.
 ///
-/// The codes from `EOPNP_TOO_FEW_POINTS` to `EOPNP_NO_CONSENSUS` are the variants of the Rust
-/// library's `PnpError`, one to one. The others are this interface's own (bad pointers, bad
-/// arguments) or the camera, COLMAP model and registration errors of the library.
+/// The codes from `EOPNP_TOO_FEW_POINTS` to `EOPNP_NO_CONSENSUS`, and
+/// `EOPNP_GRAVITY_MISMATCH` (added later, so numbered after the others), are the variants of
+/// the Rust library's `PnpError`, one to one. The others are this interface's own (bad
+/// pointers, bad arguments) or the camera, COLMAP model and registration errors of the library.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum EopnpStatus {
@@ -67,6 +68,12 @@ pub enum EopnpStatus {
     /// A panic inside the library was caught at the boundary (a bug: please report it with
     /// the message). The outputs are unspecified; the handles stay valid.
     EOPNP_PANIC = 18,
+    /// `PnpError::GravityMismatch`: the images contradict the known vertical
+    /// (`EopnpProblem::gravity_camera`): the vertical of the images' own pose and the measured
+    /// one differ by more than their combined uncertainties allow. The message gives the angle
+    /// in degrees and the distance in standard deviations. The vertical, its frames or its
+    /// sigma are wrong, or the correspondences are; solve without it to see the images' pose.
+    EOPNP_GRAVITY_MISMATCH = 19,
 }
 
 /// Which input an `EOPNP_NON_FINITE` error refers to (`EopnpErrorInfo::input`).
@@ -223,7 +230,10 @@ impl From<PnpError> for Failure {
                 info.need = to_u64(needed);
                 S::EOPNP_NO_CONSENSUS
             }
+            PnpError::GravityMismatch { .. } => S::EOPNP_GRAVITY_MISMATCH,
             // A variant added to the library after this interface: the nearest general code.
+            // Every variant known when this was written has its arm above (the unit test
+            // `every_known_pnp_error_has_its_own_status` lists them).
             _ => S::EOPNP_NO_SOLUTION,
         };
         Failure { info, message }

@@ -9,9 +9,10 @@ use eopnp::camera::Camera;
 use eopnp::colmap::{self, FrameRegistration, ReadOptions, Registrar, Registration};
 use eopnp::covariance::NoiseModel;
 use eopnp::ransac::Ransac;
-use eopnp::{Loss, PlanarDetection, Problem, Refinement, Rig, Solver};
+use eopnp::{Gravity, Loss, PlanarDetection, Problem, Refinement, Rig, Solver};
 use nalgebra::{
     Isometry3, Matrix3, Point2, Point3, Quaternion, Rotation3, Translation3, UnitQuaternion,
+    Vector3,
 };
 
 use crate::error::{guard, last_info, last_message, EopnpErrorInfo, EopnpStatus, Failure};
@@ -181,6 +182,38 @@ struct Inputs<'a> {
     weights: Option<&'a [f64]>,
     observed: Observed<'a>,
     focal: Option<(f64, f64)>,
+    gravity: Option<Gravity>,
+    /// The focal length is unknown: in the default range (`None`) or in `(min_px, max_px)`.
+    unknown_focal: Option<Option<(f64, f64)>>,
+}
+
+/// The known vertical of a problem: `None` without one; `EOPNP_INVALID_ARGUMENT` for a half-set
+/// one, the library's `InvalidOption("gravity")` for a zero direction or a bad sigma.
+///
+/// # Safety
+/// `camera` and `world` NULL or 3 readable doubles each.
+unsafe fn gravity(camera: *const f64, world: *const f64, sigma_deg: f64) -> Res<Option<Gravity>> {
+    match (camera.is_null(), world.is_null()) {
+        (true, true) => {
+            if sigma_deg != 0.0 {
+                return Err(Failure::invalid(
+                    "`gravity_sigma_deg` is set without `gravity_camera` and `gravity_world`: \
+                     set the three, or none",
+                ));
+            }
+            Ok(None)
+        }
+        (false, false) => {
+            let c = slice(camera, 3, "gravity_camera")?;
+            let w = slice(world, 3, "gravity_world")?;
+            let v = |x: &[f64]| Vector3::new(x[0], x[1], x[2]);
+            Ok(Some(Gravity::new(v(c), v(w), sigma_deg)?))
+        }
+        _ => Err(Failure::invalid(
+            "a vertical needs both `gravity_camera` and `gravity_world` (and \
+             `gravity_sigma_deg`): set the three, or none",
+        )),
+    }
 }
 
 impl<'a> Inputs<'a> {
@@ -227,12 +260,23 @@ impl<'a> Inputs<'a> {
             }
         };
         let focal = (p.focal_x != 0.0 || p.focal_y != 0.0).then_some((p.focal_x, p.focal_y));
+        let gravity = gravity(p.gravity_camera, p.gravity_world, p.gravity_sigma_deg)?;
+        let range = (p.focal_min_px != 0.0 || p.focal_max_px != 0.0)
+            .then_some((p.focal_min_px, p.focal_max_px));
+        if range.is_some() && !p.unknown_focal {
+            return Err(Failure::invalid(
+                "`focal_min_px`/`focal_max_px` are set without `unknown_focal`",
+            ));
+        }
+        let unknown_focal = p.unknown_focal.then_some(range);
         Ok(Inputs {
             world,
             image,
             weights,
             observed,
             focal,
+            gravity,
+            unknown_focal,
         })
     }
 
@@ -248,7 +292,14 @@ impl<'a> Inputs<'a> {
         if let Some((fx, fy)) = self.focal {
             problem = problem.focal(fx, fy);
         }
-        problem
+        if let Some(g) = self.gravity {
+            problem = problem.gravity(g);
+        }
+        match self.unknown_focal {
+            Some(Some((lo, hi))) => problem.unknown_focal_within(lo, hi),
+            Some(None) => problem.unknown_focal(),
+            None => problem,
+        }
     }
 
     fn n(&self) -> usize {
@@ -377,6 +428,7 @@ pub extern "C" fn eopnp_status_name(status: i32) -> *const c_char {
         16 => c"EOPNP_REGISTER_ERROR",
         17 => c"EOPNP_BUFFER_TOO_SMALL",
         18 => c"EOPNP_PANIC",
+        19 => c"EOPNP_GRAVITY_MISMATCH",
         _ => c"EOPNP_UNKNOWN_STATUS",
     };
     name.as_ptr()

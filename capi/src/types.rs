@@ -127,6 +127,32 @@ pub struct EopnpProblem {
     pub focal_x: f64,
     /// See `focal_x`.
     pub focal_y: f64,
+    /// A known vertical: the direction of gravity (or any direction known in both frames)
+    /// measured in the camera's frame (for a rig problem, the rig's), 3 doubles of any non-zero
+    /// length; NULL (the zero-initialised default) for none. Set together with `gravity_world`
+    /// and `gravity_sigma_deg`. The solve then returns the maximum a posteriori pose with the
+    /// vertical as a prior, RANSAC samples two points, and images that contradict the vertical
+    /// are `EOPNP_GRAVITY_MISMATCH` (the library's `Gravity`, `Problem::gravity`). Not with
+    /// `unknown_focal`.
+    pub gravity_camera: *const f64,
+    /// The same direction in the world's frame, 3 doubles of any non-zero length; NULL for
+    /// none. Set together with `gravity_camera`.
+    pub gravity_world: *const f64,
+    /// The standard deviation of the measured direction in degrees (finite, > 0, else
+    /// `EOPNP_INVALID_OPTION`), with `gravity_camera`; must be 0 without it.
+    pub gravity_sigma_deg: f64,
+    /// Pixels through `camera` only: the focal length is unknown and estimated with the pose,
+    /// `camera` being the starting guess (principal point and distortion kept; its two focal
+    /// lengths scaled alike). The solution's `focal_estimated`, `focal_x` and `focal_y` give it.
+    /// With normalised or rig input, or with a vertical: `EOPNP_INVALID_OPTION`.
+    pub unknown_focal: bool,
+    /// With `unknown_focal`: the range of the (first) focal length sought, pixels
+    /// (`0 < focal_min_px < focal_max_px`, else `EOPNP_INVALID_OPTION`). Both 0 (the
+    /// zero-initialised default): a tenth to ten times the camera's. Must be 0 without
+    /// `unknown_focal`.
+    pub focal_min_px: f64,
+    /// See `focal_min_px`.
+    pub focal_max_px: f64,
 }
 
 /// A pose `x_cam = R X + t` (world to camera), the input of `eopnp_refine` (a prior pose).
@@ -185,6 +211,14 @@ pub struct EopnpSolution {
     /// `covariance` holds the pose's covariance (asked for by `eopnp_solver_set_covariance`,
     /// and the normal equations positive definite).
     pub has_covariance: bool,
+    /// The focal length was estimated (`EopnpProblem::unknown_focal`): `focal_x`, `focal_y`
+    /// hold it.
+    pub focal_estimated: bool,
+    /// With `focal_estimated`: the estimated focal length along x, pixels; 0 otherwise.
+    pub focal_x: f64,
+    /// With `focal_estimated`: the estimated focal length along y, pixels (the guess camera's
+    /// two focal lengths scaled alike); 0 otherwise.
+    pub focal_y: f64,
 }
 
 /// Statistics of a RANSAC run (the library's `RansacStats`).
@@ -300,6 +334,12 @@ fn to_u64(x: usize) -> u64 {
     u64::try_from(x).unwrap_or(u64::MAX)
 }
 
+/// The focal lengths `(fx, fy)` a solution estimated (an unknown focal length), `None` when the
+/// focal length was known. The one place this interface reads them from a solution.
+pub(crate) fn estimated_focal(s: &Solution) -> Option<(f64, f64)> {
+    s.focal
+}
+
 impl From<&Solution> for EopnpSolution {
     fn from(s: &Solution) -> Self {
         let mut rotation = [0.0; 9];
@@ -317,6 +357,7 @@ impl From<&Solution> for EopnpSolution {
             }
             covariance_sigma = cov.sigma;
         }
+        let focal = estimated_focal(s);
         EopnpSolution {
             rotation,
             translation: [s.translation.x, s.translation.y, s.translation.z],
@@ -335,6 +376,9 @@ impl From<&Solution> for EopnpSolution {
             planar: s.planar,
             converged: s.converged,
             has_covariance: s.covariance.is_some(),
+            focal_estimated: focal.is_some(),
+            focal_x: focal.map_or(0.0, |f| f.0),
+            focal_y: focal.map_or(0.0, |f| f.1),
         }
     }
 }

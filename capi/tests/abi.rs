@@ -45,6 +45,8 @@ fn assert_same(c: &EopnpSolution, s: &Solution) {
         (s.cheirality_ok, s.degenerate, s.planar, s.converged)
     );
     assert_eq!(c.has_covariance, s.covariance.is_some());
+    // Only the focal_gravity tests estimate a focal length: here none is.
+    assert!(!c.focal_estimated && c.focal_x == 0.0 && c.focal_y == 0.0);
     if let Some(cov) = &s.covariance {
         let mut m = [0.0; 36];
         for i in 0..6 {
@@ -75,6 +77,12 @@ fn problem(world: &[f64], image: &[f64], n: usize) -> EopnpProblem {
         rig_cameras: ptr::null(),
         focal_x: 0.0,
         focal_y: 0.0,
+        gravity_camera: ptr::null(),
+        gravity_world: ptr::null(),
+        gravity_sigma_deg: 0.0,
+        unknown_focal: false,
+        focal_min_px: 0.0,
+        focal_max_px: 0.0,
     }
 }
 

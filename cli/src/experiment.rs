@@ -13,7 +13,8 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg64;
 
-use crate::report::Estimate;
+use crate::report::{Estimate, FocalEstimate};
+use crate::solve::{camera_with_focal, estimated_focal};
 
 /// Replaces `round(fraction * N)` of the correspondences' world points, chosen uniformly
 /// without replacement, by wrong ones: a uniformly chosen point of `cloud` plus Gaussian noise
@@ -113,8 +114,38 @@ pub(crate) fn image_problem(
     }
 }
 
+/// The problem of `pixels` through the model's camera `cam`, or, with `guess`, through the
+/// guess with the focal length unknown ([`eopnp::Problem::unknown_focal`]).
+pub(crate) fn pixel_problem<'a>(
+    world: &'a [Point3<f64>],
+    pixels: &'a [Point2<f64>],
+    cam: &'a Camera,
+    guess: Option<&'a Camera>,
+) -> eopnp::Problem<'a> {
+    match guess {
+        Some(g) => eopnp::Problem::pixels(world, pixels, g).unknown_focal(),
+        None => eopnp::Problem::pixels(world, pixels, cam),
+    }
+}
+
+/// The model's camera `cam` with its focal length(s) multiplied by `scale`: the starting guess
+/// of `register --unknown-focal --focal-guess-scale`.
+///
+/// # Errors
+/// [`RegisterError::Solver`] (`InvalidOption("unknown_focal")`) if the scaled focal length is
+/// not a finite positive number.
+pub(crate) fn focal_guess(cam: &Camera, scale: f64) -> Result<Camera, RegisterError> {
+    let (fx, fy) = cam.focal_lengths();
+    camera_with_focal(cam, (fx * scale, fy * scale)).map_err(|_| {
+        RegisterError::Solver(eopnp::PnpError::InvalidOption {
+            option: "unknown_focal",
+        })
+    })
+}
+
 /// RANSAC ([`Ransac::estimate`] of the pixels) on the image's correspondences, optionally with
-/// injected outliers ([`image_problem`]).
+/// injected outliers ([`image_problem`]), through the model's camera or with an unknown focal
+/// length from `guess`.
 /// `estimate.inliers` is the RANSAC inlier count; the pixel RMSEs are over the true
 /// correspondences.
 ///
@@ -126,11 +157,12 @@ pub(crate) fn ransac_on_problem(
     problem: &ImageProblem,
     ransac: &Ransac,
     solver: &Solver,
+    guess: Option<&Camera>,
 ) -> Result<(Estimate, RansacSolution), RegisterError> {
     let (_, cam) = model.image_and_camera(image_id)?;
     let sol = ransac.estimate(
         solver,
-        &eopnp::Problem::pixels(&problem.world, &problem.pixels, cam),
+        &pixel_problem(&problem.world, &problem.pixels, cam, guess),
     )?;
     let mut reg = estimate(model, image_id, problem, &sol.solution, sol.num_inliers)?;
     reg.micros = sol.stats.micros;
@@ -140,7 +172,8 @@ pub(crate) fn ransac_on_problem(
 
 /// The [`Estimate`] of `solution` for image `image_id`: errors against the model's pose (as
 /// the library's `Registration` measures them), pixel RMSEs over the true correspondences of
-/// `problem`.
+/// `problem` (the estimate's through the estimated camera when the solution estimated the focal
+/// length, with its error against the model's).
 ///
 /// # Errors
 /// [`RegisterError::UnknownImage`], [`RegisterError::UnknownCamera`].
@@ -155,7 +188,25 @@ pub(crate) fn estimate(
     let (r_ref, t_ref) = img.pose();
     let r = solution.rotation;
     let t = solution.translation;
-    let rmse = |r: &Matrix3<f64>, t: &Vector3<f64>| true_rmse(cam, problem, r, t);
+    let rmse = |cam: &Camera, r: &Matrix3<f64>, t: &Vector3<f64>| true_rmse(cam, problem, r, t);
+    let (estimated_cam, focal) = match estimated_focal(solution) {
+        Some(f) => {
+            let model_f = cam.focal_lengths();
+            let error = |e: f64, m: f64| 100.0 * (e - m).abs() / m;
+            let estimated = camera_with_focal(cam, f).map_err(|_| {
+                RegisterError::Solver(eopnp::PnpError::InvalidOption {
+                    option: "unknown_focal",
+                })
+            })?;
+            let focal = FocalEstimate {
+                estimated: f,
+                model: model_f,
+                error_pct: error(f.0, model_f.0).max(error(f.1, model_f.1)),
+            };
+            (Some(estimated), Some(focal))
+        }
+        None => (None, None),
+    };
     Ok(Estimate {
         n: problem.world.len(),
         inliers,
@@ -164,9 +215,10 @@ pub(crate) fn estimate(
         solution: *solution,
         rotation_error_deg: rotation_error_deg(&r, &r_ref),
         translation_error_pct: 100.0 * (t - t_ref).norm() / t_ref.norm(),
-        rmse_px: rmse(&r, &t),
-        model_rmse_px: rmse(&r_ref, &t_ref),
+        rmse_px: rmse(estimated_cam.as_ref().unwrap_or(cam), &r, &t),
+        model_rmse_px: rmse(cam, &r_ref, &t_ref),
         micros: 0.0,
+        focal,
     })
 }
 
@@ -208,7 +260,7 @@ fn index(rng: &mut Pcg64, n: usize) -> usize {
 }
 
 /// The floor of an image problem: EOPnP ([`Solver::solve`] of the pixels with `solver`) on the
-/// true correspondences only, as an [`Estimate`].
+/// true correspondences only, as an [`Estimate`] (with `guess`, the focal length unknown too).
 ///
 /// # Errors
 /// As [`eopnp::colmap::register_image`].
@@ -217,6 +269,7 @@ pub(crate) fn floor(
     image_id: u32,
     problem: &ImageProblem,
     solver: &Solver,
+    guess: Option<&Camera>,
 ) -> Result<Estimate, RegisterError> {
     let (_, cam) = model.image_and_camera(image_id)?;
     let (mut w, mut p) = (Vec::new(), Vec::new());
@@ -232,7 +285,7 @@ pub(crate) fn floor(
         }
     }
     let start = Instant::now();
-    let sol = solver.solve(&eopnp::Problem::pixels(&w, &p, cam))?;
+    let sol = solver.solve(&pixel_problem(&w, &p, cam, guess))?;
     let micros = start.elapsed().as_secs_f64() * 1e6;
     let mut reg = estimate(model, image_id, problem, &sol, sol.used)?;
     reg.micros = micros;

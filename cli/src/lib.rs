@@ -69,7 +69,9 @@ f,cx,cy,k; RADIAL_FISHEYE f,cx,cy,k1,k2.
 
 Output: rotation (matrix, row-major, and quaternion w,x,y,z) and translation of the
 world-to-camera pose x_cam = R X + t, number of points and inliers, the minimised cost and the
-reprojection RMSE in pixels.";
+reprojection RMSE in pixels; with --unknown-focal the estimated \"focal\": [fx, fy] (and the
+estimated camera), with a known vertical (--gravity-camera, --gravity-world, --gravity-sigma)
+a \"gravity\" block with the angle between the measured vertical and the pose's.";
 
 /// Options of `register`.
 #[derive(Debug, Args)]
@@ -144,6 +146,23 @@ pub(crate) struct RegisterOptions {
     /// frames' poses would disagree with their images').
     #[arg(long)]
     per_image: bool,
+    /// Withhold every image's focal length: it is estimated with the pose (also with --ransac,
+    /// whose samples are then P4Pf's four points), the model's camera being only the starting
+    /// guess (see --focal-guess-scale; principal point and distortion as the model's). Each
+    /// image's estimated focal length and its error against the model's are reported, with
+    /// their median and maximum. Image by image: on a model whose frames hold several images,
+    /// add --per-image. Not with --write (the model's cameras would not match the poses).
+    #[arg(long, conflicts_with = "write")]
+    unknown_focal: bool,
+    /// With --unknown-focal: start from the model's focal length times S (finite, > 0), to
+    /// check the recovery from a wrong guess [default: 1].
+    #[arg(
+        long,
+        value_name = "S",
+        requires = "unknown_focal",
+        allow_hyphen_values = true
+    )]
+    focal_guess_scale: Option<f64>,
 }
 
 impl Default for RegisterOptions {
@@ -158,6 +177,8 @@ impl Default for RegisterOptions {
             export_problems: None,
             max_input_size: None,
             per_image: false,
+            unknown_focal: false,
+            focal_guess_scale: None,
         }
     }
 }
@@ -174,6 +195,13 @@ impl RegisterOptions {
                  number (between about 1e-154 and 1e154), got {}",
                 self.threshold
             )));
+        }
+        if let Some(s) = self.focal_guess_scale {
+            if !(s > 0.0 && s.is_finite()) {
+                return Err(Failure::input(format!(
+                    "--focal-guess-scale must be a finite number > 0, got {s}"
+                )));
+            }
         }
         if let Some(f) = self.outliers {
             if !(0.0..=1.0).contains(&f) {
@@ -215,6 +243,115 @@ struct SolveArgs {
     /// `KiB` etc. also accepted), or `none`.
     #[arg(long, value_name = "SIZE", value_parser = parse_size, default_value = "1G")]
     max_input_size: u64,
+    /// The focal length is unknown: estimated with the pose, the camera's (--camera or the
+    /// file's) being only the starting guess (its principal point and distortion are kept; a
+    /// camera's two focal lengths are scaled alike). Searched between a tenth and ten times
+    /// the guess unless --focal-range is given. The output gains "focal": [fx, fy] and its
+    /// "camera" shows the estimated camera.
+    #[arg(long, conflicts_with = "gravity_camera")]
+    unknown_focal: bool,
+    /// With --unknown-focal: search the (first) focal length between MIN_PX and MAX_PX pixels
+    /// (0 < MIN_PX < MAX_PX; the range must contain the camera's focal length, where the
+    /// search starts).
+    #[arg(
+        long,
+        num_args = 2,
+        value_names = ["MIN_PX", "MAX_PX"],
+        requires = "unknown_focal",
+        allow_hyphen_values = true
+    )]
+    focal_range: Option<Vec<f64>>,
+    /// A known vertical: the direction of gravity (or any direction known in both frames)
+    /// measured in the camera's frame, as X,Y,Z (any non-zero length). Needs --gravity-world
+    /// and --gravity-sigma. The pose is then the maximum a posteriori one with the vertical as
+    /// a prior; images that contradict it are an error (exit 2).
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        value_parser = parse_vector,
+        allow_hyphen_values = true,
+        requires_all = ["gravity_world", "gravity_sigma"]
+    )]
+    gravity_camera: Option<nalgebra::Vector3<f64>>,
+    /// The same direction in the world's frame, X,Y,Z (e.g. 0,0,-1 for "down" in a z-up
+    /// world). Needs --gravity-camera and --gravity-sigma.
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        value_parser = parse_vector,
+        allow_hyphen_values = true,
+        requires_all = ["gravity_camera", "gravity_sigma"]
+    )]
+    gravity_world: Option<nalgebra::Vector3<f64>>,
+    /// The standard deviation of the measured direction, degrees (finite, > 0; an IMU's tilt
+    /// accuracy, e.g. 0.1 to 1). Needs --gravity-camera and --gravity-world.
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires_all = ["gravity_camera", "gravity_world"]
+    )]
+    gravity_sigma: Option<f64>,
+}
+
+/// Parses a vector `X,Y,Z` of three finite numbers.
+pub(crate) fn parse_vector(s: &str) -> Result<nalgebra::Vector3<f64>, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let bad = || format!("`{s}`: expected three finite numbers X,Y,Z, e.g. 0,0,-1");
+    if parts.len() != 3 {
+        return Err(bad());
+    }
+    let mut v = [0.0; 3];
+    for (x, p) in v.iter_mut().zip(&parts) {
+        *x = p
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(bad)?;
+    }
+    Ok(nalgebra::Vector3::new(v[0], v[1], v[2]))
+}
+
+impl SolveArgs {
+    /// The unknown focal length and the vertical of `solve`, checked.
+    fn solve_options(&self) -> Result<solve::Options, Failure> {
+        let unknown_focal = match (&self.focal_range, self.unknown_focal) {
+            (Some(r), _) => {
+                let (lo, hi) = (r[0], r[1]);
+                if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+                    return Err(Failure::input(format!(
+                        "--focal-range: expected 0 < MIN_PX < MAX_PX, finite, got {lo} {hi}"
+                    )));
+                }
+                Some(Some((lo, hi)))
+            }
+            (None, true) => Some(None),
+            (None, false) => None,
+        };
+        let gravity = match (self.gravity_camera, self.gravity_world, self.gravity_sigma) {
+            (Some(c), Some(w), Some(sigma)) => {
+                Some(eopnp::Gravity::new(c, w, sigma).map_err(|_| {
+                    Failure::input(format!(
+                        "--gravity-camera {}, --gravity-world {}, --gravity-sigma {sigma}: the \
+                         two directions must be non-zero and the sigma a finite number of \
+                         degrees > 0",
+                        vector_text(&c),
+                        vector_text(&w)
+                    ))
+                })?)
+            }
+            _ => None,
+        };
+        Ok(solve::Options {
+            unknown_focal,
+            gravity,
+        })
+    }
+}
+
+/// `v` as `X,Y,Z`.
+fn vector_text(v: &nalgebra::Vector3<f64>) -> String {
+    format!("{},{},{}", v.x, v.y, v.z)
 }
 
 /// Parses a size: bytes, or a number with a suffix K, M, G or T (powers of 1024, optionally
@@ -329,8 +466,9 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 max_input_bytes: a.max_input_size,
                 ..input::Limits::default()
             };
+            let options = a.solve_options()?;
             let problem = input::read_problem(&a.file, a.format, a.camera.as_deref(), &limits)?;
-            let json = solve::solve(&problem, &solver)?;
+            let json = solve::solve_with(&problem, &solver, &options)?;
             emit(&json)
         }
     }

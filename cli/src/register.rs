@@ -13,7 +13,6 @@ use eopnp::colmap::{
     self, Limit, Model, ModelErrorKind, ModelFormat, Pose, RegisterError, Registrar, SensorId,
 };
 use eopnp::ransac::Ransac;
-use eopnp::Problem;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
@@ -33,6 +32,11 @@ impl super::RegisterOptions {
             noise: OUTLIER_NOISE,
             seed: self.seed,
         })
+    }
+
+    /// `--focal-guess-scale`, 1 by default.
+    fn focal_guess_scale(&self) -> f64 {
+        self.focal_guess_scale.unwrap_or(1.0)
     }
 
     fn ransac_options(&self) -> Ransac {
@@ -55,7 +59,21 @@ fn estimate(
     // machine's scheduling noise otherwise dominates single ~1 ms measurements.
     let solver = opts.solver();
     let spec = opts.outlier_spec();
-    if spec.is_none() {
+    // An unknown focal length: the solve is given the guess camera, and the library's
+    // registrar (which solves through the model's camera) is not used.
+    let guess = if opts.unknown_focal {
+        let guess = model
+            .image_and_camera(image_id)
+            .and_then(|(_, cam)| experiment::focal_guess(cam, opts.focal_guess_scale()));
+        match guess {
+            Ok(g) => Some(g),
+            Err(e) => return (Err(e), None),
+        }
+    } else {
+        None
+    };
+    let guess = guess.as_ref();
+    if spec.is_none() && guess.is_none() {
         let ransac = opts.ransac.then(|| opts.ransac_options());
         let mut run = || {
             registrar
@@ -80,7 +98,10 @@ fn estimate(
         return (result, extra);
     }
     let problem = experiment::image_problem(model, image_id, spec.as_ref());
-    let floor = experiment::floor(model, image_id, &problem, &solver).ok();
+    let floor = spec
+        .is_some()
+        .then(|| experiment::floor(model, image_id, &problem, &solver, guess).ok())
+        .flatten();
     let mut extra = Extra {
         stats: None,
         true_correspondences: problem.truth.iter().filter(|b| **b).count(),
@@ -89,7 +110,7 @@ fn estimate(
     };
     let result = if opts.ransac {
         let r = opts.ransac_options();
-        let run = || experiment::ransac_on_problem(model, image_id, &problem, &r, &solver);
+        let run = || experiment::ransac_on_problem(model, image_id, &problem, &r, &solver, guess);
         run().and_then(|(mut best, sol)| {
             for _ in 0..2 {
                 best.micros = best.micros.min(run()?.0.micros);
@@ -105,17 +126,24 @@ fn estimate(
             Ok(best)
         })
     } else {
-        plain_on_problem(model, image_id, &problem, &solver)
+        plain_on_problem(model, image_id, &problem, &solver, guess)
     };
+    // Without injected outliers (an unknown focal length alone), the extras are those of the
+    // registrar's path: RANSAC's statistics, or none.
+    if spec.is_none() && !opts.ransac {
+        return (result, None);
+    }
     (result, Some(extra))
 }
 
-/// Plain EOPnP (no outlier rejection) on a problem with injected outliers.
+/// Plain EOPnP (no outlier rejection) on a problem with injected outliers, or with an unknown
+/// focal length from `guess`.
 fn plain_on_problem(
     model: &Model,
     image_id: u32,
     problem: &ImageProblem,
     solver: &eopnp::Solver,
+    guess: Option<&eopnp::camera::Camera>,
 ) -> Result<Estimate, RegisterError> {
     let cam = model
         .images
@@ -126,7 +154,12 @@ fn plain_on_problem(
     let mut sol = None;
     for _ in 0..3 {
         let start = Instant::now();
-        let s = solver.solve(&Problem::pixels(&problem.world, &problem.pixels, cam))?;
+        let s = solver.solve(&experiment::pixel_problem(
+            &problem.world,
+            &problem.pixels,
+            cam,
+            guess,
+        ))?;
         best = best.min(start.elapsed().as_secs_f64() * 1e6);
         sol = Some(s);
     }
@@ -431,6 +464,13 @@ pub(crate) fn run(
     // Frames of several images are registered as rig poses; a model whose frames each hold one
     // image (what COLMAP 3.12 and later write for a model without rigs) image by image.
     let multi_image_frames = model.frames.values().any(|f| f.image_ids().count() > 1);
+    if multi_image_frames && !opts.per_image && opts.unknown_focal {
+        return Err(Failure::input(
+            "--unknown-focal estimates one camera's focal length image by image; a rig pose \
+             with unknown focal lengths is not supported: on a model whose frames hold several \
+             images, add --per-image",
+        ));
+    }
     if multi_image_frames && !opts.per_image {
         if opts.outliers.is_some() || opts.export_problems.is_some() {
             return Err(Failure::input(

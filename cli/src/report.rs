@@ -26,6 +26,19 @@ pub(crate) struct Estimate {
     pub(crate) rmse_px: f64,
     pub(crate) model_rmse_px: f64,
     pub(crate) micros: f64,
+    /// With an unknown focal length (`--unknown-focal`): the estimate and its error.
+    pub(crate) focal: Option<FocalEstimate>,
+}
+
+/// An estimated focal length (`register --unknown-focal`) against the model's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FocalEstimate {
+    /// The estimated `(fx, fy)`, pixels.
+    pub(crate) estimated: (f64, f64),
+    /// The model camera's `(fx, fy)`, pixels.
+    pub(crate) model: (f64, f64),
+    /// The larger of the two relative errors, percent of the model's.
+    pub(crate) error_pct: f64,
 }
 
 impl From<Registration> for Estimate {
@@ -41,6 +54,7 @@ impl From<Registration> for Estimate {
             rmse_px: r.rmse_px,
             model_rmse_px: r.model_rmse_px,
             micros: r.micros,
+            focal: None,
         }
     }
 }
@@ -71,6 +85,35 @@ pub(super) struct Written {
     pub(super) kept: Vec<u32>,
 }
 
+/// The estimated focal lengths of the registered images (`--unknown-focal`), and the median
+/// and the largest of their errors, percent; `None` if no image has one.
+pub(super) fn focal_errors(rows: &[Row]) -> Option<(usize, f64, f64)> {
+    let mut errors: Vec<f64> = rows
+        .iter()
+        .filter_map(|r| r.2.as_ref().ok()?.focal.map(|f| f.error_pct))
+        .collect();
+    if errors.is_empty() {
+        return None;
+    }
+    errors.sort_by(f64::total_cmp);
+    let n = errors.len();
+    let median = if n % 2 == 1 {
+        errors[n / 2]
+    } else {
+        0.5 * (errors[n / 2 - 1] + errors[n / 2])
+    };
+    Some((n, median, errors[n - 1]))
+}
+
+/// An image's focal estimate as JSON.
+fn focal_json(f: &FocalEstimate) -> serde_json::Value {
+    json!({
+        "estimated": [f.estimated.0, f.estimated.1],
+        "model": [f.model.0, f.model.1],
+        "error_pct": f.error_pct,
+    })
+}
+
 pub(super) fn format_name(format: colmap::ModelFormat) -> &'static str {
     match format {
         colmap::ModelFormat::Text => "text",
@@ -91,12 +134,18 @@ pub(super) fn extra_json(e: &Extra) -> serde_json::Value {
             "inlier_ratio": s.inlier_ratio,
             "micros": s.micros,
         })),
-        "floor": e.floor.as_ref().map(|f| json!({
-            "rotation_error_deg": f.rotation_error_deg,
-            "translation_error_pct": f.translation_error_pct,
-            "rmse_px": f.rmse_px,
-            "micros": f.micros,
-        })),
+        "floor": e.floor.as_ref().map(|f| {
+            let mut v = json!({
+                "rotation_error_deg": f.rotation_error_deg,
+                "translation_error_pct": f.translation_error_pct,
+                "rmse_px": f.rmse_px,
+                "micros": f.micros,
+            });
+            if let Some(focal) = &f.focal {
+                v["focal"] = focal_json(focal);
+            }
+            v
+        }),
     })
 }
 
@@ -114,7 +163,7 @@ pub(super) fn to_json(
                 let rm = r.solution.rotation;
                 let t = r.solution.translation;
                 let q = r.solution.pose().rotation;
-                json!({
+                let mut v = json!({
                     "image_id": id,
                     "name": name,
                     "n": r.n,
@@ -134,7 +183,11 @@ pub(super) fn to_json(
                     "translation": [t.x, t.y, t.z],
                     "cheirality_ok": r.solution.cheirality_ok,
                     "robust": extra.as_ref().map(extra_json),
-                })
+                });
+                if let Some(f) = &r.focal {
+                    v["focal"] = focal_json(f);
+                }
+                v
             }
             Err(e) => json!({ "image_id": id, "name": name, "error": e.to_string() }),
         })
@@ -145,6 +198,13 @@ pub(super) fn to_json(
         "refinement": mode,
         "images": images,
     });
+    if let Some((n, median, max)) = focal_errors(rows) {
+        v["focal"] = json!({
+            "images": n,
+            "median_error_pct": median,
+            "max_error_pct": max,
+        });
+    }
     if let Some(w) = written {
         v["written"] = json!({
             "dir": w.dir.display().to_string(),
@@ -253,6 +313,13 @@ pub(super) fn to_table(
                     rmse,
                     r.micros
                 );
+                if let Some(f) = &r.focal {
+                    let _ = writeln!(
+                        s,
+                        "{:<wname$}  focal {:.3}, {:.3} px (model {:.3}, {:.3}): error {:.4} %",
+                        "", f.estimated.0, f.estimated.1, f.model.0, f.model.1, f.error_pct
+                    );
+                }
                 if r.skipped > 0 {
                     let _ = writeln!(
                         s,
@@ -281,6 +348,13 @@ pub(super) fn to_table(
             "{ok} of {} images registered; worst differences to COLMAP: rotation {worst_r:.6} \
              degrees, translation {worst_t:.6} %.",
             rows.len()
+        );
+    }
+    if let Some((n, median, max)) = focal_errors(rows) {
+        let _ = writeln!(
+            s,
+            "Focal length estimated for {n} images: error to the model's median {median:.4} %, \
+             max {max:.4} %."
         );
     }
     if robust

@@ -801,6 +801,101 @@ static void test_threads(void) {
   eopnp_solver_free(s);
 }
 
+/* The known vertical and the unknown focal length (EopnpProblem's gravity_* and unknown_focal
+ * fields, EopnpSolution's focal_*). The synthetic problem's pose is R = I, so the vertical is
+ * the same vector in both frames. */
+static void test_focal_and_gravity(void) {
+  EopnpSolver *s = NULL;
+  EopnpCamera *guess = NULL;
+  EXPECT(EOPNP_OK, eopnp_solver_create(&s));
+  /* The pixels are of an 800 px camera; the guess is 500 px. */
+  EXPECT(EOPNP_OK, eopnp_camera_pinhole(500.0, 500.0, 320.0, 240.0, &guess));
+  EopnpProblem p = normalised(N);
+  p.image = PX;
+  p.camera = guess;
+  EopnpSolution sol;
+  memset(&sol, 0xff, sizeof sol);
+  EXPECT(EOPNP_OK, eopnp_solve(s, &p, &sol));
+  CHECK(!sol.focal_estimated && sol.focal_x == 0.0 && sol.focal_y == 0.0);
+  CHECK(sol.reprojection_rmse * 500.0 > 1.0); /* the wrong focal length does not fit */
+  p.unknown_focal = true;
+  EXPECT(EOPNP_OK, eopnp_solve(s, &p, &sol));
+  CHECK(sol.focal_estimated);
+  CHECK(fabs(sol.focal_x - 800.0) < 1e-6 && fabs(sol.focal_y - 800.0) < 1e-6);
+  CHECK(fabs(sol.translation[2] - 6.0) < 1e-6 && fabs(sol.translation[0] - 0.1) < 1e-6);
+  CHECK(fabs(sol.rotation[0] - 1.0) < 1e-9);
+  /* Within a range; a bad range; a range without the option. */
+  p.focal_min_px = 400.0;
+  p.focal_max_px = 1000.0;
+  EXPECT(EOPNP_OK, eopnp_solve(s, &p, &sol));
+  CHECK(fabs(sol.focal_x - 800.0) < 1e-6);
+  p.focal_min_px = 1000.0;
+  p.focal_max_px = 400.0;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &p, &sol));
+  CHECK(strstr(eopnp_last_error_message(), "unknown focal length") != NULL);
+  p.unknown_focal = false;
+  EXPECT(EOPNP_INVALID_ARGUMENT, eopnp_solve(s, &p, &sol));
+  CHECK(strstr(eopnp_last_error_message(), "unknown_focal") != NULL);
+  /* Normalised input cannot have it. */
+  EopnpProblem q = normalised(N);
+  q.unknown_focal = true;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &q, &sol));
+
+  /* The vertical: right, then 10 degrees off at 0.1 degree. */
+  const double down[3] = {0.0, 0.0, -9.81};
+  /* sin and cos of 10 degrees (literals: the shared library's test does not link libm). */
+  const double tilted[3] = {0.0, 0.17364817766693033, -0.984807753012208};
+  const double zero[3] = {0.0, 0.0, 0.0};
+  EopnpProblem g = normalised(N);
+  g.gravity_camera = down;
+  g.gravity_world = down;
+  g.gravity_sigma_deg = 0.5;
+  EXPECT(EOPNP_OK, eopnp_solve(s, &g, &sol));
+  CHECK(fabs(sol.rotation[0] - 1.0) < 1e-9 && fabs(sol.translation[2] - 6.0) < 1e-9);
+  CHECK(!sol.focal_estimated);
+  g.gravity_camera = tilted;
+  g.gravity_sigma_deg = 0.1;
+  EXPECT(EOPNP_GRAVITY_MISMATCH, eopnp_solve(s, &g, &sol));
+  CHECK(strcmp(eopnp_status_name(EOPNP_GRAVITY_MISMATCH), "EOPNP_GRAVITY_MISMATCH") == 0);
+  {
+    /* "... the pose they give is A degrees off it, S standard deviations ..." */
+    const char *msg = eopnp_last_error_message();
+    const char *at = strstr(msg, " is ");
+    double angle = 0.0, sigmas = 0.0;
+    CHECK(at != NULL && strstr(msg, "contradict") != NULL);
+    if (at != NULL) {
+      CHECK(sscanf(at, " is %lf degrees off it, %lf standard deviations", &angle, &sigmas) == 2);
+    }
+    CHECK(fabs(angle - 10.0) < 0.1);
+    CHECK(sigmas > 3.0);
+  }
+  /* Bad verticals: sigma, zero direction, half given, sigma alone; with unknown focal. */
+  g.gravity_sigma_deg = 0.0;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &g, &sol));
+  g.gravity_sigma_deg = -1.0;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &g, &sol));
+  g.gravity_sigma_deg = NAN;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &g, &sol));
+  CHECK(strstr(eopnp_last_error_message(), "sigma_deg") != NULL);
+  g.gravity_sigma_deg = 1.0;
+  g.gravity_camera = zero;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &g, &sol));
+  g.gravity_camera = down;
+  g.gravity_world = NULL;
+  EXPECT(EOPNP_INVALID_ARGUMENT, eopnp_solve(s, &g, &sol));
+  g.gravity_camera = NULL;
+  EXPECT(EOPNP_INVALID_ARGUMENT, eopnp_solve(s, &g, &sol));
+  p.gravity_camera = down;
+  p.gravity_world = down;
+  p.gravity_sigma_deg = 1.0;
+  p.unknown_focal = true;
+  p.focal_min_px = 0.0;
+  p.focal_max_px = 0.0;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &p, &sol));
+  eopnp_camera_free(guess);
+  eopnp_solver_free(s);
+}
+
 int main(int argc, char **argv) {
   if (argc != 4) {
     fprintf(stderr, "usage: %s REFERENCE_FILE COLMAP_MODEL_DIR COLMAP_RIG_MODEL_DIR\n", argv[0]);
@@ -812,6 +907,7 @@ int main(int argc, char **argv) {
   test_ransac_options();
   test_cameras();
   test_solves();
+  test_focal_and_gravity();
   test_model(argv[2]);
   test_frames(argv[3]);
   test_threads();

@@ -10,6 +10,7 @@
 #include "eopnp.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -176,6 +177,64 @@ void make_problem() {
     PX[2 * i] = 800.0 * cx / cz + 320.0;
     PX[2 * i + 1] = 800.0 * cy / cz + 240.0;
   }
+}
+
+// The known vertical and the unknown focal length (Problem::gravity, Problem::unknown_focal,
+// estimated_focal, GravityMismatchError). The problem's pose is R = I.
+void test_focal_and_gravity() {
+  const eopnp::Solver solver;
+  const auto guess = eopnp::Camera::pinhole(1100.0, 1100.0, 320.0, 240.0);
+  // Known focal length: nothing estimated, a poor fit.
+  const auto plain = solver.solve(eopnp::Problem::pixels(W, PX, N, guess));
+  CHECK(!eopnp::estimated_focal(plain).has_value());
+  CHECK(plain.reprojection_rmse * 1100.0 > 1.0);
+  // Unknown: 800 px from 1100.
+  const auto s = solver.solve(eopnp::Problem::pixels(W, PX, N, guess).unknown_focal());
+  const auto f = eopnp::estimated_focal(s);
+  CHECK(f.has_value() && std::fabs((*f)[0] - 800.0) < 1e-6 && std::fabs((*f)[1] - 800.0) < 1e-6);
+  CHECK(std::fabs(s.translation[2] - 6.0) < 1e-6);
+  const auto r = solver.solve(eopnp::Problem::pixels(W, PX, N, guess).unknown_focal(500.0, 2000.0));
+  CHECK(r.focal_estimated && std::fabs(r.focal_x - 800.0) < 1e-6);
+  THROWS(eopnp::InvalidOptionError, EOPNP_INVALID_OPTION,
+         solver.solve(eopnp::Problem::pixels(W, PX, N, guess).unknown_focal(2000.0, 500.0)));
+  THROWS(eopnp::InvalidOptionError, EOPNP_INVALID_OPTION,
+         solver.solve(eopnp::Problem::normalised(W, M, N).unknown_focal()));
+
+  // The vertical: copied into the problem, so the problem (and its copies) outlive the arrays.
+  eopnp::Problem g = eopnp::Problem::normalised(W, M, N);
+  {
+    const std::array<double, 3> down = {0.0, 0.0, -1.0};
+    g.gravity(down, down, 0.5);
+  }
+  const eopnp::Problem copy = g;
+  const auto v = solver.solve(copy);
+  CHECK(std::fabs(v.rotation[0] - 1.0) < 1e-9 && std::fabs(v.translation[2] - 6.0) < 1e-9);
+  CHECK(copy.c().gravity_camera != g.c().gravity_camera);  // each points at its own copy
+  const double deg = 3.14159265358979323846 / 180.0;
+  const std::array<double, 3> tilted = {0.0, std::sin(10.0 * deg), -std::cos(10.0 * deg)};
+  ++checks;
+  try {
+    (void)solver.solve(eopnp::Problem::normalised(W, M, N).gravity(tilted, {0.0, 0.0, -1.0}, 0.1));
+    ++failures;
+    std::cerr << __FILE__ << ":" << __LINE__ << ": no GravityMismatchError\n";
+  } catch (const eopnp::GravityMismatchError& e) {
+    const std::string what = e.what();
+    double angle = 0.0;
+    const auto at = what.find(" is ");
+    if (at == std::string::npos ||
+        std::sscanf(what.c_str() + at, " is %lf degrees off", &angle) != 1 ||
+        std::fabs(angle - 10.0) > 0.1 || e.status() != EOPNP_GRAVITY_MISMATCH) {
+      ++failures;
+      std::cerr << __FILE__ << ":" << __LINE__ << ": unexpected mismatch: " << what << "\n";
+    }
+  }
+  const std::array<double, 3> down = {0.0, 0.0, -1.0}, zero = {0.0, 0.0, 0.0};
+  THROWS(eopnp::InvalidOptionError, EOPNP_INVALID_OPTION,
+         solver.solve(eopnp::Problem::normalised(W, M, N).gravity(down, down, 0.0)));
+  THROWS(eopnp::InvalidOptionError, EOPNP_INVALID_OPTION,
+         solver.solve(eopnp::Problem::normalised(W, M, N).gravity(zero, down, 1.0)));
+  THROWS(eopnp::InvalidOptionError, EOPNP_INVALID_OPTION,
+         solver.solve(eopnp::Problem::pixels(W, PX, N, guess).gravity(down, down, 1.0).unknown_focal()));
 }
 
 void test_frames(const std::string& dir) {
@@ -373,6 +432,7 @@ int main(int argc, char** argv) {
   try {
     test_interface(argv[2]);
     test_frames(argv[3]);
+    test_focal_and_gravity();
 #ifdef EOPNP_TEST_OPENCV
     test_opencv();
 #endif

@@ -39,3 +39,93 @@ fn success_keeps_the_last_failure() {
     assert_eq!(guard(|| Ok(())), EopnpStatus::EOPNP_OK);
     assert_eq!(message(), "`x` is NULL");
 }
+
+#[test]
+fn every_known_pnp_error_has_its_own_status() {
+    use eopnp::PnpError as E;
+    use EopnpStatus as S;
+    let cases = [
+        (E::TooFewPoints { got: 3, need: 4 }, S::EOPNP_TOO_FEW_POINTS),
+        (
+            E::LengthMismatch { world: 4, image: 5 },
+            S::EOPNP_LENGTH_MISMATCH,
+        ),
+        (
+            E::WeightsLength {
+                weights: 3,
+                points: 4,
+            },
+            S::EOPNP_WEIGHTS_LENGTH,
+        ),
+        (
+            E::NonFinite {
+                index: 2,
+                input: eopnp::InputKind::Image,
+            },
+            S::EOPNP_NON_FINITE,
+        ),
+        (
+            E::CameraIndicesLength {
+                indices: 3,
+                points: 4,
+            },
+            S::EOPNP_CAMERA_INDICES_LENGTH,
+        ),
+        (
+            E::UnknownCamera {
+                index: 1,
+                camera: 7,
+            },
+            S::EOPNP_UNKNOWN_CAMERA,
+        ),
+        (E::InvalidWeight { index: 0 }, S::EOPNP_INVALID_WEIGHT),
+        (
+            E::Degenerate(eopnp::DegenerateKind::CollinearWorldPoints),
+            S::EOPNP_DEGENERATE,
+        ),
+        (E::NoSolution, S::EOPNP_NO_SOLUTION),
+        (
+            E::InvalidOption { option: "gravity" },
+            S::EOPNP_INVALID_OPTION,
+        ),
+        (
+            E::InvalidOption {
+                option: "unknown_focal",
+            },
+            S::EOPNP_INVALID_OPTION,
+        ),
+        (
+            E::NoConsensus {
+                iterations: 10,
+                inliers: 3,
+                needed: 9,
+            },
+            S::EOPNP_NO_CONSENSUS,
+        ),
+        (
+            E::GravityMismatch {
+                angle_deg: 4.25,
+                sigmas: 8.5,
+            },
+            S::EOPNP_GRAVITY_MISMATCH,
+        ),
+    ];
+    for (e, want) in cases {
+        let f = Failure::from(e.clone());
+        assert_eq!(f.info.status, want, "{e:?}");
+        assert_eq!(f.message, e.to_string());
+    }
+    // The mismatch's message carries the angle and the sigmas.
+    let f = Failure::from(E::GravityMismatch {
+        angle_deg: 4.25,
+        sigmas: 8.5,
+    });
+    assert!(
+        f.message.contains("4.250 degrees") && f.message.contains("8.5 standard"),
+        "{}",
+        f.message
+    );
+    assert_eq!(guard(|| Err(f)), S::EOPNP_GRAVITY_MISMATCH);
+    assert_eq!(last_info().status, S::EOPNP_GRAVITY_MISMATCH);
+    assert!(message().contains("contradict"), "{}", message());
+}
