@@ -256,7 +256,9 @@ impl<'a> Problem<'a> {
     }
 
     /// As [`Problem::unknown_focal`], the focal length sought between `min_px` and `max_px`
-    /// (the camera's first focal length's range; finite, `0 < min_px < max_px`, else
+    /// (the camera's first focal length's range, which need not hold the guess: the solution
+    /// is the least pixel error within it, on its bound if the minimum is outside; finite,
+    /// `0 < min_px < max_px`, else
     /// [`crate::PnpError::InvalidOption`] (`"unknown_focal"`) at solve time).
     #[must_use]
     pub fn unknown_focal_within(mut self, min_px: f64, max_px: f64) -> Self {

@@ -286,5 +286,8 @@ fn covariance_with_an_unknown_focal_length_matches_monte_carlo() {
     assert!(lo > 0.85 && hi < 1.15, "{lo} {hi}");
     // The RMS of 2,000 draws about the truth: relative standard deviation 1.6 %; 6 % is
     // about four of them.
-    assert!((spread / predicted - 1.0).abs() < 0.06, "{spread} against {predicted}");
+    assert!(
+        (spread / predicted - 1.0).abs() < 0.06,
+        "{spread} against {predicted}"
+    );
 }

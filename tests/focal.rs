@@ -302,3 +302,24 @@ fn the_bundled_model_with_its_focal_lengths_withheld() {
         100.0 * worst_f
     );
 }
+
+#[test]
+fn a_range_without_the_truth_or_the_guess_returns_a_focal_length_within_it() {
+    // The truth 1,500 px, the guess 1,000 px, the range 300 to 900 px: the search's minima lie
+    // outside it; the solution is still a pose at a focal length within the range.
+    for trial in 0..10 {
+        let mut c = case(trial_seed("focal_range_out", trial), 40, 1.0);
+        let scale = 1500.0 / c.f;
+        for p in &mut c.pixels {
+            *p = c.c + (*p - c.c) * scale;
+        }
+        let guess = Camera::pinhole(1000.0, 1000.0, c.c.x, c.c.y).unwrap();
+        let p = Problem::pixels(&c.world, &c.pixels, &guess).unknown_focal_within(300.0, 900.0);
+        let sol = Solver::default().solve(&p).unwrap();
+        let (fx, _) = sol.camera.unwrap().focal_lengths();
+        assert!((300.0..=900.0).contains(&fx), "trial {trial}: {fx}");
+        let r = Solver::default().refine(&p, &sol.pose()).unwrap();
+        let (fx, _) = r.camera.unwrap().focal_lengths();
+        assert!((300.0..=900.0).contains(&fx), "trial {trial}: refine {fx}");
+    }
+}

@@ -337,7 +337,7 @@ fn to_u64(x: usize) -> u64 {
 /// The focal lengths `(fx, fy)` a solution estimated (an unknown focal length), `None` when the
 /// focal length was known. The one place this interface reads them from a solution.
 pub(crate) fn estimated_focal(s: &Solution) -> Option<(f64, f64)> {
-    s.focal
+    s.camera.map(|c| c.focal_lengths())
 }
 
 impl From<&Solution> for EopnpSolution {

@@ -18,7 +18,7 @@ use problems::{flat2, flat3, synthetic, Synthetic};
 
 /// The focal lengths the library estimated (the one place this test reads them).
 fn lib_focal(s: &eopnp::Solution) -> (f64, f64) {
-    s.focal.expect("an estimated focal length")
+    s.camera.expect("an estimated camera").focal_lengths()
 }
 
 fn zeroed_solution() -> EopnpSolution {

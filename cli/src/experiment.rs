@@ -14,7 +14,7 @@ use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg64;
 
 use crate::report::{Estimate, FocalEstimate};
-use crate::solve::{camera_with_focal, estimated_focal};
+use crate::solve::camera_with_focal;
 
 /// Replaces `round(fraction * N)` of the correspondences' world points, chosen uniformly
 /// without replacement, by wrong ones: a uniformly chosen point of `cloud` plus Gaussian noise
@@ -189,15 +189,11 @@ pub(crate) fn estimate(
     let r = solution.rotation;
     let t = solution.translation;
     let rmse = |cam: &Camera, r: &Matrix3<f64>, t: &Vector3<f64>| true_rmse(cam, problem, r, t);
-    let (estimated_cam, focal) = match estimated_focal(solution) {
-        Some(f) => {
+    let (estimated_cam, focal) = match solution.camera {
+        Some(estimated) => {
+            let f = estimated.focal_lengths();
             let model_f = cam.focal_lengths();
             let error = |e: f64, m: f64| 100.0 * (e - m).abs() / m;
-            let estimated = camera_with_focal(cam, f).map_err(|_| {
-                RegisterError::Solver(eopnp::PnpError::InvalidOption {
-                    option: "unknown_focal",
-                })
-            })?;
             let focal = FocalEstimate {
                 estimated: f,
                 model: model_f,

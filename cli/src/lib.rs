@@ -251,8 +251,7 @@ struct SolveArgs {
     #[arg(long, conflicts_with = "gravity_camera")]
     unknown_focal: bool,
     /// With --unknown-focal: search the (first) focal length between MIN_PX and MAX_PX pixels
-    /// (0 < MIN_PX < MAX_PX; the range must contain the camera's focal length, where the
-    /// search starts).
+    /// (0 < MIN_PX < MAX_PX).
     #[arg(
         long,
         num_args = 2,

@@ -1,7 +1,7 @@
 //! `eopnp solve`'s output: the problem solved, the pose rendered as JSON.
 
 use eopnp::camera::Camera;
-use eopnp::{Gravity, PnpError, Solution, Solver};
+use eopnp::{Gravity, PnpError, Solver};
 use nalgebra::Point2;
 use serde_json::json;
 
@@ -16,12 +16,6 @@ pub struct Options {
     pub unknown_focal: Option<Option<(f64, f64)>>,
     /// A known vertical.
     pub gravity: Option<Gravity>,
-}
-
-/// The focal lengths `(fx, fy)` a solution estimated (an unknown focal length), `None` when the
-/// focal length was known. The one place the command line reads them from a solution.
-pub(crate) fn estimated_focal(sol: &Solution) -> Option<(f64, f64)> {
-    sol.focal
 }
 
 /// `camera` with its focal lengths set to `(fx, fy)`, everything else equal (a single-focal
@@ -57,18 +51,6 @@ pub fn solve_with(p: &Problem, solver: &Solver, options: &Options) -> Result<Str
             .undistort(*px)
             .map_err(|e| Failure::input(format!("correspondence {}: {e}", k + 1)))?;
     }
-    if let Some(Some((lo, hi))) = options.unknown_focal {
-        // The camera's focal length is a start of the search, and what stands when no start
-        // converges within the range: outside it, the result could be outside too.
-        let (f, _) = p.camera.focal_lengths();
-        if !(lo..=hi).contains(&f) {
-            return Err(Failure::input(format!(
-                "--focal-range {lo} {hi} does not contain the camera's focal length {f} px, the \
-                 starting guess of --unknown-focal: give a camera whose focal length lies in \
-                 the range"
-            )));
-        }
-    }
     let mut problem = eopnp::Problem::pixels(&p.world, &p.pixels, &p.camera);
     problem = match options.unknown_focal {
         Some(Some((lo, hi))) => problem.unknown_focal_within(lo, hi),
@@ -94,13 +76,8 @@ pub fn solve_with(p: &Problem, solver: &Solver, options: &Options) -> Result<Str
     })?;
 
     // The camera the pose goes with: the estimated one when the focal length was unknown.
-    let focal = estimated_focal(&sol);
-    let camera = match focal {
-        Some(f) => camera_with_focal(&p.camera, f).map_err(|e| {
-            Failure::solver(format!("the estimated focal length {f:?} is unusable: {e}"))
-        })?,
-        None => p.camera.clone(),
-    };
+    let focal = sol.camera.map(|c| c.focal_lengths());
+    let camera = sol.camera.unwrap_or(p.camera);
     let r = sol.rotation;
     let t = sol.translation;
     let q = sol.pose().rotation;

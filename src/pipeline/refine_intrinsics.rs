@@ -89,6 +89,10 @@ pub(crate) struct IntrinsicsInputs<'a> {
     pub pixels: &'a [Point2<f64>],
     pub weights: Option<&'a [f64]>,
     pub free: Free,
+    /// With the focal length free: the range of the (first) focal length, pixels. A step
+    /// that leaves it ends on its bound (a projected step), so the minimum returned is the
+    /// range's.
+    pub focal_range: (f64, f64),
 }
 
 /// The free parameters' layout: the pose's 6, then the free intrinsics.
@@ -235,9 +239,18 @@ fn normal(
 
 /// The camera `cam` moved by the intrinsics' part of the step `delta`, or `None` if that is not
 /// a valid camera.
-fn step_camera(cam: &Camera, lay: &Layout, delta: &Gradient) -> Option<Camera> {
+fn step_camera(
+    cam: &Camera,
+    lay: &Layout,
+    delta: &Gradient,
+    (lo, hi): (f64, f64),
+) -> Option<Camera> {
     let base = match lay.focal {
-        Some(j) => cam.with_focal_scale(delta[j].exp()),
+        Some(j) => {
+            let f = cam.focal_lengths().0;
+            let to = (f * delta[j].exp()).clamp(lo, hi);
+            cam.with_focal_scale(to / f)
+        }
         None => *cam,
     };
     let n = base.params().len();
@@ -273,7 +286,8 @@ fn step_size(cam: &Camera, lay: &Layout, delta: &Gradient) -> f64 {
     s
 }
 
-/// Levenberg-Marquardt over the pose and `inp.free`'s intrinsics from `(r0, t0, camera)`
+/// Levenberg-Marquardt over the pose and `inp.free`'s intrinsics (the focal length within
+/// `inp.focal_range`, the start's moved into it) from `(r0, t0, camera)`
 /// (`x_cam = R X + t`), at most `max_iterations` iterations ([`MAX_ITERATIONS`] to
 /// convergence; RANSAC's local fits take a few, their result only re-scored). Returns `None`
 /// if the start has a point at depth 0 (or a non-finite residual).
@@ -301,7 +315,15 @@ pub(crate) fn refine_intrinsics(
     let x0 = sum / wsum;
     let mut r = *r0;
     let mut t = t0 + r0 * x0;
+    // The start within the focal range.
     let mut cam = *camera;
+    if lay.focal.is_some() {
+        let (f, (lo, hi)) = (cam.focal_lengths().0, inp.focal_range);
+        if !(lo <= hi) {
+            return None;
+        }
+        cam = cam.with_focal_scale(f.clamp(lo, hi) / f);
+    }
     // The depth signs at the start, which no accepted step changes (as `refine`'s).
     let mut front = vec![false; inp.world.len()];
     let (mut e, mut h, mut g) = normal(inp, &lay, &x0, (&r, &t, &cam), &mut front, true)?;
@@ -339,7 +361,7 @@ pub(crate) fn refine_intrinsics(
         }
         let r_new = exp_so3(&w) * r;
         let t_new = t + dt;
-        let next = step_camera(&cam, &lay, &delta).and_then(|c| {
+        let next = step_camera(&cam, &lay, &delta, inp.focal_range).and_then(|c| {
             normal(inp, &lay, &x0, (&r_new, &t_new, &c), &mut front, false).map(|n| (c, n))
         });
         match next {

@@ -169,17 +169,15 @@ impl Solver {
             scored.sort_by(|a, b| a.1.total_cmp(&b.1));
             scored.truncate(STARTS - 1);
         }
+        let (f0, _) = camera.focal_lengths();
         let inputs = IntrinsicsInputs {
             world,
             pixels,
             weights,
             free,
+            focal_range: (lo * f0, hi * f0),
         };
-        let (f0, _) = camera.focal_lengths();
-        let within = |o: &IntrinsicsOutcome| {
-            let scale = o.camera.focal_lengths().0 / f0;
-            scale >= lo && scale <= hi && o.cost.is_finite()
-        };
+        let within = |o: &IntrinsicsOutcome| o.cost.is_finite();
         let mut best: Option<(IntrinsicsOutcome, Solution)> = None;
         let mut consider = |sol: Solution, scale: f64| {
             let start = camera.with_focal_scale(scale);
@@ -196,14 +194,19 @@ impl Solver {
                 }
             }
         };
+        // Should no refinement end within the range: the lowest solve at a focal length within
+        // it (the camera's, or a candidate's).
+        let fallback = core::iter::once((1.0, first.cost, first))
+            .chain(scored.iter().copied())
+            .filter(|(s, _, _)| *s >= lo && *s <= hi)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
         consider(first, 1.0);
         for (s, _, sol) in scored {
             consider(sol, s);
         }
         let Some((o, mut sol)) = best else {
-            // No start refined within the range: the given camera stands.
-            let mut sol = first;
-            sol.camera = Some(*camera);
+            let (s, _, mut sol) = fallback.ok_or(PnpError::NoSolution)?;
+            sol.camera = Some(camera.with_focal_scale(s));
             return Ok(sol);
         };
         sol.rotation = o.r;

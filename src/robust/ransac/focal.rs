@@ -164,12 +164,12 @@ impl Ransac {
                     focal: true,
                     ..Free::default()
                 },
+                focal_range: (lo * f0, hi * f0),
             };
             let start = camera.with_focal_scale(scale);
             refine_intrinsics(&inp, r, t, &start, FIT_ITERATIONS)
-                .map(|o| (o.r, o.t, o.camera.focal_lengths().0 / f0, o.cost))
-                .filter(|&(_, _, s, cost)| s >= lo && s <= hi && cost.is_finite())
-                .map(|(r, t, s, _)| (r, t, s))
+                .filter(|o| o.cost.is_finite())
+                .map(|o| (o.r, o.t, o.camera.focal_lengths().0 / f0))
         };
 
         let mut stats = RansacStats::default();

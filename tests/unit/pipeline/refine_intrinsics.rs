@@ -78,6 +78,7 @@ fn noise_free_problems_give_the_true_focal_length() {
             pixels: &pixels,
             weights: None,
             free: FOCAL,
+            focal_range: (0.0, f64::INFINITY),
         };
         let t0 = t + Vector3::new(0.1, 0.0, 0.3);
         let out = refine_intrinsics(&inp, &r0, &t0, &guess, MAX_ITERATIONS).unwrap();
@@ -144,6 +145,7 @@ fn noise_free_problems_give_the_true_principal_point_and_distortion() {
             pixels: &pixels,
             weights: None,
             free: ALL,
+            focal_range: (0.0, f64::INFINITY),
         };
         let r0 = exp_so3(&Vector3::new(0.01, -0.01, 0.01)) * r;
         let out = refine_intrinsics(&inp, &r0, &t, &guess, MAX_ITERATIONS).unwrap();
