@@ -390,6 +390,9 @@ typedef struct EopnpSolution {
   // With `focal_estimated`: the estimated focal length along y, pixels (the guess camera's
   // two focal lengths scaled alike); 0 otherwise.
   double focal_y;
+  // With `focal_estimated` and `has_covariance`: the estimated focal length's standard
+  // deviation, pixels (`covariance` is then the pose's marginal covariance); 0 otherwise.
+  double focal_sigma;
 } EopnpSolution;
 
 // Statistics of a RANSAC run (the library's `RansacStats`).

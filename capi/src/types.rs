@@ -219,6 +219,9 @@ pub struct EopnpSolution {
     /// With `focal_estimated`: the estimated focal length along y, pixels (the guess camera's
     /// two focal lengths scaled alike); 0 otherwise.
     pub focal_y: f64,
+    /// With `focal_estimated` and `has_covariance`: the estimated focal length's standard
+    /// deviation, pixels (`covariance` is then the pose's marginal covariance); 0 otherwise.
+    pub focal_sigma: f64,
 }
 
 /// Statistics of a RANSAC run (the library's `RansacStats`).
@@ -379,6 +382,7 @@ impl From<&Solution> for EopnpSolution {
             focal_estimated: focal.is_some(),
             focal_x: focal.map_or(0.0, |f| f.0),
             focal_y: focal.map_or(0.0, |f| f.1),
+            focal_sigma: s.covariance.and_then(|c| c.focal_sigma).unwrap_or(0.0),
         }
     }
 }

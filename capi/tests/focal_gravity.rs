@@ -124,6 +124,26 @@ fn unknown_focal_is_recovered_from_a_wrong_guess_as_the_library_does() {
         .unwrap();
     assert_eq!(s2.focal_x.to_bits(), lib_focal(&lib).0.to_bits());
     assert!((s2.focal_x - 1200.0).abs() < 1e-6);
+    // No covariance: no focal sigma; with one, the library's.
+    assert_eq!(s2.focal_sigma, 0.0);
+    // SAFETY: a live solver handle.
+    let status = unsafe {
+        eopnp_solver_set_covariance(
+            h.solver,
+            EopnpCovariance::EOPNP_COVARIANCE_SIGMA as i32,
+            1.0,
+        )
+    };
+    assert_eq!(status, EopnpStatus::EOPNP_OK);
+    let (status, s3) = h.solve(&p);
+    assert_eq!(status, EopnpStatus::EOPNP_OK, "{}", message());
+    let lib = Solver::default()
+        .covariance(Some(eopnp::covariance::NoiseModel::Sigma(1.0)))
+        .solve(&Problem::pixels(&syn.world, &px, &guess).unknown_focal_within(1000.0, 1500.0))
+        .unwrap();
+    let sigma = lib.covariance.unwrap().focal_sigma.unwrap();
+    assert!(s3.has_covariance && sigma > 0.0);
+    assert_eq!(s3.focal_sigma.to_bits(), sigma.to_bits());
 }
 
 #[test]
