@@ -35,23 +35,10 @@ import numpy as np
 import poselib
 
 import eopnp
+from compare_focal_peers import haar, rot_err_deg  # the same metric and draw
 
 DOWN = np.array([0.2, -0.3, -1.0]) / np.linalg.norm([0.2, -0.3, -1.0])
 CAM = eopnp.Camera("PINHOLE", [800.0, 800.0, 320.0, 240.0], 640, 480)
-
-
-def rot_err_deg(r, r_ref):
-    worst = 0.0
-    for k in range(3):
-        a, b = r[:, k], r_ref[:, k]
-        worst = max(worst, np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b)), np.dot(a, b))))
-    return worst
-
-
-def haar(rng):
-    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-    q = q @ np.diag(np.sign(np.diag(r)))
-    return q * np.linalg.det(q)
 
 
 def rodrigues(w):

@@ -44,7 +44,8 @@ fn compare(devs: &[Vector6<f64>], c: &Matrix6<f64>) -> (f64, f64, f64) {
     (chi2 / n, ev.min(), ev.max())
 }
 
-fn run(camera: &Camera, sigma_px: f64, noise: NoiseModel) -> (f64, f64, f64, f64) {
+/// The Monte Carlo problem: 30 points, seeded, and its noise-free pixels through `camera`.
+fn fixture(camera: &Camera) -> (Problem, Vec<Point2<f64>>) {
     let p = Problem::generate(&ProblemOptions {
         n: 30,
         sigma_px: 0.0,
@@ -52,7 +53,12 @@ fn run(camera: &Camera, sigma_px: f64, noise: NoiseModel) -> (f64, f64, f64, f64
         rotation: RotationKind::Uniform,
         seed: common::trial_seed("covariance", 1),
     });
-    let clean: Vec<Point2<f64>> = p.image.iter().map(|m| camera.project(*m)).collect();
+    let clean = p.image.iter().map(|m| camera.project(*m)).collect();
+    (p, clean)
+}
+
+fn run(camera: &Camera, sigma_px: f64, noise: NoiseModel) -> (f64, f64, f64, f64) {
+    let (p, clean) = fixture(camera);
     let solver = Solver::default().covariance(Some(noise));
     // The predicted covariance at the noise-free pose, for the stated noise.
     let c = Solver::default()
@@ -245,14 +251,7 @@ fn covariance_with_an_unknown_focal_length_matches_monte_carlo() {
     // focal length unknown.
     let camera = Camera::pinhole(800.0, 800.0, 320.0, 240.0).unwrap();
     let sigma_px = 1.0;
-    let p = Problem::generate(&ProblemOptions {
-        n: 30,
-        sigma_px: 0.0,
-        scene: Scene::General,
-        rotation: RotationKind::Uniform,
-        seed: common::trial_seed("covariance", 1),
-    });
-    let clean: Vec<Point2<f64>> = p.image.iter().map(|m| camera.project(*m)).collect();
+    let (p, clean) = fixture(&camera);
     let solver = Solver::default().covariance(Some(NoiseModel::Sigma(sigma_px)));
     let at_truth = solver
         .solve(&eopnp::Problem::pixels(&p.world, &clean, &camera).unknown_focal())

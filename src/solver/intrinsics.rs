@@ -75,6 +75,20 @@ fn check_count(
     Ok(())
 }
 
+/// The plain problem of `pixels` through `camera` with the caller's weights.
+fn pixel_problem<'a>(
+    world: &'a [Point3<f64>],
+    pixels: &'a [Point2<f64>],
+    camera: &'a Camera,
+    weights: Option<&'a [f64]>,
+) -> Problem<'a> {
+    let p = Problem::pixels(world, pixels, camera);
+    match weights {
+        Some(w) => p.weights(w),
+        None => p,
+    }
+}
+
 impl Solver {
     /// The solve of pixels through `camera` with the intrinsics `free` estimated.
     pub(super) fn pixels_intrinsics(
@@ -85,14 +99,9 @@ impl Solver {
         weights: Option<&[f64]>,
         free: FreeIntrinsics,
     ) -> Result<Solution, PnpError> {
-        let (f0, _) = camera.focal_lengths();
-        let range = free.scales(f0)?;
+        let range = free.scales(camera.focal_lengths().0)?;
         // The inputs checked (and the solve at the camera's focal length, one of the starts).
-        let mut p = Problem::pixels(world, pixels, camera);
-        if let Some(w) = weights {
-            p = p.weights(w);
-        }
-        let first = self.solve(&p)?;
+        let first = self.solve(&pixel_problem(world, pixels, camera, weights))?;
         check_count(world, weights, camera, free.free)?;
         let search = free.free.focal;
         self.finish_intrinsics(
@@ -111,13 +120,8 @@ impl Solver {
         free: FreeIntrinsics,
         initial: &Isometry3<f64>,
     ) -> Result<Solution, PnpError> {
-        let (f0, _) = camera.focal_lengths();
-        let range = free.scales(f0)?;
-        let mut p = Problem::pixels(world, pixels, camera);
-        if let Some(w) = weights {
-            p = p.weights(w);
-        }
-        let first = self.refine(&p, initial)?;
+        let range = free.scales(camera.focal_lengths().0)?;
+        let first = self.refine(&pixel_problem(world, pixels, camera, weights), initial)?;
         check_count(world, weights, camera, free.free)?;
         self.finish_intrinsics(
             world, pixels, camera, weights, free.free, range, first, false,
@@ -141,11 +145,7 @@ impl Solver {
     ) -> Result<Solution, PnpError> {
         let plain = |scale: f64| -> Result<Solution, PnpError> {
             let cam = camera.with_focal_scale(scale);
-            let mut p = Problem::pixels(world, pixels, &cam);
-            if let Some(w) = weights {
-                p = p.weights(w);
-            }
-            self.solve(&p)
+            self.solve(&pixel_problem(world, pixels, &cam, weights))
         };
         // The candidates: P4Pf's best few, and the grid, each scored by the solve at it.
         let mut scored: Vec<(f64, f64, Solution)> = Vec::new();
