@@ -291,6 +291,16 @@ struct SolveArgs {
         requires_all = ["gravity_camera", "gravity_world"]
     )]
     gravity_sigma: Option<f64>,
+    /// Refine the principal point with the pose (and the focal length with --unknown-focal),
+    /// the camera's being the starting guess (COLMAP's refine_principal_point). The output's
+    /// "camera" shows the refined camera. Not with a known vertical.
+    #[arg(long, conflicts_with = "gravity_camera")]
+    refine_principal_point: bool,
+    /// Refine the camera's distortion parameters with the pose (and the focal length with
+    /// --unknown-focal), the camera's being the starting guess (COLMAP's refine_extra_params).
+    /// The output's "camera" shows the refined camera. Not with a known vertical.
+    #[arg(long, conflicts_with = "gravity_camera")]
+    refine_distortion: bool,
 }
 
 /// Parses a vector `X,Y,Z` of three finite numbers.
@@ -343,6 +353,8 @@ impl SolveArgs {
         };
         Ok(solve::Options {
             unknown_focal,
+            refine_principal_point: self.refine_principal_point,
+            refine_distortion: self.refine_distortion,
             gravity,
         })
     }

@@ -8,12 +8,17 @@ use serde_json::json;
 use crate::input::Problem;
 use crate::Failure;
 
-/// What `solve` knows beyond the correspondences: an unknown focal length, a known vertical.
+/// What `solve` knows beyond the correspondences: an unknown focal length, refined intrinsics,
+/// a known vertical.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Options {
     /// The focal length is unknown: `Some(None)` in the default range (a tenth to ten times
     /// the camera's), `Some(Some((min_px, max_px)))` in that range.
     pub unknown_focal: Option<Option<(f64, f64)>>,
+    /// The principal point is refined with the pose.
+    pub refine_principal_point: bool,
+    /// The distortion parameters are refined with the pose.
+    pub refine_distortion: bool,
     /// A known vertical.
     pub gravity: Option<Gravity>,
 }
@@ -57,6 +62,12 @@ pub fn solve_with(p: &Problem, solver: &Solver, options: &Options) -> Result<Str
         Some(None) => problem.unknown_focal(),
         None => problem,
     };
+    if options.refine_principal_point {
+        problem = problem.refine_principal_point();
+    }
+    if options.refine_distortion {
+        problem = problem.refine_distortion();
+    }
     if let Some(g) = options.gravity {
         problem = problem.gravity(g);
     }

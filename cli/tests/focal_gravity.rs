@@ -7,6 +7,7 @@ use std::process::{Command, Output};
 
 use eopnp_testkit::{axis_angle, gauss, rng_from_seed};
 use nalgebra::{Matrix3, Point3, Rotation3, Vector3};
+use rand_core::RngCore;
 use serde_json::Value;
 
 fn eopnp(args: &[&str]) -> Output {
@@ -484,4 +485,74 @@ fn register_unknown_focal_errors() {
         "--json",
     ]);
     assert!(!errors.is_empty() && max < 1.0, "{errors:?}");
+}
+
+/// A uniform draw in [0, 1).
+fn unit(rng: &mut impl RngCore) -> f64 {
+    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+#[test]
+fn refined_principal_point_and_distortion() {
+    // 60 noise-free points through a SIMPLE_RADIAL camera (f 800, principal point (322, 236),
+    // k -0.12); the file's camera has the principal point 8 px off and no distortion.
+    let truth_cam = eopnp::camera::Camera::from_colmap(
+        "SIMPLE_RADIAL",
+        640,
+        480,
+        vec![800.0, 322.0, 236.0, -0.12],
+    )
+    .unwrap();
+    let (r, t) = truth();
+    let mut rng = rng_from_seed(8);
+    let (mut p2, mut p3) = (Vec::new(), Vec::new());
+    while p2.len() < 60 {
+        let px =
+            nalgebra::Point2::new(20.0 + 600.0 * unit(&mut rng), 20.0 + 440.0 * unit(&mut rng));
+        let m = truth_cam.undistort(px).unwrap();
+        let z = 3.0 + 5.0 * unit(&mut rng);
+        let c = Vector3::new(m.x * z, m.y * z, z);
+        let x = r.transpose() * (c - t);
+        p2.push([px.x, px.y]);
+        p3.push([x.x, x.y, x.z]);
+    }
+    let doc = serde_json::json!({
+        "camera": { "model": "SIMPLE_RADIAL", "params": [800.0, 330.0, 230.0, 0.0] },
+        "points2d": p2,
+        "points3d": p3,
+    });
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("fg-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("intrinsics.json");
+    std::fs::write(&path, serde_json::to_string(&doc).unwrap()).unwrap();
+    let path = path.to_str().unwrap();
+    let v = json_of(&eopnp(&[
+        "solve",
+        path,
+        "--refine-principal-point",
+        "--refine-distortion",
+    ]));
+    let params = f64s(&v["camera"]["params"]);
+    for (a, b) in params.iter().zip([800.0, 322.0, 236.0, -0.12]) {
+        assert!((a - b).abs() < 1e-7 * f64::max(1.0, b.abs()), "{params:?}");
+    }
+    let rmse = v["reprojection_rmse_px"].as_f64().unwrap();
+    assert!(rmse < 1e-6, "rmse {rmse}");
+    // Without the options the camera stays the file's, and the residuals are pixels.
+    let v = json_of(&eopnp(&["solve", path]));
+    assert_eq!(f64s(&v["camera"]["params"]), vec![800.0, 330.0, 230.0, 0.0]);
+    assert!(v["reprojection_rmse_px"].as_f64().unwrap() > 1.0);
+    // Not with a known vertical.
+    let o = eopnp(&[
+        "solve",
+        path,
+        "--refine-distortion",
+        "--gravity-camera",
+        "0,1,0",
+        "--gravity-world",
+        "0,1,0",
+        "--gravity-sigma",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
