@@ -104,7 +104,7 @@ impl From<Camera> for CameraFields {
 }
 
 /// The most parameters of a supported model (`OPENCV_THIN_PRISM_TILTED`'s 18).
-const MAX_PARAMS: usize = 18;
+pub(crate) const MAX_PARAMS: usize = 18;
 
 /// A camera: model, image size and parameters (validated on construction; with feature
 /// `serde`, deserialization validates the same way). The parameters are stored inline, so a

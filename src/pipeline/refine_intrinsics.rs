@@ -27,14 +27,15 @@
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, Point2, Point3, SMatrix, SVector, Vector3};
 
-use crate::camera::{Camera, Projector};
+use crate::camera::{Camera, Projector, MAX_PARAMS};
 use crate::numeric::rotation::exp_so3;
 
+/// The most distortion parameters of a model: those after two focal lengths and the principal
+/// point (`OPENCV_THIN_PRISM_TILTED`'s 14).
+const MAX_DISTORTION: usize = MAX_PARAMS - 4;
 /// The most free parameters: the pose (6), the focal length (1), the principal point (2) and
-/// `OPENCV_THIN_PRISM_TILTED`'s 14 distortion parameters.
-pub(crate) const MAX_FREE: usize = 23;
-/// The most distortion parameters of a model.
-const MAX_DISTORTION: usize = 14;
+/// the distortion.
+pub(crate) const MAX_FREE: usize = 6 + 1 + 2 + MAX_DISTORTION;
 
 type Normal = SMatrix<f64, MAX_FREE, MAX_FREE>;
 type Gradient = SVector<f64, MAX_FREE>;
@@ -148,7 +149,7 @@ fn normal(
     // The distortion parameters' central differences: the projections with each moved by +-h.
     let mut moved: ArrayVec<(Projector, Projector, f64), MAX_DISTORTION> = ArrayVec::new();
     if let Some((_, range)) = &lay.distortion {
-        let mut params = [0.0; 18];
+        let mut params = [0.0; MAX_PARAMS];
         let n = cam.params().len();
         params[..n].copy_from_slice(cam.params());
         for j in range.clone() {
@@ -254,7 +255,7 @@ fn step_camera(
         None => *cam,
     };
     let n = base.params().len();
-    let mut params = [0.0; 18];
+    let mut params = [0.0; MAX_PARAMS];
     params[..n].copy_from_slice(base.params());
     if let Some(j) = lay.centre {
         let [a, b] = cam.intrinsic_groups().0;
