@@ -272,6 +272,79 @@ pub(super) fn solve_positive(p: &Poly) -> Roots {
     cur
 }
 
+/// [`solve_prepared`] on `(lo, bound)` only: every level of the derivative sequence bracketed
+/// between its derivative's roots above `lo` (the interval from `lo` to the first of them is
+/// monotone), each level's sign at `lo` evaluated there; a root at `lo` itself is not reported.
+/// Near-real roots (`imag_tol > 0`) come from the critical points above `lo`.
+pub(super) fn solve_above(p: &Poly, zero_root: bool, imag_tol: f64, lo: f64) -> Roots {
+    let n = p.n;
+    let bound = p.root_bound();
+    if !(lo > -bound) {
+        return solve_prepared(p, zero_root, imag_tol);
+    }
+    let mut out = Roots::default();
+    if n == 0 || !(lo < bound) {
+        if zero_root && lo < 0.0 {
+            out.push(0.0);
+        }
+        return out;
+    }
+    let mut d = [*p; MAX_DEGREE];
+    for k in 1..n {
+        d[k] = d[k - 1].derivative();
+    }
+    let lin = &d[n - 1];
+    let mut cur = Roots::default();
+    let r = -lin.c[0] / lin.c[1];
+    if r > lo && r < bound {
+        cur.push(r);
+    }
+    let mut crit = Roots::default();
+    for k in (0..n - 1).rev() {
+        crit = cur;
+        let f = d[k].eval(lo);
+        cur = roots_above(
+            &d[k],
+            crit.as_slice(),
+            (lo, sgn(f), d[k].negligible(lo, f)),
+            bound,
+            f64::NAN,
+        );
+    }
+    out = cur;
+    if zero_root && lo < 0.0 {
+        out.push(0.0);
+    }
+    if imag_tol > 0.0 && n >= 2 {
+        near_real(p, crit.as_slice(), imag_tol, &mut out);
+    }
+    out.sort_dedup();
+    out
+}
+
+/// Adds to `out` the critical points `crit` of `p` next to a near-real complex pair
+/// ([`super::real_roots_near`]).
+fn near_real(p: &Poly, crit: &[f64], imag_tol: f64, out: &mut Roots) {
+    let found = *out;
+    for &x in crit {
+        let tol = imag_tol * (1.0 + x.abs());
+        let (f, _, h, s) = p.eval_d2_abs(x);
+        let f2 = 2.0 * h;
+        if p.negligible_with(f, s) || found.iter().any(|&r| (r - x).abs() <= tol) {
+            continue; // already a root
+        }
+        // Same signs of p and p'': a complex pair x +- i b (opposite signs: a real pair,
+        // already found by the bracketing).
+        if f == 0.0 || f2 == 0.0 || (f > 0.0) != (f2 > 0.0) {
+            continue;
+        }
+        let b = (2.0 * (f / f2)).sqrt();
+        if b <= tol {
+            out.push(x);
+        }
+    }
+}
+
 /// The full solver on a prepared polynomial. `imag_tol > 0` adds near-real roots.
 pub(super) fn solve_prepared(p: &Poly, zero_root: bool, imag_tol: f64) -> Roots {
     let mut out = Roots::default();
@@ -321,24 +394,7 @@ pub(super) fn solve_prepared(p: &Poly, zero_root: bool, imag_tol: f64) -> Roots 
     }
     // Near-real roots from the critical points of p (T8).
     if imag_tol > 0.0 && n >= 2 {
-        let found = out;
-        for &x in &crit {
-            let tol = imag_tol * (1.0 + x.abs());
-            let (f, _, h, s) = p.eval_d2_abs(x);
-            let f2 = 2.0 * h;
-            if p.negligible_with(f, s) || found.iter().any(|&r| (r - x).abs() <= tol) {
-                continue; // already a root
-            }
-            // Same signs of p and p'': a complex pair x +- i b (opposite signs: a real pair,
-            // already found by the bracketing).
-            if f == 0.0 || f2 == 0.0 || (f > 0.0) != (f2 > 0.0) {
-                continue;
-            }
-            let b = (2.0 * (f / f2)).sqrt();
-            if b <= tol {
-                out.push(x);
-            }
-        }
+        near_real(p, crit.as_slice(), imag_tol, &mut out);
     }
     out.sort_dedup();
     out
