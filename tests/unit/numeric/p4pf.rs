@@ -176,3 +176,15 @@ fn noisy_samples_give_good_hypotheses() {
     println!("{good} of {total} noisy samples gave a good hypothesis");
     assert!(good * 10 >= total * 8, "{good} of {total}");
 }
+
+/// The straight-line monomials follow the quadrics' exponent table.
+#[test]
+fn monomials_follow_the_exponent_table() {
+    let v = [1.7, -0.3, 2.9];
+    let m = super::monomials(&v);
+    for (e, t) in super::EXPONENTS.iter().zip(m) {
+        let want =
+            v[0].powi(i32::from(e[0])) * v[1].powi(i32::from(e[1])) * v[2].powi(i32::from(e[2]));
+        assert!((t - want).abs() <= 1e-15 * want.abs().max(1.0), "{e:?}");
+    }
+}
