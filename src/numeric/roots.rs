@@ -432,7 +432,8 @@ pub fn real_roots_near(c: &[f64], imag_tol: f64) -> Roots {
 /// derivative sequence searched above `lo` (less work when only the roots above a known value
 /// matter, as for the P4Pf octic's depth ratios); `lo` at or below the root bound's negative
 /// (or NaN) searches everywhere. A root at `lo` itself is not reported; near-real roots come
-/// from the critical points above `lo`.
+/// from the critical points above `lo`. The derivatives' roots (bracket ends only) are refined to
+/// a relative Halley step of 1e-7, the polynomial's to the rounding level as [`real_roots`]'s.
 #[must_use]
 pub fn real_roots_near_above(c: &[f64], imag_tol: f64, lo: f64) -> Roots {
     match prepare(c) {

@@ -106,8 +106,11 @@ fn split(lo: f64, hi: f64) -> f64 {
 /// iteration per root from the usual quadratic-model start. Returns the iterate
 /// with the smallest |q|. Stops when |q(x)| <= eps sum |c_i| |x|^i (below Horner's error bound:
 /// further iterations only chase rounding noise), when a step is below half an ulp, or when
-/// lo and hi are adjacent floats.
-fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f64 {
+
+/// lo and hi are adjacent floats; with `xtol > 0`, also after a Halley or Newton step of at most
+/// `xtol (1 + |x|)` (its result returned: the error left is of the order of the step cubed or
+/// squared).
+fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64, xtol: f64) -> f64 {
     let mut x = if x0 > lo && x0 < hi {
         x0
     } else {
@@ -160,6 +163,9 @@ fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f6
         if next == x {
             break;
         }
+        if newton_ok && step <= xtol * (1.0 + x.abs()) {
+            return next;
+        }
         // A (Halley or Newton) step below half an ulp of x: x is the correctly rounded root up to the
         // rounding of q; keep the better of x and its neighbour.
         if newton_ok && step <= 0.5 * EPS * x.abs() {
@@ -183,17 +189,19 @@ fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f6
 fn roots_between<P: Horner>(q: &P, crit: &[f64], bound: f64, start: f64) -> Roots {
     let lead = sgn(q.lead());
     let s_minf = if q.degree() & 1 == 0 { lead } else { -lead };
-    roots_above(q, crit, (-bound, s_minf, false), bound, start)
+    roots_above(q, crit, (-bound, s_minf, false), bound, start, 0.0)
 }
 
 /// [`roots_between`] on `(lo, bound)`: `low` is `(lo, the sign of q at lo, whether q(lo) is
 /// zero)`; critical points at or below `lo` are ignored, a root at `lo` is not reported.
+/// `xtol`: [`bracket`]'s.
 fn roots_above<P: Horner>(
     q: &P,
     crit: &[f64],
     low: (f64, f64, bool),
     bound: f64,
     start: f64,
+    xtol: f64,
 ) -> Roots {
     let mut out = Roots::default();
     let s_pinf = sgn(q.lead());
@@ -216,7 +224,7 @@ fn roots_above<P: Horner>(
             } else {
                 prev_x + prev_reach
             };
-            out.push(bracket(q, prev_x, x, prev_s, x0));
+            out.push(bracket(q, prev_x, x, prev_s, x0, xtol));
         }
         if z {
             out.push(x);
@@ -233,7 +241,7 @@ fn roots_above<P: Horner>(
         } else {
             prev_x + prev_reach
         };
-        out.push(bracket(q, prev_x, bound, prev_s, x0));
+        out.push(bracket(q, prev_x, bound, prev_s, x0, xtol));
     }
     out
 }
@@ -266,11 +274,18 @@ pub(super) fn solve_positive(p: &Poly) -> Roots {
             (0.0, sgn(c0), c0 == 0.0),
             bound,
             f64::NAN,
+            0.0,
         );
     }
     cur.sort_dedup();
     cur
 }
+
+/// The relative step at which [`solve_above`] stops refining the roots of the derivatives
+/// `p', p'', ...` (they only bracket the roots of the level below: a root of `p^(k)` within
+/// about the step's square or cube of such a bracket end is the only one its sign there can
+/// misjudge); `p`'s own roots are refined to the rounding level.
+const LEVEL_XTOL: f64 = 1e-7;
 
 /// [`solve_prepared`] on `(lo, bound)` only: every level of the derivative sequence bracketed
 /// between its derivative's roots above `lo` (the interval from `lo` to the first of them is
@@ -309,6 +324,7 @@ pub(super) fn solve_above(p: &Poly, zero_root: bool, imag_tol: f64, lo: f64) -> 
             (lo, sgn(f), d[k].negligible(lo, f)),
             bound,
             f64::NAN,
+            if k == 0 { 0.0 } else { LEVEL_XTOL },
         );
     }
     out = cur;
