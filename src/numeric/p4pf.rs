@@ -176,9 +176,7 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
         // component along R's third row.
         let r1 = (ra / na).transpose();
         let r2 = (rb / nb).transpose();
-        let Some(rotation) =
-            nearest_rotation(&Matrix3::from_columns(&[r1, r2, r1.cross(&r2)]).transpose())
-        else {
+        let Some(rotation) = orthonormal_pair(&r1, &r2) else {
             continue;
         };
         let s = (na + nb) / 2.0;
@@ -204,6 +202,26 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
         }
     }
     out
+}
+
+/// The nearest rotation (Frobenius norm) to the matrix of rows `a`, `b`, `a x b` (`a`, `b` unit
+/// vectors), in closed form: its rows are orthogonal to `a x b` and `a x b` to them, so the
+/// polar factor is the symmetric orthonormalisation of the pair, `(a, b) G^-1/2` with `G` their
+/// Gram matrix `[1 c; c 1]` (`c = a . b`), and the unit `a x b`. `None` if the pair is
+/// (nearly) parallel or not finite.
+fn orthonormal_pair(a: &Vector3<f64>, b: &Vector3<f64>) -> Option<Matrix3<f64>> {
+    let c = a.dot(b);
+    if !(c.abs() < 1.0 - 1e-12) {
+        return None;
+    }
+    // G^-1/2 = [[p, q], [q, p]]: the eigenvalues 1 +- c, eigenvectors (1, +-1) / sqrt(2).
+    let (sp, sm) = (1.0 / (1.0 + c).sqrt(), 1.0 / (1.0 - c).sqrt());
+    let (p, q) = ((sp + sm) / 2.0, (sp - sm) / 2.0);
+    let r1 = a * p + b * q;
+    let r2 = a * q + b * p;
+    let r3 = r1.cross(&r2);
+    let m = Matrix3::from_rows(&[r1.transpose(), r2.transpose(), r3.transpose()]);
+    m.iter().all(|v| v.is_finite()).then_some(m)
 }
 
 /// The translation that projects the four points closest to their images at the rotation

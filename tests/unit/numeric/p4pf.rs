@@ -188,3 +188,26 @@ fn monomials_follow_the_exponent_table() {
         assert!((t - want).abs() <= 1e-15 * want.abs().max(1.0), "{e:?}");
     }
 }
+
+/// The closed-form polar factor of rows `a`, `b`, `a x b` is `nearest_rotation`'s (the SVD's).
+#[test]
+fn orthonormal_pair_is_the_nearest_rotation() {
+    let mut rng = Pcg64::seed_from_u64(11);
+    for _ in 0..1000 {
+        let mut unit = || {
+            Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+            .normalize()
+        };
+        let (a, b) = (unit(), unit());
+        let got = super::orthonormal_pair(&a, &b).expect("not parallel");
+        let m = Matrix3::from_rows(&[a.transpose(), b.transpose(), a.cross(&b).transpose()]);
+        let want = crate::numeric::rotation::nearest_rotation(&m).expect("rotation");
+        assert!((got - want).norm() <= 1e-9, "{got} vs {want}");
+        assert!((got * got.transpose() - Matrix3::identity()).norm() <= 1e-12);
+    }
+    assert!(super::orthonormal_pair(&Vector3::x(), &Vector3::x()).is_none());
+}
