@@ -106,7 +106,6 @@ fn split(lo: f64, hi: f64) -> f64 {
 /// iteration per root from the usual quadratic-model start. Returns the iterate
 /// with the smallest |q|. Stops when |q(x)| <= eps sum |c_i| |x|^i (below Horner's error bound:
 /// further iterations only chase rounding noise), when a step is below half an ulp, or when
-
 /// lo and hi are adjacent floats; with `xtol > 0`, also after a Halley or Newton step of at most
 /// `xtol (1 + |x|)` (its result returned: the error left is of the order of the step cubed or
 /// squared).
