@@ -3,8 +3,8 @@
 //! coefficients, near-real complex pairs, iteration. (Formerly `src/numeric/roots/tests.rs`.)
 
 use eopnp::internals::roots::{
-    cubic_real_roots, positive_real_roots, quartic_real_roots, real_roots, real_roots_near, Roots,
-    DEFAULT_IMAG_TOL,
+    cubic_real_roots, positive_real_roots, quartic_real_roots, real_roots, real_roots_near,
+    real_roots_near_above, Roots, DEFAULT_IMAG_TOL,
 };
 
 fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
@@ -195,4 +195,77 @@ fn positive_roots_are_the_positive_real_roots() {
     }
     assert_eq!(compared, 20_000);
     assert!(found > 20_000, "{found} positive roots");
+}
+
+/// `real_roots_near_above` finds the roots `real_roots_near` finds above the bound (to a few
+/// ulps): known roots, a double root, a near-real pair, and 20,000 random polynomials of degree
+/// 1 to 9 (random roots and random coefficients) with random bounds and imaginary tolerances
+/// (roots within 1e-6 of the bound left out of the comparison).
+#[test]
+fn roots_above_are_the_real_roots_above() {
+    let r = [-3.0, -1.0, 0.5, 2.0, 7.0];
+    let got = real_roots_near_above(&from_roots(&r), 0.0, -2.0);
+    assert!(
+        close(got.as_slice(), &[-1.0, 0.5, 2.0, 7.0], 1e-14),
+        "{got:?}"
+    );
+    let c = from_roots(&[2.0, 2.0, -3.0, 0.0]);
+    assert!(close(
+        real_roots_near_above(&c, 0.0, -2.0).as_slice(),
+        &[0.0, 2.0],
+        1e-14
+    ));
+    // ((x - 1)^2 + 1e-8) (x + 3), a pair 1 +- 1e-4 i: found with the tolerance (above -2, not
+    // -3).
+    let c = [3.0 + 3e-8, -5.0 + 1e-8, 1.0, 1.0];
+    let near = real_roots_near_above(&c, 1e-3, -2.0);
+    assert!(close(near.as_slice(), &[1.0], 1e-8), "{near:?}");
+    let none = real_roots_near_above(&c, 0.0, -2.0);
+    assert!(none.is_empty(), "{none:?}");
+    // Everywhere when the bound is below every root.
+    assert_eq!(
+        real_roots_near_above(&from_roots(&r), 0.0, f64::NEG_INFINITY).as_slice(),
+        real_roots(&from_roots(&r)).as_slice()
+    );
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = move || {
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut found = 0;
+    for k in 0..20_000 {
+        let degree = 1 + k % 9;
+        let c: Vec<f64> = if k % 2 == 0 {
+            let roots: Vec<f64> = (0..degree).map(|_| 20.0 * next() - 10.0).collect();
+            from_roots(&roots)
+        } else {
+            (0..=degree).map(|_| 2.0 * next() - 1.0).collect()
+        };
+        let lo = 10.0 * next() - 5.0;
+        let tol = [0.0, DEFAULT_IMAG_TOL, 1e-2][k % 3];
+        let away = |x: &f64| (x - lo).abs() > 1e-6 * (1.0 + lo.abs());
+        let all: Vec<f64> = real_roots_near(&c, tol)
+            .iter()
+            .copied()
+            .filter(|&x| x > lo && away(&x))
+            .collect();
+        let above: Vec<f64> = real_roots_near_above(&c, tol, lo)
+            .iter()
+            .copied()
+            .filter(away)
+            .collect();
+        assert_eq!(
+            above.len(),
+            all.len(),
+            "{c:?} above {lo}: {above:?} vs {all:?}"
+        );
+        for (&a, &b) in above.iter().zip(&all) {
+            assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{c:?}: {a} vs {b}");
+        }
+        found += above.len();
+    }
+    assert!(found > 20_000, "{found} roots");
 }

@@ -12,7 +12,9 @@
 //! [`e3q3`]: `z` hidden, the constant 3 x 3 system of their `x^2, xy, y^2` coefficients solved
 //! for those monomials, the generated kernel `e3q3_octic` gives the octic `det L(z)` and the
 //! matrix `L(z)` whose null vector at a root is `(x, y, 1)`. Every `l_i` is `w` times the depth
-//! of point `i` over that of point 1, so only positive roots and null vectors are sought. Each
+//! of point `i` over that of point 1, so only roots and null vectors with every `mu_k = l_k - 1`
+//! above -2 (loosely positive `l_k`) are sought: the octic's roots on `(-2, bound)` only
+//! ([`real_roots_near_above`]), the others' `x` and `y` screened before the polish. Each
 //! solution is polished by Newton's method on the three quadrics and Gauss-Newton on all four,
 //! turned into `R` (from `M`'s first two rows, well determined, and their cross product), `f`
 //! (from the third row's component along `R`'s third: that row is weak and noisy when the
@@ -29,7 +31,7 @@
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-use super::roots::real_roots_near;
+use super::roots::real_roots_near_above;
 use super::rotation::nearest_rotation;
 use crate::kernels::{e3q3_octic, p4pf_quadrics, P4PF_QUADRIC_EXPONENTS};
 
@@ -70,6 +72,10 @@ const NEWTON_ITERATIONS: usize = 10;
 /// solution complex, and Newton's method on the three quadrics finds it from the pair's real
 /// part (one of `verify`'s 5,000 instances).
 const NEAR_REAL: f64 = 1e-2;
+/// The screen of [`e3q3`]'s solutions in P4Pf: each `mu_k = l_k - 1` above this (`l_k > -1`:
+/// loose, as the polish can move a root of a near-double pair far; the solutions must have
+/// `l_k > 0`).
+const SCREEN: f64 = -2.0;
 /// Gauss-Newton iterations on the four quadrics after that.
 const GAUSS_NEWTON_ITERATIONS: usize = 10;
 
@@ -144,9 +150,10 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
     let four = [quadric(0), quadric(1), quadric(2), quadric(3)];
     let three = [four[0], four[1], four[2]];
     // Roots whose depth ratios are clearly negative (l_k < -1 before the polish; the polish can
-    // move a root of a near-double pair far, so the screen is loose) are not polished: on
-    // noisy samples, 6.4 -> 5.4 us per call.
-    for mu in e3q3(&three, &|v| v.iter().all(|x| *x > -2.0)) {
+    // move a root of a near-double pair far, so the screen is loose) are neither sought nor
+    // polished: on noisy samples, 6.4 -> 5.4 us per call (the polish), and the octic's roots
+    // searched above the screen only (module docs).
+    for mu in e3q3(&three, SCREEN) {
         // Gauss-Newton on all four: two solutions of the three close together (a near-double
         // root of the octic, where Newton on the three converges slowly) are told apart by the
         // fourth.
@@ -169,9 +176,7 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
         // component along R's third row.
         let r1 = (ra / na).transpose();
         let r2 = (rb / nb).transpose();
-        let Some(rotation) =
-            nearest_rotation(&Matrix3::from_columns(&[r1, r2, r1.cross(&r2)]).transpose())
-        else {
+        let Some(rotation) = orthonormal_pair(&r1, &r2) else {
             continue;
         };
         let s = (na + nb) / 2.0;
@@ -197,6 +202,26 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
         }
     }
     out
+}
+
+/// The nearest rotation (Frobenius norm) to the matrix of rows `a`, `b`, `a x b` (`a`, `b` unit
+/// vectors), in closed form: its rows are orthogonal to `a x b` and `a x b` to them, so the
+/// polar factor is the symmetric orthonormalisation of the pair, `(a, b) G^-1/2` with `G` their
+/// Gram matrix `[1 c; c 1]` (`c = a . b`), and the unit `a x b`. `None` if the pair is
+/// (nearly) parallel or not finite.
+fn orthonormal_pair(a: &Vector3<f64>, b: &Vector3<f64>) -> Option<Matrix3<f64>> {
+    let c = a.dot(b);
+    if !(c.abs() < 1.0 - 1e-12) {
+        return None;
+    }
+    // G^-1/2 = [[p, q], [q, p]]: the eigenvalues 1 +- c, eigenvectors (1, +-1) / sqrt(2).
+    let (sp, sm) = (1.0 / (1.0 + c).sqrt(), 1.0 / (1.0 - c).sqrt());
+    let (p, q) = ((sp + sm) / 2.0, (sp - sm) / 2.0);
+    let r1 = a * p + b * q;
+    let r2 = a * q + b * p;
+    let r3 = r1.cross(&r2);
+    let m = Matrix3::from_rows(&[r1.transpose(), r2.transpose(), r3.transpose()]);
+    m.iter().all(|v| v.is_finite()).then_some(m)
 }
 
 /// The translation that projects the four points closest to their images at the rotation
@@ -369,14 +394,22 @@ fn planar(world: &[Point3<f64>; 4], m: &[Vector3<f64>; 4], si: f64) -> Option<P4
 /// order of `p4pf_quadrics`, whose table it is).
 const EXPONENTS: [[u8; 3]; 10] = P4PF_QUADRIC_EXPONENTS;
 
+/// The monomials `[xx, xy, yy, xz, yz, zz, x, y, z, 1]` at `v` (the order of [`EXPONENTS`],
+/// checked by a unit test).
+#[inline]
+fn monomials(v: &[f64; 3]) -> [f64; 10] {
+    let [x, y, z] = *v;
+    [x * x, x * y, y * y, x * z, y * z, z * z, x, y, z, 1.0]
+}
+
 /// A quadric `[xx, xy, yy, xz, yz, zz, x, y, z, 1]` at `v`.
+#[inline]
 fn eval(q: &[f64; 10], v: &[f64; 3]) -> f64 {
-    EXPONENTS.iter().zip(q).fold(0.0, |acc, (e, c)| {
-        acc + c
-            * v[0].powi(i32::from(e[0]))
-            * v[1].powi(i32::from(e[1]))
-            * v[2].powi(i32::from(e[2]))
-    })
+    let [x, y, z] = *v;
+    (q[0] * x + q[1] * y + q[3] * z + q[6]) * x
+        + (q[2] * y + q[4] * z + q[7]) * y
+        + (q[5] * z + q[8]) * z
+        + q[9]
 }
 
 /// The gradient of a quadric at `v`.
@@ -448,13 +481,11 @@ fn permuted(q: &[f64; 10], p: usize) -> [f64; 10] {
 /// 3 x 3 system (by Hadamard's ratio). Each solution is polished by Newton's method on the three, kept if it then
 /// solves them (to `1e-8` of each one's terms) and reported once.
 ///
-/// `wanted` screens the solutions before their polish (P4Pf: every depth ratio positive); a
-/// solution it rejects then is not returned.
+/// Only solutions whose every coordinate exceeds `above` are sought (P4Pf: the depth ratios
+/// loosely positive; `f64::NEG_INFINITY` for all): the octic's roots on `(above, bound)` only,
+/// the others' coordinates screened before their polish.
 #[must_use]
-pub fn e3q3(
-    quadrics: &[[f64; 10]; 3],
-    wanted: &dyn Fn(&[f64; 3]) -> bool,
-) -> ArrayVec<[f64; 3], MAX_P4PF_SOLUTIONS> {
+pub fn e3q3(quadrics: &[[f64; 10]; 3], above: f64) -> ArrayVec<[f64; 3], MAX_P4PF_SOLUTIONS> {
     let mut out = ArrayVec::new();
     // Hide each variable in turn: the best-conditioned 3 x 3 system of the other two's squares,
     // by the ratio of its determinant to the product of its rows' norms (Hadamard's bound: 1 for
@@ -506,7 +537,7 @@ pub fn e3q3(
         *s = at;
         at += len;
     }
-    for &z in real_roots_near(octic, NEAR_REAL).iter() {
+    for &z in real_roots_near_above(octic, NEAR_REAL, above).iter() {
         let l = Matrix3::from_fn(|r, col| {
             let n = 3 * r + col;
             horner(&k[starts[n]..starts[n] + lens[n]], z)
@@ -529,7 +560,7 @@ pub fn e3q3(
         for kk in 0..3 {
             orig[perm[kk]] = sol[kk];
         }
-        if !wanted(&orig) {
+        if !orig.iter().all(|x| *x > above) {
             continue;
         }
         let sol = polish(&qs, sol);
@@ -557,33 +588,43 @@ pub fn e3q3(
 /// far less accurate than that; Newton's polish brings a real solution to the rounding level,
 /// and the real part of a complex pair, which solves nothing, stays far above it).
 fn solves(qs: &[[f64; 10]; 3], v: &[f64; 3]) -> bool {
+    let m = monomials(v);
     qs.iter().all(|q| {
-        let scale = EXPONENTS.iter().zip(q).fold(0.0, |acc, (e, c)| {
-            acc + (c
-                * v[0].powi(i32::from(e[0]))
-                * v[1].powi(i32::from(e[1]))
-                * v[2].powi(i32::from(e[2])))
-            .abs()
-        });
-        eval(q, v).abs() <= 1e-8 * scale
+        let (mut value, mut scale) = (0.0, 0.0);
+        for i in 0..10 {
+            let t = q[i] * m[i];
+            value += t;
+            scale += t.abs();
+        }
+        value.abs() <= 1e-8 * scale
     })
 }
 
 /// Newton's method on the three quadrics from `v` (a step kept only if it lowers the largest
 /// residual).
 fn polish(qs: &[[f64; 10]; 3], mut v: [f64; 3]) -> [f64; 3] {
-    let residual = |v: &[f64; 3]| qs.iter().map(|q| eval(q, v).abs()).fold(0.0, f64::max);
-    let mut r = residual(&v);
+    let values = |v: &[f64; 3]| [eval(&qs[0], v), eval(&qs[1], v), eval(&qs[2], v)];
+    let largest = |f: &[f64; 3]| f[0].abs().max(f[1].abs()).max(f[2].abs());
+    let mut f = values(&v);
+    let mut r = largest(&f);
     for _ in 0..NEWTON_ITERATIONS {
-        let j = Matrix3::from_rows(&qs.map(|q| gradient(&q, &v).transpose()));
-        let f = Vector3::new(eval(&qs[0], &v), eval(&qs[1], &v), eval(&qs[2], &v));
-        let Some(step) = j.try_inverse().map(|ji| ji * f) else {
+        let j = Matrix3::from_rows(&[
+            gradient(&qs[0], &v).transpose(),
+            gradient(&qs[1], &v).transpose(),
+            gradient(&qs[2], &v).transpose(),
+        ]);
+        let Some(step) = j
+            .try_inverse()
+            .map(|ji| ji * Vector3::new(f[0], f[1], f[2]))
+        else {
             break;
         };
         let cand = [v[0] - step[0], v[1] - step[1], v[2] - step[2]];
-        let rc = residual(&cand);
+        let fc = values(&cand);
+        let rc = largest(&fc);
         if rc < r {
             v = cand;
+            f = fc;
             r = rc;
         } else {
             break;
@@ -595,21 +636,35 @@ fn polish(qs: &[[f64; 10]; 3], mut v: [f64; 3]) -> [f64; 3] {
 /// Gauss-Newton on the four quadrics from `v` (a step kept only if it lowers the sum of
 /// squared residuals).
 fn gauss_newton4(qs: &[[f64; 10]; 4], mut v: [f64; 3]) -> [f64; 3] {
-    let cost = |v: &[f64; 3]| qs.iter().map(|q| eval(q, v).powi(2)).sum::<f64>();
-    let mut c = cost(&v);
+    let values = |v: &[f64; 3]| {
+        [
+            eval(&qs[0], v),
+            eval(&qs[1], v),
+            eval(&qs[2], v),
+            eval(&qs[3], v),
+        ]
+    };
+    let cost = |f: &[f64; 4]| f.iter().map(|x| x * x).sum::<f64>();
+    let mut f = values(&v);
+    let mut c = cost(&f);
     for _ in 0..GAUSS_NEWTON_ITERATIONS {
-        let j = nalgebra::Matrix4x3::from_rows(&qs.map(|q| gradient(&q, &v).transpose()));
-        let f = nalgebra::Vector4::from_fn(|i, _| eval(&qs[i], &v));
-        let Some(step) = (j.transpose() * j)
-            .try_inverse()
-            .map(|n| n * (j.transpose() * f))
-        else {
+        // The normal equations J^T J step = J^T f, accumulated row by row.
+        let mut jtj = Matrix3::zeros();
+        let mut jtf = Vector3::zeros();
+        for (q, fi) in qs.iter().zip(&f) {
+            let g = gradient(q, &v);
+            jtj += g * g.transpose();
+            jtf += g * *fi;
+        }
+        let Some(step) = jtj.try_inverse().map(|n| n * jtf) else {
             break;
         };
         let cand = [v[0] - step[0], v[1] - step[1], v[2] - step[2]];
-        let cc = cost(&cand);
+        let fc = values(&cand);
+        let cc = cost(&fc);
         if cc < c {
             v = cand;
+            f = fc;
             c = cc;
         } else {
             break;

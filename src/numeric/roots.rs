@@ -428,6 +428,22 @@ pub fn real_roots_near(c: &[f64], imag_tol: f64) -> Roots {
     }
 }
 
+/// The roots of [`real_roots_near`] above `lo`, found on `(lo, bound)` only: every level of the
+/// derivative sequence searched above `lo` (less work when only the roots above a known value
+/// matter, as for the P4Pf octic's depth ratios); `lo` at or below the root bound's negative
+/// (or NaN) searches everywhere. A root at `lo` itself is not reported; near-real roots come
+/// from the critical points above `lo`. The derivatives' roots (bracket ends only) are refined to
+/// a relative Halley step of 1e-7, the polynomial's to the rounding level as [`real_roots`]'s.
+#[must_use]
+pub fn real_roots_near_above(c: &[f64], imag_tol: f64, lo: f64) -> Roots {
+    match prepare(c) {
+        Some((p, z)) => {
+            isolate::solve_above(&p, z, if imag_tol > 0.0 { imag_tol } else { 0.0 }, lo)
+        }
+        None => Roots::default(),
+    }
+}
+
 /// Real roots of the cubic `c[0] + c[1] x + c[2] x^2 + c[3] x^3`, sorted ascending, in closed form
 /// (trigonometric form for three real roots, Cardano with the cancellation-free `A + Q/A`
 /// otherwise, the smallest root recomputed from the product of the roots), then Newton polishing

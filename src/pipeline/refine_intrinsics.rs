@@ -221,13 +221,11 @@ fn normal(
                 row[1][j0 + k] = (vp - vm) * s;
             }
         }
-        for (rw, ri) in row.iter().zip(res) {
-            for j in 0..m {
-                g[j] += w * rw[j] * ri;
-                for k in j..m {
-                    h[(j, k)] += w * rw[j] * rw[k];
-                }
-            }
+        // The pose and the focal length (RANSAC's fits): the same sums with the size known.
+        if m == 7 {
+            accumulate::<7>(&mut h, &mut g, &row, res, w);
+        } else {
+            accumulate_n(m, &mut h, &mut g, &row, res, w);
         }
     }
     for j in 0..m {
@@ -236,6 +234,60 @@ fn normal(
         }
     }
     e.is_finite().then_some((e, h, g))
+}
+
+/// The step `-hd^-1 g` by Cholesky's factorisation, or `None` if `hd` is not positive definite;
+/// on the leading 7 x 7 block when `m` is 7 (the pose and the focal length: RANSAC's fits),
+/// else on the whole matrix (the unused parameters' rows the identity).
+fn solve_damped(hd: &Normal, g: &Gradient, m: usize) -> Option<Gradient> {
+    if m == 7 {
+        let chol = hd.fixed_view::<7, 7>(0, 0).into_owned().cholesky()?;
+        let d = chol.solve(&(-g.fixed_rows::<7>(0).into_owned()));
+        let mut delta = Gradient::zeros();
+        delta.fixed_rows_mut::<7>(0).copy_from(&d);
+        Some(delta)
+    } else {
+        Some(hd.cholesky()?.solve(&(-g)))
+    }
+}
+
+/// Adds a point's two rows `row` (residuals `res`, weight `w`) to the upper triangle of `h` and
+/// to `g`, over the first `M` parameters (a size known at compile time).
+#[inline(always)]
+fn accumulate<const M: usize>(
+    h: &mut Normal,
+    g: &mut Gradient,
+    row: &[[f64; MAX_FREE]; 2],
+    res: [f64; 2],
+    w: f64,
+) {
+    for (rw, ri) in row.iter().zip(res) {
+        for j in 0..M {
+            g[j] += w * rw[j] * ri;
+            for k in j..M {
+                h[(j, k)] += w * rw[j] * rw[k];
+            }
+        }
+    }
+}
+
+/// [`accumulate`] over the first `m` parameters.
+fn accumulate_n(
+    m: usize,
+    h: &mut Normal,
+    g: &mut Gradient,
+    row: &[[f64; MAX_FREE]; 2],
+    res: [f64; 2],
+    w: f64,
+) {
+    for (rw, ri) in row.iter().zip(res) {
+        for j in 0..m {
+            g[j] += w * rw[j] * ri;
+            for k in j..m {
+                h[(j, k)] += w * rw[j] * rw[k];
+            }
+        }
+    }
 }
 
 /// The camera `cam` moved by the intrinsics' part of the step `delta`, or `None` if that is not
@@ -345,14 +397,13 @@ pub(crate) fn refine_intrinsics(
                 hd[(j, j)] = 1.0;
             }
         }
-        let Some(chol) = hd.cholesky() else {
+        let Some(delta) = solve_damped(&hd, &g, m) else {
             lam *= 10.0;
             if lam > 1e16 {
                 break;
             }
             continue;
         };
-        let delta = chol.solve(&(-g));
         let w = Vector3::new(delta[0], delta[1], delta[2]);
         let dt = Vector3::new(delta[3], delta[4], delta[5]);
         let scale = t.norm() + 1.0;

@@ -106,8 +106,10 @@ fn split(lo: f64, hi: f64) -> f64 {
 /// iteration per root from the usual quadratic-model start. Returns the iterate
 /// with the smallest |q|. Stops when |q(x)| <= eps sum |c_i| |x|^i (below Horner's error bound:
 /// further iterations only chase rounding noise), when a step is below half an ulp, or when
-/// lo and hi are adjacent floats.
-fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f64 {
+/// lo and hi are adjacent floats; with `xtol > 0`, also after a Halley or Newton step of at most
+/// `xtol (1 + |x|)` (its result returned: the error left is of the order of the step cubed or
+/// squared).
+fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64, xtol: f64) -> f64 {
     let mut x = if x0 > lo && x0 < hi {
         x0
     } else {
@@ -160,6 +162,9 @@ fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f6
         if next == x {
             break;
         }
+        if newton_ok && step <= xtol * (1.0 + x.abs()) {
+            return next;
+        }
         // A (Halley or Newton) step below half an ulp of x: x is the correctly rounded root up to the
         // rounding of q; keep the better of x and its neighbour.
         if newton_ok && step <= 0.5 * EPS * x.abs() {
@@ -183,17 +188,19 @@ fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64) -> f6
 fn roots_between<P: Horner>(q: &P, crit: &[f64], bound: f64, start: f64) -> Roots {
     let lead = sgn(q.lead());
     let s_minf = if q.degree() & 1 == 0 { lead } else { -lead };
-    roots_above(q, crit, (-bound, s_minf, false), bound, start)
+    roots_above(q, crit, (-bound, s_minf, false), bound, start, 0.0)
 }
 
 /// [`roots_between`] on `(lo, bound)`: `low` is `(lo, the sign of q at lo, whether q(lo) is
 /// zero)`; critical points at or below `lo` are ignored, a root at `lo` is not reported.
+/// `xtol`: [`bracket`]'s.
 fn roots_above<P: Horner>(
     q: &P,
     crit: &[f64],
     low: (f64, f64, bool),
     bound: f64,
     start: f64,
+    xtol: f64,
 ) -> Roots {
     let mut out = Roots::default();
     let s_pinf = sgn(q.lead());
@@ -216,7 +223,7 @@ fn roots_above<P: Horner>(
             } else {
                 prev_x + prev_reach
             };
-            out.push(bracket(q, prev_x, x, prev_s, x0));
+            out.push(bracket(q, prev_x, x, prev_s, x0, xtol));
         }
         if z {
             out.push(x);
@@ -233,7 +240,7 @@ fn roots_above<P: Horner>(
         } else {
             prev_x + prev_reach
         };
-        out.push(bracket(q, prev_x, bound, prev_s, x0));
+        out.push(bracket(q, prev_x, bound, prev_s, x0, xtol));
     }
     out
 }
@@ -266,10 +273,91 @@ pub(super) fn solve_positive(p: &Poly) -> Roots {
             (0.0, sgn(c0), c0 == 0.0),
             bound,
             f64::NAN,
+            0.0,
         );
     }
     cur.sort_dedup();
     cur
+}
+
+/// The relative step at which [`solve_above`] stops refining the roots of the derivatives
+/// `p', p'', ...` (they only bracket the roots of the level below: a root of `p^(k)` within
+/// about the step's square or cube of such a bracket end is the only one its sign there can
+/// misjudge); `p`'s own roots are refined to the rounding level.
+const LEVEL_XTOL: f64 = 1e-7;
+
+/// [`solve_prepared`] on `(lo, bound)` only: every level of the derivative sequence bracketed
+/// between its derivative's roots above `lo` (the interval from `lo` to the first of them is
+/// monotone), each level's sign at `lo` evaluated there; a root at `lo` itself is not reported.
+/// Near-real roots (`imag_tol > 0`) come from the critical points above `lo`.
+pub(super) fn solve_above(p: &Poly, zero_root: bool, imag_tol: f64, lo: f64) -> Roots {
+    let n = p.n;
+    let bound = p.root_bound();
+    if !(lo > -bound) {
+        return solve_prepared(p, zero_root, imag_tol);
+    }
+    let mut out = Roots::default();
+    if n == 0 || !(lo < bound) {
+        if zero_root && lo < 0.0 {
+            out.push(0.0);
+        }
+        return out;
+    }
+    let mut d = [*p; MAX_DEGREE];
+    for k in 1..n {
+        d[k] = d[k - 1].derivative();
+    }
+    let lin = &d[n - 1];
+    let mut cur = Roots::default();
+    let r = -lin.c[0] / lin.c[1];
+    if r > lo && r < bound {
+        cur.push(r);
+    }
+    let mut crit = Roots::default();
+    for k in (0..n - 1).rev() {
+        crit = cur;
+        let f = d[k].eval(lo);
+        cur = roots_above(
+            &d[k],
+            crit.as_slice(),
+            (lo, sgn(f), d[k].negligible(lo, f)),
+            bound,
+            f64::NAN,
+            if k == 0 { 0.0 } else { LEVEL_XTOL },
+        );
+    }
+    out = cur;
+    if zero_root && lo < 0.0 {
+        out.push(0.0);
+    }
+    if imag_tol > 0.0 && n >= 2 {
+        near_real(p, crit.as_slice(), imag_tol, &mut out);
+    }
+    out.sort_dedup();
+    out
+}
+
+/// Adds to `out` the critical points `crit` of `p` next to a near-real complex pair
+/// ([`super::real_roots_near`]).
+fn near_real(p: &Poly, crit: &[f64], imag_tol: f64, out: &mut Roots) {
+    let found = *out;
+    for &x in crit {
+        let tol = imag_tol * (1.0 + x.abs());
+        let (f, _, h, s) = p.eval_d2_abs(x);
+        let f2 = 2.0 * h;
+        if p.negligible_with(f, s) || found.iter().any(|&r| (r - x).abs() <= tol) {
+            continue; // already a root
+        }
+        // Same signs of p and p'': a complex pair x +- i b (opposite signs: a real pair,
+        // already found by the bracketing).
+        if f == 0.0 || f2 == 0.0 || (f > 0.0) != (f2 > 0.0) {
+            continue;
+        }
+        let b = (2.0 * (f / f2)).sqrt();
+        if b <= tol {
+            out.push(x);
+        }
+    }
 }
 
 /// The full solver on a prepared polynomial. `imag_tol > 0` adds near-real roots.
@@ -321,24 +409,7 @@ pub(super) fn solve_prepared(p: &Poly, zero_root: bool, imag_tol: f64) -> Roots 
     }
     // Near-real roots from the critical points of p (T8).
     if imag_tol > 0.0 && n >= 2 {
-        let found = out;
-        for &x in &crit {
-            let tol = imag_tol * (1.0 + x.abs());
-            let (f, _, h, s) = p.eval_d2_abs(x);
-            let f2 = 2.0 * h;
-            if p.negligible_with(f, s) || found.iter().any(|&r| (r - x).abs() <= tol) {
-                continue; // already a root
-            }
-            // Same signs of p and p'': a complex pair x +- i b (opposite signs: a real pair,
-            // already found by the bracketing).
-            if f == 0.0 || f2 == 0.0 || (f > 0.0) != (f2 > 0.0) {
-                continue;
-            }
-            let b = (2.0 * (f / f2)).sqrt();
-            if b <= tol {
-                out.push(x);
-            }
-        }
+        near_real(p, crit.as_slice(), imag_tol, &mut out);
     }
     out.sort_dedup();
     out

@@ -176,3 +176,38 @@ fn noisy_samples_give_good_hypotheses() {
     println!("{good} of {total} noisy samples gave a good hypothesis");
     assert!(good * 10 >= total * 8, "{good} of {total}");
 }
+
+/// The straight-line monomials follow the quadrics' exponent table.
+#[test]
+fn monomials_follow_the_exponent_table() {
+    let v = [1.7, -0.3, 2.9];
+    let m = super::monomials(&v);
+    for (e, t) in super::EXPONENTS.iter().zip(m) {
+        let want =
+            v[0].powi(i32::from(e[0])) * v[1].powi(i32::from(e[1])) * v[2].powi(i32::from(e[2]));
+        assert!((t - want).abs() <= 1e-15 * want.abs().max(1.0), "{e:?}");
+    }
+}
+
+/// The closed-form polar factor of rows `a`, `b`, `a x b` is `nearest_rotation`'s (the SVD's).
+#[test]
+fn orthonormal_pair_is_the_nearest_rotation() {
+    let mut rng = Pcg64::seed_from_u64(11);
+    for _ in 0..1000 {
+        let mut unit = || {
+            Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+            .normalize()
+        };
+        let (a, b) = (unit(), unit());
+        let got = super::orthonormal_pair(&a, &b).expect("not parallel");
+        let m = Matrix3::from_rows(&[a.transpose(), b.transpose(), a.cross(&b).transpose()]);
+        let want = crate::numeric::rotation::nearest_rotation(&m).expect("rotation");
+        assert!((got - want).norm() <= 1e-9, "{got} vs {want}");
+        assert!((got * got.transpose() - Matrix3::identity()).norm() <= 1e-12);
+    }
+    assert!(super::orthonormal_pair(&Vector3::x(), &Vector3::x()).is_none());
+}

@@ -376,7 +376,7 @@ pub fn e3q3_solutions(n: usize) -> Measurement {
             st::normal(&mut rng),
         ];
         let qs = planted(&mut rng, &p);
-        let sols = e3q3(&qs, &|_| true);
+        let sols = e3q3(&qs, f64::NEG_INFINITY);
         let mut worst = 0.0f64;
         for s in &sols {
             for q in &qs {
