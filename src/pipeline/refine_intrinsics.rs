@@ -223,9 +223,9 @@ fn normal(
         }
         // The pose and the focal length (RANSAC's fits): the same sums with the size known.
         if m == 7 {
-            accumulate::<7>(&mut h, &mut g, &row, res, w);
+            accumulate(7, &mut h, &mut g, &row, res, w);
         } else {
-            accumulate_n(m, &mut h, &mut g, &row, res, w);
+            accumulate(m, &mut h, &mut g, &row, res, w);
         }
     }
     for j in 0..m {
@@ -252,27 +252,10 @@ fn solve_damped(hd: &Normal, g: &Gradient, m: usize) -> Option<Gradient> {
 }
 
 /// Adds a point's two rows `row` (residuals `res`, weight `w`) to the upper triangle of `h` and
-/// to `g`, over the first `M` parameters (a size known at compile time).
+/// to `g`, over the first `m` parameters (inlined, so that a constant `m` is a size known at
+/// compile time).
 #[inline(always)]
-fn accumulate<const M: usize>(
-    h: &mut Normal,
-    g: &mut Gradient,
-    row: &[[f64; MAX_FREE]; 2],
-    res: [f64; 2],
-    w: f64,
-) {
-    for (rw, ri) in row.iter().zip(res) {
-        for j in 0..M {
-            g[j] += w * rw[j] * ri;
-            for k in j..M {
-                h[(j, k)] += w * rw[j] * rw[k];
-            }
-        }
-    }
-}
-
-/// [`accumulate`] over the first `m` parameters.
-fn accumulate_n(
+fn accumulate(
     m: usize,
     h: &mut Normal,
     g: &mut Gradient,
