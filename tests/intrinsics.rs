@@ -289,3 +289,63 @@ fn bad_requests_are_typed_errors() {
         .refine_distortion();
     assert!(s.solve(&p).is_ok());
 }
+
+#[test]
+fn a_robust_loss_applies_to_the_intrinsics_too() {
+    // 100 points, 10 of them 20 to 50 px off, the focal length unknown: with a Cauchy loss
+    // the pose and focal length minimise the robust cost (no focal length moved either way at
+    // the returned pose lowers it), and the focal length is closer than least squares'.
+    let camera = Camera::pinhole(900.0, 900.0, 320.0, 240.0).unwrap();
+    let loss = eopnp::Loss::Cauchy(2.0);
+    let robust_cost = |c: &Case, cam: &Camera, r: &Matrix3<f64>, t: &Vector3<f64>| -> f64 {
+        c.world
+            .iter()
+            .zip(&c.pixels)
+            .map(|(x, m)| {
+                let p = r * x.coords + t;
+                let r2 = (cam.project(Point2::new(p.x / p.z, p.y / p.z)) - m).norm_squared();
+                4.0 * (1.0 + r2 / 4.0).ln()
+            })
+            .sum()
+    };
+    let (mut closer, trials) = (0, 10u64);
+    for trial in 0..trials {
+        let mut c = case(trial_seed("intrinsics_loss", trial), &camera, 100, 0.5, 0);
+        let mut rng = rng_from_seed(trial_seed("intrinsics_loss_off", trial));
+        for m in &mut c.pixels[..10] {
+            let a = rng.random_range(0.0..std::f64::consts::TAU);
+            let d = rng.random_range(20.0..50.0);
+            *m += nalgebra::Vector2::new(d * a.cos(), d * a.sin());
+        }
+        let guess = Camera::pinhole(1170.0, 1170.0, 320.0, 240.0).unwrap();
+        let p = Problem::pixels(&c.world, &c.pixels, &guess).unknown_focal();
+        let sol = Solver::default().loss(loss).solve(&p).unwrap();
+        let est = sol.camera.unwrap();
+        let e = robust_cost(&c, &est, &sol.rotation, &sol.translation);
+        assert!(
+            (e / sol.cost - 1.0).abs() < 1e-12,
+            "trial {trial}: {e} against {}",
+            sol.cost
+        );
+        for sign in [-1.0, 1.0] {
+            let f = est.focal_lengths().0 * (1.0 + sign * 1e-6);
+            let moved = Camera::pinhole(f, f, 320.0, 240.0).unwrap();
+            let moved_cost = robust_cost(&c, &moved, &sol.rotation, &sol.translation);
+            assert!(moved_cost >= e * (1.0 - 1e-12), "trial {trial}: {sign}");
+        }
+        // The RMS residual is without the loss.
+        let sq = cost(&c, &est, &sol.rotation, &sol.translation);
+        let rmse = (sq / 100.0).sqrt() / est.focal_lengths().0;
+        assert!(
+            (sol.reprojection_rmse / rmse - 1.0).abs() < 1e-9,
+            "trial {trial}"
+        );
+        let ls = Solver::default().solve(&p).unwrap().camera.unwrap();
+        let err = |cam: &Camera| (cam.focal_lengths().0 / 900.0 - 1.0).abs();
+        closer += usize::from(err(&est) < err(&ls));
+    }
+    assert!(
+        closer >= 8,
+        "the robust focal length closer in {closer} of {trials}"
+    );
+}

@@ -29,6 +29,7 @@ use nalgebra::{Matrix3, Point2, Point3, SMatrix, SVector, Vector3};
 
 use crate::camera::{Camera, Projector, MAX_PARAMS};
 use crate::numeric::rotation::exp_so3;
+use crate::pipeline::Loss;
 
 /// The most distortion parameters of a model: those after two focal lengths and the principal
 /// point (`OPENCV_THIN_PRISM_TILTED`'s 14).
@@ -94,6 +95,9 @@ pub(crate) struct IntrinsicsInputs<'a> {
     /// that leaves it ends on its bound (a projected step), so the minimum returned is the
     /// range's.
     pub focal_range: (f64, f64),
+    /// The robust loss of each point's squared pixel residual ([`Loss::Squared`]: least
+    /// squares); the normal equations are then those of iteratively reweighted least squares.
+    pub loss: Loss,
 }
 
 /// The free parameters' layout: the pose's 6, then the free intrinsics.
@@ -192,7 +196,10 @@ fn normal(
         if !(res[0].is_finite() && res[1].is_finite()) {
             return None;
         }
-        e += w * (res[0] * res[0] + res[1] * res[1]);
+        // The loss and its IRLS weight (1 for least squares).
+        let (rho, drho) = inp.loss.eval(res[0] * res[0] + res[1] * res[1]);
+        e += w * rho;
+        let w = w * drho;
         // d pixel / d p = J_cam (1 / z) [[1, 0, -nx], [0, 1, -ny]].
         let iz = 1.0 / p.z;
         let dn = nalgebra::Matrix2x3::new(iz, 0.0, -nx * iz, 0.0, iz, -ny * iz);
@@ -429,8 +436,39 @@ pub(crate) fn refine_intrinsics(
     })
 }
 
-/// The covariance of the pose and the free intrinsics at `out` (the same normal equations, at
-/// the world's origin so that the translation is `t`'s): `sigma^2 (J^T W J)^-1` over the
+/// `inp` with the least-squares loss.
+fn squared<'a>(inp: &IntrinsicsInputs<'a>) -> IntrinsicsInputs<'a> {
+    IntrinsicsInputs {
+        world: inp.world,
+        pixels: inp.pixels,
+        weights: inp.weights,
+        free: inp.free,
+        focal_range: inp.focal_range,
+        loss: Loss::Squared,
+    }
+}
+
+/// The (weighted) sum of squared pixel residuals at `out`, without the loss (`None` if a
+/// point of weight > 0 is at depth 0).
+pub(crate) fn squared_cost(inp: &IntrinsicsInputs<'_>, out: &IntrinsicsOutcome) -> Option<f64> {
+    let inp = squared(inp);
+    let lay = Layout::new(&out.camera, inp.free);
+    let mut front = vec![false; inp.world.len()];
+    let zero = Vector3::zeros();
+    normal(
+        &inp,
+        &lay,
+        &zero,
+        (&out.r, &out.t, &out.camera),
+        &mut front,
+        true,
+    )
+    .map(|n| n.0)
+}
+
+/// The covariance of the pose and the free intrinsics at `out` (the same normal equations
+/// without the loss, as the pose's covariance with a loss is, at the world's origin so that
+/// the translation is `t`'s): `sigma^2 (J^T W J)^-1` over the
 /// layout's parameters, the noise `sigma` given or estimated as `sqrt(E / (2 n - p))` (`n` the
 /// points of weight > 0, `p` the free parameters). Returns the pose's marginal covariance
 /// of `[w, dt]` (`R = Exp(w) R_hat`), the focal length's standard deviation (pixels, the first
@@ -441,6 +479,7 @@ pub(crate) fn covariance(
     out: &IntrinsicsOutcome,
     sigma: Option<f64>,
 ) -> Option<(SMatrix<f64, 6, 6>, Option<f64>, f64)> {
+    let inp = &squared(inp);
     let lay = Layout::new(&out.camera, inp.free);
     let m = lay.len;
     let mut front = vec![false; inp.world.len()];

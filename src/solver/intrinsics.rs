@@ -20,8 +20,10 @@ use crate::covariance::{from_rotation_vector, NoiseModel};
 use crate::error::PnpError;
 use crate::numeric::p4pf::p4pf;
 use crate::pipeline::refine_intrinsics::{
-    covariance, refine_intrinsics, Free, IntrinsicsInputs, IntrinsicsOutcome, MAX_ITERATIONS,
+    covariance, refine_intrinsics, squared_cost, Free, IntrinsicsInputs, IntrinsicsOutcome,
+    MAX_ITERATIONS,
 };
+use crate::pipeline::Loss;
 use crate::pipeline::Solution;
 use crate::problem::{FocalRange, Problem};
 
@@ -176,6 +178,7 @@ impl Solver {
             weights,
             free,
             focal_range: (lo * f0, hi * f0),
+            loss: self.opts.loss,
         };
         let within = |o: &IntrinsicsOutcome| o.cost.is_finite();
         let mut best: Option<(IntrinsicsOutcome, Solution)> = None;
@@ -214,8 +217,14 @@ impl Solver {
         sol.cost = o.cost;
         let wsum = weights.map_or(sol.used as f64, |w| w.iter().filter(|x| **x > 0.0).sum());
         let (fx, fy) = o.camera.focal_lengths();
+        // The RMS residual without the loss.
+        let sq = if inputs.loss == Loss::Squared {
+            o.cost
+        } else {
+            squared_cost(&inputs, &o).unwrap_or(f64::INFINITY)
+        };
         sol.reprojection_rmse = if wsum > 0.0 {
-            (o.cost / wsum).sqrt() / fx.max(fy)
+            (sq / wsum).sqrt() / fx.max(fy)
         } else {
             f64::INFINITY
         };

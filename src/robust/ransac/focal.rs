@@ -165,6 +165,9 @@ impl Ransac {
                     ..Free::default()
                 },
                 focal_range: (lo * f0, hi * f0),
+                // The fits are least squares on the points within the threshold; the final
+                // solution has the solver's loss.
+                loss: crate::pipeline::Loss::Squared,
             };
             let start = camera.with_focal_scale(scale);
             refine_intrinsics(&inp, r, t, &start, FIT_ITERATIONS)

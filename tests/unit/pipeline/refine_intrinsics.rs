@@ -5,6 +5,7 @@
 
 use super::*;
 use crate::numeric::rotation::rotation_error_deg;
+use crate::pipeline::Loss;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
@@ -79,6 +80,7 @@ fn noise_free_problems_give_the_true_focal_length() {
             weights: None,
             free: FOCAL,
             focal_range: (0.0, f64::INFINITY),
+            loss: Loss::Squared,
         };
         let t0 = t + Vector3::new(0.1, 0.0, 0.3);
         let out = refine_intrinsics(&inp, &r0, &t0, &guess, MAX_ITERATIONS).unwrap();
@@ -146,6 +148,7 @@ fn noise_free_problems_give_the_true_principal_point_and_distortion() {
             weights: None,
             free: ALL,
             focal_range: (0.0, f64::INFINITY),
+            loss: Loss::Squared,
         };
         let r0 = exp_so3(&Vector3::new(0.01, -0.01, 0.01)) * r;
         let out = refine_intrinsics(&inp, &r0, &t, &guess, MAX_ITERATIONS).unwrap();
