@@ -56,6 +56,13 @@ fn case(seed: u64, n: usize, sigma: f64) -> Case {
     }
 }
 
+/// The camera given to the solve: `c`'s with a focal length up to a factor 2 off either way.
+fn guess(seed: u64, c: &Case) -> Camera {
+    let mut rng = rng_from_seed(seed ^ 9);
+    let f = c.f * 2f64.powf(rng.random_range(-1.0..1.0));
+    Camera::pinhole(f, f, c.c.x, c.c.y).unwrap()
+}
+
 #[test]
 fn the_solve_reaches_the_maximum_likelihood_pose_and_focal_length() {
     for &(n, trials) in &[(6usize, 200u64), (10, 200), (100, 200), (1000, 200)] {
@@ -63,10 +70,7 @@ fn the_solve_reaches_the_maximum_likelihood_pose_and_focal_length() {
         for trial in 0..trials {
             let seed = trial_seed(&format!("focal-ml-{n}"), trial);
             let c = case(seed, n, 1.0);
-            // The guess: up to a factor 2 off either way.
-            let mut rng = rng_from_seed(seed ^ 9);
-            let guess = c.f * 2f64.powf(rng.random_range(-1.0..1.0));
-            let camera = Camera::pinhole(guess, guess, c.c.x, c.c.y).unwrap();
+            let camera = guess(seed, &c);
             let sol = Solver::default()
                 .solve(&Problem::pixels(&c.world, &c.pixels, &camera).unknown_focal())
                 .unwrap_or_else(|e| panic!("N = {n} seed {seed}: {e}"));
@@ -92,9 +96,7 @@ fn noise_free_problems_give_the_focal_length() {
         for trial in 0..50u64 {
             let seed = trial_seed(&format!("focal-exact-{n}"), trial);
             let c = case(seed, n, 0.0);
-            let mut rng = rng_from_seed(seed ^ 9);
-            let guess = c.f * 2f64.powf(rng.random_range(-1.0..1.0));
-            let camera = Camera::pinhole(guess, guess, c.c.x, c.c.y).unwrap();
+            let camera = guess(seed, &c);
             let sol = Solver::default()
                 .solve(&Problem::pixels(&c.world, &c.pixels, &camera).unknown_focal())
                 .unwrap_or_else(|e| panic!("N = {n} seed {seed}: {e}"));

@@ -162,15 +162,7 @@ fn positive_roots_are_the_positive_real_roots() {
     assert!(close(positive_real_roots(&c).as_slice(), &[2.0], 1e-14));
     assert!(positive_real_roots(&from_roots(&[-1.0, -2.0, -5.0])).is_empty());
     assert!(positive_real_roots(&[1.0, 0.0, 1.0]).is_empty());
-    // A deterministic generator (splitmix64), so a failure reproduces.
-    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut next = move || {
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniform(0x9e37_79b9_7f4a_7c15_u64);
     let (mut compared, mut found) = (0, 0);
     for k in 0..20_000 {
         let degree = 1 + k % 9;
@@ -227,14 +219,7 @@ fn roots_above_are_the_real_roots_above() {
         real_roots_near_above(&from_roots(&r), 0.0, f64::NEG_INFINITY).as_slice(),
         real_roots(&from_roots(&r)).as_slice()
     );
-    let mut state = 0x2545_f491_4f6c_dd1d_u64;
-    let mut next = move || {
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniform(0x2545_f491_4f6c_dd1d_u64);
     let mut found = 0;
     for k in 0..20_000 {
         let degree = 1 + k % 9;
@@ -268,4 +253,14 @@ fn roots_above_are_the_real_roots_above() {
         found += above.len();
     }
     assert!(found > 20_000, "{found} roots");
+}
+
+/// A deterministic stream of uniform draws in [0, 1) from `seed` (SplitMix64), so that a
+/// failure reproduces.
+fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+    move || {
+        let z = eopnp_testkit::splitmix64(state);
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    }
 }
