@@ -672,8 +672,11 @@ class Registration:
             inliers, inlier_ratio, micros), or None without RANSAC.
         rotation_error_deg: rotation difference to the model's pose, degrees.
         translation_error_pct: translation difference, percent of the model's ``|t|``.
-        rmse_px: RMS pixel reprojection error of the estimated pose over the fitted points.
-        model_rmse_px: the same for the model's own pose.
+        rmse_px: RMS pixel reprojection error of the estimated pose over the fitted points
+            (through the estimated camera with ``estimate_focal``).
+        model_rmse_px: the same for the model's own pose and camera.
+        focal_error_pct: with ``estimate_focal`` (or another intrinsic refined), the estimated
+            focal length's error against the model camera's, percent; None otherwise.
         micros: wall time of undistortion plus solve, microseconds.
     """
 
@@ -714,6 +717,12 @@ class Registration:
     @property
     def model_rmse_px(self) -> float:
         """The same for the model's own pose."""
+    @property
+    def focal_error_pct(self) -> float | None:
+        """With ``estimate_focal`` (or another intrinsic refined): the estimated focal length's
+        error against the model camera's, percent (the larger of the two axes'); None
+        otherwise.
+        """
     @property
     def micros(self) -> float:
         """Wall time of undistortion plus solve, microseconds."""
@@ -1246,6 +1255,10 @@ def register_image(
     image_id: int,
     *,
     ransac: _RansacArg | bool = None,
+    estimate_focal: bool = False,
+    focal_range: tuple[float, float] | None = None,
+    refine_principal_point: bool = False,
+    refine_distortion: bool = False,
     options: _Options = None,
     refinement: _Refinement = "ml",
     planar: _Planar = "auto",
@@ -1265,6 +1278,14 @@ def register_image(
         ransac: None or False: ``solve`` on every correspondence through the image's camera;
             True (default options), a ``RansacOptions`` or a dict of its fields: robust, as
             ``solve_ransac``.
+        estimate_focal: the image's focal length is re-estimated with its pose, the model's
+            camera the starting guess (as pycolmap's ``estimate_focal_length`` and
+            ``refine_focal_length``); ``Registration.solution.camera`` holds the estimated
+            camera, ``Registration.focal_error_pct`` its error against the model's.
+        focal_range: ``(min_px, max_px)``, the range of the focal length sought (implies
+            ``estimate_focal``; default a tenth to ten times the model camera's).
+        refine_principal_point, refine_distortion: the principal point, the distortion
+            parameters refined with the pose too, as ``solve``'s.
         options: a ``SolverOptions`` (or a dict of its fields), as ``solve``: ``loss``'s scale
             and ``covariance``'s noise in pixels; ``Registration.solution.covariance`` is from
             every correspondence used, or with RANSAC from the inliers.
@@ -1278,6 +1299,7 @@ def register_image(
         UnknownIdError: no such image (or its camera is missing).
         InvalidInputError, DegenerateError, NoConsensusError, ...: as ``solve`` and
             ``solve_ransac`` on the image's correspondences.
+        InvalidOptionError: an option out of range (e.g. a bad ``focal_range``).
     """
 
 def register_images(
@@ -1285,6 +1307,10 @@ def register_images(
     image_ids: Iterable[int] | None = None,
     *,
     ransac: _RansacArg | bool = None,
+    estimate_focal: bool = False,
+    focal_range: tuple[float, float] | None = None,
+    refine_principal_point: bool = False,
+    refine_distortion: bool = False,
     options: _Options = None,
     threads: int | None = None,
     refinement: _Refinement = "ml",
@@ -1303,7 +1329,8 @@ def register_images(
     Args:
         model: a ``Model`` from ``read_colmap_model``.
         image_ids: the images (any iterable of ids), or None for every image in id order.
-        ransac, options, **keywords: as ``register_image``.
+        ransac, estimate_focal, focal_range, refine_principal_point, refine_distortion,
+        options, **keywords: as ``register_image``.
         threads: None (rayon's global pool) or the number of threads, as ``solve_batch``.
 
     Returns:

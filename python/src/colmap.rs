@@ -20,6 +20,7 @@ use crate::model_rigs::{PyFrame, PySensorRig};
 use crate::options::{solver_arg, KEYWORDS};
 use crate::ransac::ransac_arg;
 use crate::solution::PySolution;
+use crate::solve::{focal_arg, with_intrinsics};
 
 /// A COLMAP sparse reconstruction, as read by ``read_colmap_model`` (read-only).
 ///
@@ -292,8 +293,11 @@ pub(crate) fn read_colmap_model(py: Python<'_>, path: PathBuf) -> PyResult<PyMod
 ///         inliers, inlier_ratio, micros), or None without RANSAC.
 ///     rotation_error_deg: rotation difference to the model's pose, degrees.
 ///     translation_error_pct: translation difference, percent of the model's ``|t|``.
-///     rmse_px: RMS pixel reprojection error of the estimated pose over the fitted points.
-///     model_rmse_px: the same for the model's own pose.
+///     rmse_px: RMS pixel reprojection error of the estimated pose over the fitted points
+///         (through the estimated camera with ``estimate_focal``).
+///     model_rmse_px: the same for the model's own pose and camera.
+///     focal_error_pct: with ``estimate_focal`` (or another intrinsic refined), the estimated
+///         focal length's error against the model camera's, percent; None otherwise.
 ///     micros: wall time of undistortion plus solve, microseconds.
 #[pyclass(frozen, module = "eopnp", name = "Registration")]
 pub(crate) struct PyRegistration {
@@ -332,6 +336,11 @@ pub(crate) struct PyRegistration {
     /// The same for the model's own pose.
     #[pyo3(get)]
     model_rmse_px: f64,
+    /// With ``estimate_focal`` (or another intrinsic refined): the estimated focal length's
+    /// error against the model camera's, percent (the larger of the two axes'); None
+    /// otherwise.
+    #[pyo3(get)]
+    focal_error_pct: Option<f64>,
     /// Wall time of undistortion plus solve, microseconds.
     #[pyo3(get)]
     micros: f64,
@@ -367,6 +376,7 @@ impl PyRegistration {
                 self.model_rmse_px,
                 self.micros,
             ),
+            self.focal_error_pct,
         );
         Ok((rebuild, PyTuple::new(py, [state.into_pyobject(py)?])?))
     }
@@ -378,12 +388,14 @@ type RegistrationState = (
     Py<PySolution>,
     Option<Py<PyDict>>,
     (f64, f64, f64, f64, f64),
+    Option<f64>,
 );
 
 /// Rebuilds a `Registration` from `__reduce__`'s state (private; for pickle).
 #[pyfunction]
 pub(crate) fn _registration_from_state(state: RegistrationState) -> PyRegistration {
-    let ((image_id, name), (n, inliers, skipped), solution, ransac, errors) = state;
+    let ((image_id, name), (n, inliers, skipped), solution, ransac, errors, focal_error_pct) =
+        state;
     let (rotation_error_deg, translation_error_pct, rmse_px, model_rmse_px, micros) = errors;
     PyRegistration {
         image_id,
@@ -397,6 +409,7 @@ pub(crate) fn _registration_from_state(state: RegistrationState) -> PyRegistrati
         translation_error_pct,
         rmse_px,
         model_rmse_px,
+        focal_error_pct,
         micros,
     }
 }
@@ -410,6 +423,14 @@ pub(crate) fn _registration_from_state(state: RegistrationState) -> PyRegistrati
 ///     ransac: None or False: ``solve`` on every correspondence through the image's camera;
 ///         True (default options), a ``RansacOptions`` or a dict of its fields: robust, as
 ///         ``solve_ransac``.
+///     estimate_focal: the image's focal length is re-estimated with its pose, the model's
+///         camera the starting guess (as pycolmap's ``estimate_focal_length`` and
+///         ``refine_focal_length``); ``Registration.solution.camera`` holds the estimated
+///         camera, ``Registration.focal_error_pct`` its error against the model's.
+///     focal_range: ``(min_px, max_px)``, the range of the focal length sought (implies
+///         ``estimate_focal``; default a tenth to ten times the model camera's).
+///     refine_principal_point, refine_distortion: the principal point, the distortion
+///         parameters refined with the pose too, as ``solve``'s.
 ///     options: a ``SolverOptions`` (or a dict of its fields), as ``solve``: ``loss``'s scale
 ///         and ``covariance``'s noise in pixels; ``Registration.solution.covariance`` is from
 ///         every correspondence used, or with RANSAC from the inliers.
@@ -423,21 +444,36 @@ pub(crate) fn _registration_from_state(state: RegistrationState) -> PyRegistrati
 ///     UnknownIdError: no such image (or its camera is missing).
 ///     InvalidInputError, DegenerateError, NoConsensusError, ...: as ``solve`` and
 ///         ``solve_ransac`` on the image's correspondences.
+///     InvalidOptionError: an option out of range (e.g. a bad ``focal_range``).
 #[pyfunction]
-#[pyo3(signature = (model, image_id, *, ransac = None, options = None, **keywords))]
+#[pyo3(signature = (model, image_id, *, ransac = None, estimate_focal = false,
+    focal_range = None, refine_principal_point = false, refine_distortion = false,
+    options = None, **keywords))]
+// One Rust parameter per Python parameter.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn register_image(
     py: Python<'_>,
     model: &Bound<'_, PyModel>,
     image_id: u32,
     ransac: Option<&Bound<'_, PyAny>>,
+    estimate_focal: bool,
+    focal_range: Option<&Bound<'_, PyAny>>,
+    refine_principal_point: bool,
+    refine_distortion: bool,
     options: Option<&Bound<'_, PyAny>>,
     keywords: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyRegistration> {
+    let intrinsics = focal_arg(estimate_focal, focal_range)?
+        .refining(refine_principal_point, refine_distortion);
     let solver = solver_arg(py, "register_image", options, keywords, KEYWORDS)?;
     let ransac = registration_ransac(py, ransac)?;
     let m = Arc::clone(&model.get().inner);
     let reg = py
-        .detach(|| colmap::register_image(&m, image_id, &solver, ransac.as_ref()))
+        .detach(|| {
+            colmap::register_image_with(&m, image_id, &solver, ransac.as_ref(), |p| {
+                with_intrinsics(p, intrinsics)
+            })
+        })
         .map_err(|e| register_error(py, &e))?;
     to_py(py, reg)
 }
@@ -489,6 +525,7 @@ fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
         translation_error_pct: reg.translation_error_pct,
         rmse_px: reg.rmse_px,
         model_rmse_px: reg.model_rmse_px,
+        focal_error_pct: reg.focal_error_pct,
         micros: reg.micros,
     })
 }
@@ -500,7 +537,8 @@ fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
 /// Args:
 ///     model: a ``Model`` from ``read_colmap_model``.
 ///     image_ids: the images (any iterable of ids), or None for every image in id order.
-///     ransac, options, **keywords: as ``register_image``.
+///     ransac, estimate_focal, focal_range, refine_principal_point, refine_distortion,
+///     options, **keywords: as ``register_image``.
 ///     threads: None (rayon's global pool) or the number of threads, as ``solve_batch``.
 ///
 /// Returns:
@@ -512,17 +550,26 @@ fn to_py(py: Python<'_>, reg: Registration) -> PyResult<PyRegistration> {
 ///     InvalidOptionError: an option out of range or a bad ``threads``.
 ///     TypeError: as ``solve``.
 #[pyfunction]
-#[pyo3(signature = (model, image_ids = None, *, ransac = None, options = None, threads = None,
-    **keywords))]
+#[pyo3(signature = (model, image_ids = None, *, ransac = None, estimate_focal = false,
+    focal_range = None, refine_principal_point = false, refine_distortion = false,
+    options = None, threads = None, **keywords))]
+// One Rust parameter per Python parameter.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn register_images<'py>(
     py: Python<'py>,
     model: &Bound<'py, PyModel>,
     image_ids: Option<&Bound<'py, PyAny>>,
     ransac: Option<&Bound<'py, PyAny>>,
+    estimate_focal: bool,
+    focal_range: Option<&Bound<'py, PyAny>>,
+    refine_principal_point: bool,
+    refine_distortion: bool,
     options: Option<&Bound<'py, PyAny>>,
     threads: Option<i64>,
     keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let intrinsics = focal_arg(estimate_focal, focal_range)?
+        .refining(refine_principal_point, refine_distortion);
     let solver = solver_arg(py, "register_images", options, keywords, KEYWORDS)?;
     let ransac = registration_ransac(py, ransac)?;
     let m = Arc::clone(&model.get().inner);
@@ -538,7 +585,11 @@ pub(crate) fn register_images<'py>(
         ids.par_iter()
             .map_init(
                 || Registrar::new(&m),
-                |r, id| r.register(*id, &solver, ransac.as_ref()),
+                |r, id| {
+                    r.register_with(*id, &solver, ransac.as_ref(), |p| {
+                        with_intrinsics(p, intrinsics)
+                    })
+                },
             )
             .collect::<Vec<_>>()
     })?;

@@ -2,7 +2,8 @@
 //! `points3D.txt`) and binary (`cameras.bin`, `images.bin`, `points3D.bin`) formats,
 //! [`write_model`] writes either atomically (reading back gives the identical [`Model`]), and
 //! [`register_image`] re-estimates an image's pose from its 2D-3D correspondences
-//! ([`Registrar`] for many images of one model).
+//! ([`Registrar`] for many images of one model; [`register_image_with`] with a
+//! [`crate::Problem`]'s options, such as an unknown focal length).
 //!
 //! Conventions are COLMAP's: an image's pose `(q, t)` maps world to camera,
 //! `x_cam = R(q) X + t`, with `q = (qw, qx, qy, qz)` a Hamilton quaternion; pixels follow
@@ -116,7 +117,9 @@ pub use options::{Limit, ReadOptions};
 pub use pose::Pose;
 #[cfg(test)]
 pub(crate) use register::pixel_rmse;
-pub use register::{register_frame, register_image, FrameRegistration, Registrar, Registration};
+pub use register::{
+    register_frame, register_image, register_image_with, FrameRegistration, Registrar, Registration,
+};
 use rigs::Culprit;
 pub use rigs::{DataId, Frame, SensorId, SensorRig, SensorType};
 #[cfg(feature = "internals")]

@@ -42,12 +42,16 @@ pub struct Registration {
     /// Translation difference to the model's pose, percent of the model's `|t|`
     /// (`100 |t - t_model| / |t_model|`).
     pub translation_error_pct: f64,
-    /// RMS reprojection error of the estimated pose in pixels, through the full camera model,
-    /// over the correspondences it was fitted to.
+    /// RMS reprojection error of the estimated pose in pixels, through the full camera model
+    /// (the estimated camera with free intrinsics), over the correspondences it was fitted to.
     pub rmse_px: f64,
     /// RMS reprojection error of the model's own pose in pixels over the same correspondences,
     /// for comparison.
     pub model_rmse_px: f64,
+    /// With free intrinsics (an unknown focal length through [`Registrar::register_with`]):
+    /// the estimated focal length's error against the model camera's, percent (the larger of
+    /// the two axes' `100 |f - f_model| / f_model`); `None` through the model's camera.
+    pub focal_error_pct: Option<f64>,
     /// Wall time of undistortion plus solve (or RANSAC), microseconds.
     pub micros: f64,
 }
@@ -223,19 +227,51 @@ impl<'m> Registrar<'m> {
         solver: &Solver,
         ransac: Option<&Ransac>,
     ) -> Result<Registration, RegisterError> {
+        self.register_with(image_id, solver, ransac, |p| p)
+    }
+
+    /// Re-estimates the pose of image `image_id` as [`Registrar::register`] does, on the
+    /// problem that `problem` makes of the image's ([`Problem::pixels`] through its camera)
+    /// with any option a [`Problem`] takes. `|p| p.unknown_focal()` re-estimates the image's
+    /// focal length with its pose (the model's camera the starting guess, as in COLMAP;
+    /// [`Registration::focal_error_pct`] its error against the model's); others are
+    /// [`Problem::refine_distortion`], a known vertical ([`Problem::gravity`]) or weights (one
+    /// per correspondence, in the order of the image's 2D points that have a 3D point).
+    ///
+    /// ```
+    /// use eopnp::colmap::{read_model, ReadOptions, Registrar};
+    /// use eopnp::Solver;
+    ///
+    /// # let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/colmap-boxes");
+    /// let model = read_model(&dir, &ReadOptions::default())?;
+    /// let mut registrar = Registrar::new(&model);
+    /// for id in model.images.keys() {
+    ///     let reg = registrar.register_with(*id, &Solver::default(), None, |p| p.unknown_focal())?;
+    ///     assert!(reg.focal_error_pct.unwrap() < 0.01 && reg.rotation_error_deg < 0.01);
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`register_image`], and the solver's errors for the options (e.g.
+    /// [`crate::PnpError::InvalidOption`]).
+    pub fn register_with(
+        &mut self,
+        image_id: u32,
+        solver: &Solver,
+        ransac: Option<&Ransac>,
+        problem: impl for<'p> FnOnce(Problem<'p>) -> Problem<'p>,
+    ) -> Result<Registration, RegisterError> {
         let (img, cam) = self.model.image_and_camera(image_id)?;
         self.gather(img);
         let (world, pixels) = (&self.world[..], &self.pixels[..]);
 
         let start = Instant::now();
+        let problem = problem(Problem::pixels(world, pixels, cam));
         let (solution, mask, stats) = match ransac {
-            None => (
-                solver.solve(&Problem::pixels(world, pixels, cam))?,
-                None,
-                None,
-            ),
+            None => (solver.solve(&problem)?, None, None),
             Some(r) => {
-                let s = r.estimate(solver, &Problem::pixels(world, pixels, cam))?;
+                let s = r.estimate(solver, &problem)?;
                 (s.solution, Some(s.inliers), Some(s.stats))
             }
         };
@@ -249,15 +285,19 @@ impl<'m> Registrar<'m> {
         // solution reports it (`refine`'s or `refine_pixels`' last pass, through the camera:
         // `reprojection_rmse` is it divided by `max(fx, fy)`); otherwise (RANSAC's inliers, pixels
         // left out, the algebraic mode's first-order error) one pass of its own.
-        let (fx, fy) = cam.focal_lengths();
+        // The camera the pose was estimated through: the model's, or with free intrinsics the
+        // estimate.
+        let estimated = solution.camera.as_ref().unwrap_or(cam);
+        let (fx, fy) = estimated.focal_lengths();
         let rmse_px = if ransac.is_none()
             && solution.skipped == 0
             && solver.minimises() == Refinement::Reprojection
         {
             solution.reprojection_rmse * fx.max(fy)
         } else {
-            pixel_rmse(cam, world, pixels, keep, &r, &t)
+            pixel_rmse(estimated, world, pixels, keep, &r, &t)
         };
+        let focal_error_pct = solution.camera.map(|c| focal_error_pct(&c, cam));
         Ok(Registration {
             image_id,
             name: img.name.clone(),
@@ -271,10 +311,19 @@ impl<'m> Registrar<'m> {
             translation_error_pct: crate::numeric::rotation::translation_error_pct(&t, &t_ref),
             rmse_px,
             model_rmse_px: pixel_rmse(cam, world, pixels, keep, &r_ref, &t_ref),
+            focal_error_pct,
             solution,
             micros,
         })
     }
+}
+
+/// The larger of the two axes' relative focal length errors of `estimated` against `model`,
+/// percent.
+pub(crate) fn focal_error_pct(estimated: &Camera, model: &Camera) -> f64 {
+    let ((ex, ey), (mx, my)) = (estimated.focal_lengths(), model.focal_lengths());
+    let error = |e: f64, m: f64| 100.0 * (e - m).abs() / m;
+    error(ex, mx).max(error(ey, my))
 }
 
 /// `buffer` emptied, with room for `n` elements: a larger one allocated afresh when needed
@@ -307,4 +356,20 @@ pub fn register_image(
     ransac: Option<&Ransac>,
 ) -> Result<Registration, RegisterError> {
     Registrar::with_table(model, false).register(image_id, solver, ransac)
+}
+
+/// [`register_image`] of the problem that `problem` makes of the image's, as
+/// [`Registrar::register_with`] (for one image): `|p| p.unknown_focal()` re-estimates the
+/// focal length with the pose.
+///
+/// # Errors
+/// As [`Registrar::register_with`].
+pub fn register_image_with(
+    model: &Model,
+    image_id: u32,
+    solver: &Solver,
+    ransac: Option<&Ransac>,
+    problem: impl for<'p> FnOnce(Problem<'p>) -> Problem<'p>,
+) -> Result<Registration, RegisterError> {
+    Registrar::with_table(model, false).register_with(image_id, solver, ransac, problem)
 }
