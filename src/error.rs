@@ -230,6 +230,20 @@ impl fmt::Display for PnpError {
                 "an unknown focal length is estimated only for pixels through one camera \
                  (Problem::pixels), without a known vertical, within a range 0 < min < max",
             ),
+            PnpError::InvalidOption {
+                option: option @ ("refine_principal_point" | "refine_distortion"),
+            } => {
+                let what = if *option == "refine_distortion" {
+                    "the distortion parameters are"
+                } else {
+                    "the principal point is"
+                };
+                write!(
+                    f,
+                    "`{option}`: {what} refined only for pixels through one camera \
+                     (Problem::pixels), without a known vertical"
+                )
+            }
             PnpError::InvalidOption { option: "gravity" } => f.write_str(
                 "the gravity direction is out of range: its two directions must be finite and \
                  non-zero, its sigma_deg finite and > 0",

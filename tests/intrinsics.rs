@@ -260,6 +260,13 @@ fn bad_requests_are_typed_errors() {
             option: "refine_distortion"
         }
     );
+    // The message names the option and what it needs (not the RANSAC options' range message).
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with("`refine_distortion`: the distortion parameters are refined only")
+            && msg.contains("pixels through one camera"),
+        "{msg}"
+    );
     let g = Gravity::new(Vector3::y(), Vector3::y(), 0.5).unwrap();
     let e = s
         .solve(
@@ -273,6 +280,12 @@ fn bad_requests_are_typed_errors() {
         PnpError::InvalidOption {
             option: "refine_principal_point"
         }
+    );
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with("`refine_principal_point`: the principal point is refined only")
+            && msg.contains("without a known vertical"),
+        "{msg}"
     );
     // OPENCV with everything free: 6 + 1 + 2 + 4 = 13 parameters, 7 points at least.
     let p = Problem::pixels(&c.world[..6], &c.pixels[..6], &camera)

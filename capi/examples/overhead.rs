@@ -76,6 +76,8 @@ fn main() {
         unknown_focal: false,
         focal_min_px: 0.0,
         focal_max_px: 0.0,
+        refine_principal_point: false,
+        refine_distortion: false,
     };
     // SAFETY: all-zero is a valid `EopnpSolution`.
     let mut out: EopnpSolution = unsafe { std::mem::zeroed() };

@@ -37,6 +37,10 @@
 // `Solutions`).
 #define EOPNP_MAX_SOLUTIONS 32
 
+// The most parameters a camera model has (`OPENCV_THIN_PRISM_TILTED`'s 18): the length of
+// `EopnpSolution::camera_params`.
+#define EOPNP_MAX_CAMERA_PARAMS 18
+
 // The length of `EopnpCameraInfo::model`, its terminating NUL included.
 #define EOPNP_MODEL_NAME_LEN 32
 
@@ -326,9 +330,11 @@ typedef struct EopnpProblem {
   // `EOPNP_INVALID_OPTION`), with `gravity_camera`; must be 0 without it.
   double gravity_sigma_deg;
   // Pixels through `camera` only: the focal length is unknown and estimated with the pose,
-  // `camera` being the starting guess (principal point and distortion kept; its two focal
-  // lengths scaled alike). The solution's `focal_estimated`, `focal_x` and `focal_y` give it.
-  // With normalised or rig input, or with a vertical: `EOPNP_INVALID_OPTION`.
+  // `camera` being the starting guess (its two focal lengths scaled alike; the principal
+  // point and the distortion kept unless `refine_principal_point`, `refine_distortion`). The
+  // solution's `focal_estimated`, `focal_x` and `focal_y` give it, and `camera_params` the
+  // whole estimated camera. With normalised or rig input, or with a vertical:
+  // `EOPNP_INVALID_OPTION`.
   bool unknown_focal;
   // With `unknown_focal`: the range of the (first) focal length sought, pixels
   // (`0 < focal_min_px < focal_max_px`, else `EOPNP_INVALID_OPTION`). Both 0 (the
@@ -337,6 +343,22 @@ typedef struct EopnpProblem {
   double focal_min_px;
   // See `focal_min_px`.
   double focal_max_px;
+  // Pixels through `camera` only: the principal point is refined with the pose (and the focal
+  // length with `unknown_focal`), `camera`'s the starting guess (the library's
+  // `Problem::refine_principal_point`, COLMAP's `refine_principal_point`). It is well
+  // determined only by many points over a wide field of view. The solution's
+  // `camera_estimated` and `camera_params` give it. With normalised or rig input, or with a
+  // vertical: `EOPNP_INVALID_OPTION` (the message names the option); fewer correspondences
+  // than half the free parameters (pose and intrinsics): `EOPNP_TOO_FEW_POINTS`.
+  bool refine_principal_point;
+  // Pixels through `camera` only: the camera's distortion parameters (those after the
+  // principal point in its COLMAP order, `eopnp_camera_params`; none for the pinhole models)
+  // are refined with the pose (and the focal length with `unknown_focal`), `camera`'s the
+  // starting guess (the library's `Problem::refine_distortion`, COLMAP's
+  // `refine_extra_params`). The solution's `camera_estimated` and `camera_params` give them.
+  // With normalised or rig input, or with a vertical: `EOPNP_INVALID_OPTION` (the message
+  // names the option); too few correspondences: `EOPNP_TOO_FEW_POINTS`.
+  bool refine_distortion;
 } EopnpProblem;
 
 // A solved pose and how it was found: the library's `Solution`. Written by the solve
@@ -383,7 +405,8 @@ typedef struct EopnpSolution {
   // and the normal equations positive definite).
   bool has_covariance;
   // The focal length was estimated (`EopnpProblem::unknown_focal`): `focal_x`, `focal_y`
-  // hold it.
+  // hold it (`camera_estimated` is then true too, and `camera_params` holds the same focal
+  // lengths). Not set by `refine_principal_point` or `refine_distortion` alone.
   bool focal_estimated;
   // With `focal_estimated`: the estimated focal length along x, pixels; 0 otherwise.
   double focal_x;
@@ -393,6 +416,20 @@ typedef struct EopnpSolution {
   // With `focal_estimated` and `has_covariance`: the estimated focal length's standard
   // deviation, pixels (`covariance` is then the pose's marginal covariance); 0 otherwise.
   double focal_sigma;
+  // An intrinsic was free (`EopnpProblem::unknown_focal`, `refine_principal_point` or
+  // `refine_distortion`): `camera_n_params` and `camera_params` hold the estimated camera
+  // (the library's `Solution::camera`). With `refine_principal_point` or `refine_distortion`
+  // alone, `focal_estimated` stays false and the focal lengths in `camera_params` are the
+  // given camera's.
+  bool camera_estimated;
+  // With `camera_estimated`: the number of the estimated camera's parameters, its model's
+  // (the given camera's model; at most `EOPNP_MAX_CAMERA_PARAMS`); 0 otherwise.
+  uint32_t camera_n_params;
+  // With `camera_estimated`: the estimated camera's parameters in its model's COLMAP order
+  // (as `eopnp_camera_params` gives them, e.g. OPENCV's `fx, fy, cx, cy, k1, k2, p1, p2`):
+  // the given camera with the free intrinsics replaced by their estimates; zeros after the
+  // first `camera_n_params`, and all zeros without `camera_estimated`.
+  double camera_params[EOPNP_MAX_CAMERA_PARAMS];
 } EopnpSolution;
 
 // Statistics of a RANSAC run (the library's `RansacStats`).

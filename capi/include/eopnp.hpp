@@ -362,11 +362,29 @@ class Problem {
   /// Pixels through a camera only: the focal length is unknown and estimated with the pose, the
   /// camera's being the starting guess; sought between a tenth and ten times it, or between
   /// `min_px` and `max_px` (0 < min_px < max_px). The solution's focal_estimated, focal_x and
-  /// focal_y give it (estimated_focal()). Not with a vertical (InvalidOptionError).
+  /// focal_y give it (estimated_focal()), and camera_params the whole camera
+  /// (estimated_camera_params()). Not with a vertical (InvalidOptionError).
   Problem& unknown_focal(double min_px = 0.0, double max_px = 0.0) {
     p_.unknown_focal = true;
     p_.focal_min_px = min_px;
     p_.focal_max_px = max_px;
+    return *this;
+  }
+  /// Pixels through a camera only: the principal point is refined with the pose (and the focal
+  /// length with unknown_focal()), the camera's being the starting guess (COLMAP's
+  /// refine_principal_point; well determined only by many points over a wide field of view).
+  /// estimated_camera_params() gives it. With normalised or rig input, or a vertical:
+  /// InvalidOptionError.
+  Problem& refine_principal_point() {
+    p_.refine_principal_point = true;
+    return *this;
+  }
+  /// Pixels through a camera only: the camera's distortion parameters (those after the
+  /// principal point; none for the pinhole models) are refined with the pose, the camera's
+  /// being the starting guess (COLMAP's refine_extra_params). estimated_camera_params() gives
+  /// them. With normalised or rig input, or a vertical: InvalidOptionError.
+  Problem& refine_distortion() {
+    p_.refine_distortion = true;
     return *this;
   }
   /// The number of correspondences.
@@ -411,10 +429,21 @@ class Problem {
 };
 
 /// The focal lengths (fx, fy) a solution estimated (Problem::unknown_focal), or nothing when
-/// the focal length was known.
+/// the focal length was known (also with only the principal point or the distortion refined).
 inline std::optional<std::array<double, 2>> estimated_focal(const Solution& s) {
   if (!s.focal_estimated) return std::nullopt;
   return std::array<double, 2>{s.focal_x, s.focal_y};
+}
+
+/// The parameters of the camera a solution estimated (Problem::unknown_focal,
+/// refine_principal_point, refine_distortion), in the given camera's model's COLMAP order (as
+/// Camera::params() gives them): the given camera with the free intrinsics replaced; nothing
+/// when no intrinsic was free.
+inline std::optional<std::vector<double>> estimated_camera_params(const Solution& s) {
+  if (!s.camera_estimated) return std::nullopt;
+  const std::size_t n =
+      std::min<std::size_t>(s.camera_n_params, static_cast<std::size_t>(EOPNP_MAX_CAMERA_PARAMS));
+  return std::vector<double>(s.camera_params, s.camera_params + n);
 }
 
 // -------------------------------------------------------------------------------------------

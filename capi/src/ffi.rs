@@ -185,6 +185,10 @@ struct Inputs<'a> {
     gravity: Option<Gravity>,
     /// The focal length is unknown: in the default range (`None`) or in `(min_px, max_px)`.
     unknown_focal: Option<Option<(f64, f64)>>,
+    /// The principal point is refined (`EopnpProblem::refine_principal_point`).
+    refine_principal_point: bool,
+    /// The distortion parameters are refined (`EopnpProblem::refine_distortion`).
+    refine_distortion: bool,
 }
 
 /// The known vertical of a problem: `None` without one; `EOPNP_INVALID_ARGUMENT` for a half-set
@@ -277,6 +281,8 @@ impl<'a> Inputs<'a> {
             focal,
             gravity,
             unknown_focal,
+            refine_principal_point: p.refine_principal_point,
+            refine_distortion: p.refine_distortion,
         })
     }
 
@@ -295,11 +301,25 @@ impl<'a> Inputs<'a> {
         if let Some(g) = self.gravity {
             problem = problem.gravity(g);
         }
-        match self.unknown_focal {
+        problem = match self.unknown_focal {
             Some(Some((lo, hi))) => problem.unknown_focal_within(lo, hi),
             Some(None) => problem.unknown_focal(),
             None => problem,
+        };
+        // The library checks the input these need (pixels through one camera, no vertical):
+        // `InvalidOption` naming the option otherwise.
+        if self.refine_principal_point {
+            problem = problem.refine_principal_point();
         }
+        if self.refine_distortion {
+            problem = problem.refine_distortion();
+        }
+        problem
+    }
+
+    /// A solution of this problem for C (`focal_estimated` with an unknown focal length).
+    fn solution(&self, s: &eopnp::Solution) -> EopnpSolution {
+        EopnpSolution::of(s, self.unknown_focal.is_some())
     }
 
     fn n(&self) -> usize {
@@ -1106,7 +1126,7 @@ pub unsafe extern "C" fn eopnp_solve(
         let inputs = Inputs::new(get(problem, "problem")?)?;
         let out = get_mut(out, "out")?;
         let sol = solver.solve(&inputs.problem())?;
-        *out = EopnpSolution::from(&sol);
+        *out = inputs.solution(&sol);
         Ok(())
     })
 }
@@ -1140,7 +1160,7 @@ pub unsafe extern "C" fn eopnp_solve_all(
         let all = solver.solve_all(&inputs.problem())?;
         *count = all.len();
         for (o, s) in out.iter_mut().zip(all.iter()) {
-            *o = EopnpSolution::from(s);
+            *o = inputs.solution(s);
         }
         if all.len() > capacity {
             return Err(Failure::new(
@@ -1175,7 +1195,7 @@ pub unsafe extern "C" fn eopnp_refine(
         let initial = isometry(get(initial, "initial")?, "initial")?;
         let out = get_mut(out, "out")?;
         let sol = solver.refine(&inputs.problem(), &initial)?;
-        *out = EopnpSolution::from(&sol);
+        *out = inputs.solution(&sol);
         Ok(())
     })
 }
@@ -1220,7 +1240,7 @@ pub unsafe extern "C" fn eopnp_ransac_estimate(
             Some(get_mut(stats, "stats")?)
         };
         let r = ransac.estimate(solver, &inputs.problem())?;
-        *out = EopnpSolution::from(&r.solution);
+        *out = inputs.solution(&r.solution);
         if let Some(mask) = mask {
             write_mask(mask, &r.inliers);
         }
@@ -1267,17 +1287,17 @@ pub unsafe extern "C" fn eopnp_solve_batch(
                 }
             })
             .collect();
-        let valid: Vec<(usize, Problem<'_>)> = inputs
+        let valid: Vec<(usize, &Inputs<'_>, Problem<'_>)> = inputs
             .iter()
             .enumerate()
-            .filter_map(|(i, x)| x.as_ref().map(|x| (i, x.problem())))
+            .filter_map(|(i, x)| x.as_ref().map(|x| (i, x, x.problem())))
             .collect();
-        let just: Vec<Problem<'_>> = valid.iter().map(|(_, p)| *p).collect();
+        let just: Vec<Problem<'_>> = valid.iter().map(|(_, _, p)| *p).collect();
         let results = run_in(threads, || solver.solve_batch(&just))?;
-        for ((i, _), r) in valid.iter().zip(results) {
+        for ((i, x, _), r) in valid.iter().zip(results) {
             match r {
                 Ok(s) => {
-                    out[*i] = EopnpSolution::from(&s);
+                    out[*i] = x.solution(&s);
                     statuses[*i] = OK;
                 }
                 Err(e) => failures.push((*i, e.into())),
@@ -1352,24 +1372,24 @@ pub unsafe extern "C" fn eopnp_ransac_batch(
         // The library's batch seeds problem `i` of its slice with `problem_seed(seed, i)`: with
         // invalid problems left out, the indices would shift; so each valid problem is run
         // with its own index's seed here (what `estimate_batch` does for a full slice).
-        let jobs: Vec<(usize, Problem<'_>)> = valid_inputs
+        let jobs: Vec<(usize, &Inputs<'_>, Problem<'_>)> = valid_inputs
             .iter()
-            .map(|(i, x)| (*i, x.problem()))
+            .map(|(i, x)| (*i, x, x.problem()))
             .collect();
         let results = run_in(threads, || {
             use rayon::prelude::*;
             jobs.par_iter()
-                .map(|(i, p)| {
+                .map(|(i, _, p)| {
                     ransac
                         .seed(eopnp::ransac::problem_seed(ransac.seed, *i))
                         .estimate(solver, p)
                 })
                 .collect::<Vec<_>>()
         })?;
-        for (((i, _), r), mask) in jobs.iter().zip(results).zip(valid_masks) {
+        for (((i, x, _), r), mask) in jobs.iter().zip(results).zip(valid_masks) {
             match r {
                 Ok(r) => {
-                    out[*i] = EopnpSolution::from(&r.solution);
+                    out[*i] = x.solution(&r.solution);
                     statuses[*i] = OK;
                     if let Some(m) = mask {
                         write_mask(m, &r.inliers);
@@ -1499,7 +1519,8 @@ fn registration(r: &Registration) -> EopnpRegistration {
         n: r.n as u64,
         inliers: r.inliers as u64,
         skipped: r.skipped as u64,
-        solution: EopnpSolution::from(&r.solution),
+        // Registration solves through the model's cameras: no intrinsic is free.
+        solution: EopnpSolution::of(&r.solution, false),
         ransac: r
             .ransac
             .as_ref()
@@ -1641,7 +1662,8 @@ fn frame_registration(r: &FrameRegistration) -> EopnpFrameRegistration {
         n: r.n as u64,
         inliers: r.inliers as u64,
         skipped: r.skipped as u64,
-        solution: EopnpSolution::from(&r.solution),
+        // Registration solves through the model's cameras: no intrinsic is free.
+        solution: EopnpSolution::of(&r.solution, false),
         ransac: r
             .ransac
             .as_ref()

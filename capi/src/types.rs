@@ -9,6 +9,12 @@ use eopnp::{CandidateSource, Solution};
 /// `Solutions`).
 pub const EOPNP_MAX_SOLUTIONS: usize = 32;
 
+/// The most parameters a camera model has (`OPENCV_THIN_PRISM_TILTED`'s 18): the length of
+/// `EopnpSolution::camera_params`.
+// The library's `camera::MAX_PARAMS`, which it does not export; the test
+// `max_camera_params_is_the_largest_model` (tests/focal_gravity.rs) checks it against the models.
+pub const EOPNP_MAX_CAMERA_PARAMS: usize = 18;
+
 /// Which cost the returned pose minimises (`eopnp_solver_set_refinement`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -142,9 +148,11 @@ pub struct EopnpProblem {
     /// `EOPNP_INVALID_OPTION`), with `gravity_camera`; must be 0 without it.
     pub gravity_sigma_deg: f64,
     /// Pixels through `camera` only: the focal length is unknown and estimated with the pose,
-    /// `camera` being the starting guess (principal point and distortion kept; its two focal
-    /// lengths scaled alike). The solution's `focal_estimated`, `focal_x` and `focal_y` give it.
-    /// With normalised or rig input, or with a vertical: `EOPNP_INVALID_OPTION`.
+    /// `camera` being the starting guess (its two focal lengths scaled alike; the principal
+    /// point and the distortion kept unless `refine_principal_point`, `refine_distortion`). The
+    /// solution's `focal_estimated`, `focal_x` and `focal_y` give it, and `camera_params` the
+    /// whole estimated camera. With normalised or rig input, or with a vertical:
+    /// `EOPNP_INVALID_OPTION`.
     pub unknown_focal: bool,
     /// With `unknown_focal`: the range of the (first) focal length sought, pixels
     /// (`0 < focal_min_px < focal_max_px`, else `EOPNP_INVALID_OPTION`). Both 0 (the
@@ -153,6 +161,22 @@ pub struct EopnpProblem {
     pub focal_min_px: f64,
     /// See `focal_min_px`.
     pub focal_max_px: f64,
+    /// Pixels through `camera` only: the principal point is refined with the pose (and the focal
+    /// length with `unknown_focal`), `camera`'s the starting guess (the library's
+    /// `Problem::refine_principal_point`, COLMAP's `refine_principal_point`). It is well
+    /// determined only by many points over a wide field of view. The solution's
+    /// `camera_estimated` and `camera_params` give it. With normalised or rig input, or with a
+    /// vertical: `EOPNP_INVALID_OPTION` (the message names the option); fewer correspondences
+    /// than half the free parameters (pose and intrinsics): `EOPNP_TOO_FEW_POINTS`.
+    pub refine_principal_point: bool,
+    /// Pixels through `camera` only: the camera's distortion parameters (those after the
+    /// principal point in its COLMAP order, `eopnp_camera_params`; none for the pinhole models)
+    /// are refined with the pose (and the focal length with `unknown_focal`), `camera`'s the
+    /// starting guess (the library's `Problem::refine_distortion`, COLMAP's
+    /// `refine_extra_params`). The solution's `camera_estimated` and `camera_params` give them.
+    /// With normalised or rig input, or with a vertical: `EOPNP_INVALID_OPTION` (the message
+    /// names the option); too few correspondences: `EOPNP_TOO_FEW_POINTS`.
+    pub refine_distortion: bool,
 }
 
 /// A pose `x_cam = R X + t` (world to camera), the input of `eopnp_refine` (a prior pose).
@@ -212,7 +236,8 @@ pub struct EopnpSolution {
     /// and the normal equations positive definite).
     pub has_covariance: bool,
     /// The focal length was estimated (`EopnpProblem::unknown_focal`): `focal_x`, `focal_y`
-    /// hold it.
+    /// hold it (`camera_estimated` is then true too, and `camera_params` holds the same focal
+    /// lengths). Not set by `refine_principal_point` or `refine_distortion` alone.
     pub focal_estimated: bool,
     /// With `focal_estimated`: the estimated focal length along x, pixels; 0 otherwise.
     pub focal_x: f64,
@@ -222,6 +247,20 @@ pub struct EopnpSolution {
     /// With `focal_estimated` and `has_covariance`: the estimated focal length's standard
     /// deviation, pixels (`covariance` is then the pose's marginal covariance); 0 otherwise.
     pub focal_sigma: f64,
+    /// An intrinsic was free (`EopnpProblem::unknown_focal`, `refine_principal_point` or
+    /// `refine_distortion`): `camera_n_params` and `camera_params` hold the estimated camera
+    /// (the library's `Solution::camera`). With `refine_principal_point` or `refine_distortion`
+    /// alone, `focal_estimated` stays false and the focal lengths in `camera_params` are the
+    /// given camera's.
+    pub camera_estimated: bool,
+    /// With `camera_estimated`: the number of the estimated camera's parameters, its model's
+    /// (the given camera's model; at most `EOPNP_MAX_CAMERA_PARAMS`); 0 otherwise.
+    pub camera_n_params: u32,
+    /// With `camera_estimated`: the estimated camera's parameters in its model's COLMAP order
+    /// (as `eopnp_camera_params` gives them, e.g. OPENCV's `fx, fy, cx, cy, k1, k2, p1, p2`):
+    /// the given camera with the free intrinsics replaced by their estimates; zeros after the
+    /// first `camera_n_params`, and all zeros without `camera_estimated`.
+    pub camera_params: [f64; EOPNP_MAX_CAMERA_PARAMS],
 }
 
 /// Statistics of a RANSAC run (the library's `RansacStats`).
@@ -337,14 +376,34 @@ fn to_u64(x: usize) -> u64 {
     u64::try_from(x).unwrap_or(u64::MAX)
 }
 
-/// The focal lengths `(fx, fy)` a solution estimated (an unknown focal length), `None` when the
-/// focal length was known. The one place this interface reads them from a solution.
-pub(crate) fn estimated_focal(s: &Solution) -> Option<(f64, f64)> {
-    s.camera.map(|c| c.focal_lengths())
+/// The focal lengths `(fx, fy)` a solution estimated (`focal_free`: its problem's focal length
+/// was unknown), `None` when the focal length was known (the solution's camera, if it has one,
+/// then has the given camera's). The one place this interface reads them from a solution.
+pub(crate) fn estimated_focal(s: &Solution, focal_free: bool) -> Option<(f64, f64)> {
+    s.camera.filter(|_| focal_free).map(|c| c.focal_lengths())
 }
 
-impl From<&Solution> for EopnpSolution {
-    fn from(s: &Solution) -> Self {
+/// The estimated camera of a solution (`EopnpSolution::camera_n_params`, `camera_params`):
+/// `(0, zeros)` without one.
+fn estimated_camera(s: &Solution) -> (u32, [f64; EOPNP_MAX_CAMERA_PARAMS]) {
+    let mut params = [0.0; EOPNP_MAX_CAMERA_PARAMS];
+    let Some(camera) = &s.camera else {
+        return (0, params);
+    };
+    // No model has more parameters than `EOPNP_MAX_CAMERA_PARAMS` (the test
+    // `max_camera_params_is_the_largest_model`, tests/focal_gravity.rs); the count written is
+    // the count copied, so that a C reader never reads past the array whatever the library adds.
+    let given = camera.params();
+    let n = given.len().min(EOPNP_MAX_CAMERA_PARAMS);
+    params[..n].copy_from_slice(&given[..n]);
+    (n as u32, params)
+}
+
+impl EopnpSolution {
+    /// `s` for C. `focal_free`: the problem's focal length was unknown
+    /// (`EopnpProblem::unknown_focal`), which `focal_estimated` reports; a solution does not
+    /// say which of its camera's intrinsics were free.
+    pub(crate) fn of(s: &Solution, focal_free: bool) -> Self {
         let mut rotation = [0.0; 9];
         for r in 0..3 {
             for c in 0..3 {
@@ -360,7 +419,8 @@ impl From<&Solution> for EopnpSolution {
             }
             covariance_sigma = cov.sigma;
         }
-        let focal = estimated_focal(s);
+        let focal = estimated_focal(s, focal_free);
+        let (camera_n_params, camera_params) = estimated_camera(s);
         EopnpSolution {
             rotation,
             translation: [s.translation.x, s.translation.y, s.translation.z],
@@ -383,6 +443,9 @@ impl From<&Solution> for EopnpSolution {
             focal_x: focal.map_or(0.0, |f| f.0),
             focal_y: focal.map_or(0.0, |f| f.1),
             focal_sigma: s.covariance.and_then(|c| c.focal_sigma).unwrap_or(0.0),
+            camera_estimated: s.camera.is_some(),
+            camera_n_params,
+            camera_params,
         }
     }
 }

@@ -45,8 +45,14 @@ fn assert_same(c: &EopnpSolution, s: &Solution) {
         (s.cheirality_ok, s.degenerate, s.planar, s.converged)
     );
     assert_eq!(c.has_covariance, s.covariance.is_some());
-    // Only the focal_gravity tests estimate a focal length: here none is.
+    // Only the focal_gravity tests estimate intrinsics: here none is.
     assert!(!c.focal_estimated && c.focal_x == 0.0 && c.focal_y == 0.0);
+    assert!(s.camera.is_none());
+    assert!(!c.camera_estimated && c.camera_n_params == 0);
+    assert_eq!(
+        bits(&c.camera_params),
+        bits(&[0.0; EOPNP_MAX_CAMERA_PARAMS])
+    );
     if let Some(cov) = &s.covariance {
         let mut m = [0.0; 36];
         for i in 0..6 {
@@ -83,6 +89,8 @@ fn problem(world: &[f64], image: &[f64], n: usize) -> EopnpProblem {
         unknown_focal: false,
         focal_min_px: 0.0,
         focal_max_px: 0.0,
+        refine_principal_point: false,
+        refine_distortion: false,
     }
 }
 

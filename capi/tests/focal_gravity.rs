@@ -1,7 +1,9 @@
-//! The known vertical (`EopnpProblem::gravity_*`) and the unknown focal length
-//! (`EopnpProblem::unknown_focal`, `focal_min_px`, `focal_max_px`) through the exported
-//! functions: the library's results bit for bit, a focal length recovered from a wrong guess,
-//! `EOPNP_GRAVITY_MISMATCH` with its message, and every bad combination's status.
+//! The known vertical (`EopnpProblem::gravity_*`), the unknown focal length
+//! (`EopnpProblem::unknown_focal`, `focal_min_px`, `focal_max_px`) and the refined principal
+//! point and distortion (`refine_principal_point`, `refine_distortion`; the solution's
+//! `camera_*`) through the exported functions: the library's results bit for bit, a focal
+//! length and a camera recovered from a wrong guess, `EOPNP_GRAVITY_MISMATCH` with its message,
+//! and every bad combination's status.
 
 #[path = "support/problems.rs"]
 mod problems;
@@ -9,12 +11,12 @@ mod problems;
 use std::ffi::CStr;
 use std::ptr;
 
-use eopnp::camera::Camera;
+use eopnp::camera::{Camera, CameraModel, SUPPORTED_MODELS};
 use eopnp::ransac::Ransac;
 use eopnp::{Gravity, Problem, Solver};
 use eopnp_capi::*;
-use nalgebra::{Point2, Rotation3, Vector3};
-use problems::{flat2, flat3, synthetic, Synthetic};
+use nalgebra::{Point2, Point3, Rotation3, Vector3};
+use problems::{flat2, flat3, synthetic, Lcg, Synthetic};
 
 /// The focal lengths the library estimated (the one place this test reads them).
 fn lib_focal(s: &eopnp::Solution) -> (f64, f64) {
@@ -368,4 +370,426 @@ fn bad_verticals_and_focal_options_have_their_status() {
         EopnpStatus::EOPNP_INVALID_OPTION,
         "unknown focal length",
     );
+}
+
+// ---------------------------------------------------------------------------------------------
+// The refined principal point and distortion.
+
+fn bits(x: &[f64]) -> Vec<u64> {
+    x.iter().map(|v| v.to_bits()).collect()
+}
+
+/// A solution whose every field the solve must overwrite: NaNs, `true`s and a count past the
+/// array, so that a field left unwritten fails the comparisons.
+fn garbage_solution() -> EopnpSolution {
+    let mut s = zeroed_solution();
+    s.focal_estimated = true;
+    s.focal_x = f64::NAN;
+    s.focal_y = f64::NAN;
+    s.camera_estimated = true;
+    s.camera_n_params = 99;
+    s.camera_params = [f64::NAN; EOPNP_MAX_CAMERA_PARAMS];
+    s
+}
+
+/// The interface's solution has the library's pose, cost and estimated camera, bit for bit;
+/// `focal_free`: the focal length was unknown.
+fn assert_librarys(c: &EopnpSolution, lib: &eopnp::Solution, focal_free: bool) {
+    let r: Vec<f64> = (0..9).map(|k| lib.rotation[(k / 3, k % 3)]).collect();
+    assert_eq!(bits(&c.rotation), bits(&r), "rotation");
+    assert_eq!(bits(&c.translation), bits(lib.translation.as_slice()));
+    assert_eq!(c.cost.to_bits(), lib.cost.to_bits(), "cost");
+    assert_eq!(
+        c.reprojection_rmse.to_bits(),
+        lib.reprojection_rmse.to_bits()
+    );
+    let cam = lib.camera.expect("an estimated camera");
+    assert!(c.camera_estimated);
+    assert_eq!(c.camera_n_params as usize, cam.params().len());
+    let mut want = [0.0; EOPNP_MAX_CAMERA_PARAMS];
+    want[..cam.params().len()].copy_from_slice(cam.params());
+    assert_eq!(bits(&c.camera_params), bits(&want), "camera_params");
+    assert_eq!(c.focal_estimated, focal_free);
+    let (fx, fy) = if focal_free {
+        cam.focal_lengths()
+    } else {
+        (0.0, 0.0)
+    };
+    assert_eq!(
+        (c.focal_x.to_bits(), c.focal_y.to_bits()),
+        (fx.to_bits(), fy.to_bits())
+    );
+}
+
+/// A noise-free problem of `n` points over the whole 640 x 480 image of `truth`, 2 to 10 units
+/// away, at a random pose: world points and pixels.
+fn wide_problem(seed: u64, truth: &Camera, n: usize) -> (Vec<Point3<f64>>, Vec<Point2<f64>>) {
+    let mut g = Lcg(seed);
+    let r =
+        Rotation3::from_euler_angles(g.range(-3.0, 3.0), g.range(-1.5, 1.5), g.range(-3.0, 3.0));
+    let t = Vector3::new(g.range(-1.0, 1.0), g.range(-1.0, 1.0), g.range(-1.0, 1.0));
+    let (mut world, mut pixels) = (Vec::new(), Vec::new());
+    for _ in 0..n {
+        let px = Point2::new(g.range(0.0, 640.0), g.range(0.0, 480.0));
+        let z = g.range(2.0, 10.0);
+        let m = truth
+            .undistort(px)
+            .expect("a mild distortion undistorts everywhere");
+        world.push(Point3::from(
+            r.inverse() * (Vector3::new(m.x * z, m.y * z, z) - t),
+        ));
+        // The pixel of the point as the camera projects it (not `px`, which undistortion only
+        // reaches to its tolerance): the problem is exact.
+        pixels.push(truth.project(m));
+    }
+    (world, pixels)
+}
+
+/// `truth` with its principal point moved by (7, -5) px, no distortion and its focal lengths
+/// scaled by `scale`: the starting guess.
+fn perturbed(truth: &Camera, scale: f64) -> Camera {
+    let mut p = truth.params().to_vec();
+    let pp = if truth.model() == CameraModel::SimpleRadial {
+        1
+    } else {
+        2
+    };
+    p[pp] += 7.0;
+    p[pp + 1] -= 5.0;
+    p[pp + 2..].iter_mut().for_each(|k| *k = 0.0);
+    p[..pp].iter_mut().for_each(|f| *f *= scale);
+    Camera::from_colmap(truth.model().name(), 640, 480, p).unwrap()
+}
+
+/// A camera handle of the interface with `camera`'s model and parameters.
+fn c_camera(camera: &Camera) -> *mut EopnpCamera {
+    let name = std::ffi::CString::new(camera.model().name()).unwrap();
+    let params = camera.params();
+    let mut out = ptr::null_mut();
+    // SAFETY: a NUL-terminated name, `params.len()` doubles, a valid out-pointer.
+    let status = unsafe {
+        eopnp_camera_from_colmap(
+            name.as_ptr(),
+            640,
+            480,
+            params.as_ptr(),
+            params.len(),
+            &mut out,
+        )
+    };
+    assert_eq!(status, EopnpStatus::EOPNP_OK, "{}", message());
+    out
+}
+
+#[test]
+fn max_camera_params_is_the_largest_model() {
+    // Every model of the library: COLMAP's and its own full OpenCV model.
+    let counts: Vec<usize> = SUPPORTED_MODELS
+        .iter()
+        .chain([&CameraModel::OpenCvThinPrismTilted])
+        .map(|m| m.num_params())
+        .collect();
+    assert_eq!(counts.iter().max(), Some(&EOPNP_MAX_CAMERA_PARAMS));
+    assert_eq!(
+        std::mem::size_of_val(&zeroed_solution().camera_params),
+        EOPNP_MAX_CAMERA_PARAMS * 8
+    );
+}
+
+#[test]
+fn refined_principal_point_and_distortion_are_the_librarys_and_the_truth() {
+    let cameras = [
+        problems::opencv_camera(),
+        Camera::from_colmap("SIMPLE_RADIAL", 640, 480, vec![500.0, 318.0, 243.0, -0.08]).unwrap(),
+    ];
+    for (k, truth) in cameras.iter().enumerate() {
+        for focal_free in [false, true] {
+            let (world, pixels) = wide_problem(40 + k as u64, truth, 50);
+            let guess = perturbed(truth, if focal_free { 1.3 } else { 1.0 });
+            let (w, m) = (flat3(&world), flat2(&pixels));
+            let h = Handles::new(800.0);
+            let cam = c_camera(&guess);
+            let mut p = zeroed_problem();
+            p.n = world.len();
+            p.world = w.as_ptr();
+            p.image = m.as_ptr();
+            p.camera = cam;
+            p.unknown_focal = focal_free;
+            let case = format!("{} focal_free {focal_free}", truth.model().name());
+            // Nothing refined but maybe the focal length: the camera fields say so.
+            if !focal_free {
+                let mut s = garbage_solution();
+                // SAFETY: live handles, arrays of `n`.
+                let status = unsafe { eopnp_solve(h.solver, &p, &mut s) };
+                assert_eq!(status, EopnpStatus::EOPNP_OK, "{case}: {}", message());
+                assert!(!s.camera_estimated && s.camera_n_params == 0, "{case}");
+                assert_eq!(
+                    bits(&s.camera_params),
+                    bits(&[0.0; EOPNP_MAX_CAMERA_PARAMS])
+                );
+                assert!(!s.focal_estimated && s.focal_x == 0.0 && s.focal_y == 0.0);
+                // The guess does not fit: a refinement has something to do.
+                assert!(s.cost > 1.0, "{case}: {}", s.cost);
+            }
+            p.refine_principal_point = true;
+            p.refine_distortion = true;
+            let mut s = garbage_solution();
+            // SAFETY: as above.
+            let status = unsafe { eopnp_solve(h.solver, &p, &mut s) };
+            assert_eq!(status, EopnpStatus::EOPNP_OK, "{case}: {}", message());
+            let mut problem = Problem::pixels(&world, &pixels, &guess)
+                .refine_principal_point()
+                .refine_distortion();
+            if focal_free {
+                problem = problem.unknown_focal();
+            }
+            let lib = Solver::default().solve(&problem).unwrap();
+            assert_librarys(&s, &lib, focal_free);
+            // The truth, from the perturbed guess.
+            let n = truth.params().len();
+            assert_eq!(s.camera_n_params as usize, n, "{case}");
+            for (j, (a, b)) in s.camera_params[..n].iter().zip(truth.params()).enumerate() {
+                assert!(
+                    (a - b).abs() <= 1e-6 * b.abs().max(1.0),
+                    "{case}: parameter {j}: {a} against {b}"
+                );
+            }
+            assert!(s.cost < 1e-12, "{case}: {}", s.cost);
+            // RANSAC and the batch write the same fields.
+            let mut ransac = ptr::null_mut();
+            let mut r = garbage_solution();
+            // SAFETY: live handles; NULL mask and statistics.
+            unsafe {
+                assert_eq!(eopnp_ransac_create(&mut ransac), EopnpStatus::EOPNP_OK);
+                let status = eopnp_ransac_estimate(
+                    ransac,
+                    h.solver,
+                    &p,
+                    &mut r,
+                    ptr::null_mut(),
+                    ptr::null_mut(),
+                );
+                eopnp_ransac_free(ransac);
+                assert_eq!(status, EopnpStatus::EOPNP_OK, "{case}: {}", message());
+            }
+            let lib = Ransac::default()
+                .estimate(&Solver::default(), &problem)
+                .unwrap();
+            assert_librarys(&r, &lib.solution, focal_free);
+            let mut plain = p;
+            plain.refine_principal_point = false;
+            plain.refine_distortion = false;
+            plain.unknown_focal = false;
+            let batch = [p, plain];
+            let mut out = [garbage_solution(), garbage_solution()];
+            let mut statuses = [EopnpStatus::EOPNP_PANIC; 2];
+            // SAFETY: 2 problems, 2 solutions, 2 statuses.
+            let status = unsafe {
+                eopnp_solve_batch(
+                    h.solver,
+                    batch.as_ptr(),
+                    2,
+                    1,
+                    out.as_mut_ptr(),
+                    statuses.as_mut_ptr(),
+                )
+            };
+            assert_eq!(status, EopnpStatus::EOPNP_OK, "{case}: {}", message());
+            assert_eq!(bits(&out[0].camera_params), bits(&s.camera_params));
+            assert_eq!(out[0].focal_estimated, focal_free);
+            assert!(out[0].camera_estimated && !out[1].camera_estimated);
+            assert!(!out[1].focal_estimated && out[1].camera_n_params == 0);
+            let mut out = [garbage_solution(), garbage_solution()];
+            // SAFETY: live handles; 2 problems, 2 solutions, 2 statuses; no masks or statistics.
+            unsafe {
+                assert_eq!(eopnp_ransac_create(&mut ransac), EopnpStatus::EOPNP_OK);
+                let status = eopnp_ransac_batch(
+                    ransac,
+                    h.solver,
+                    batch.as_ptr(),
+                    2,
+                    1,
+                    out.as_mut_ptr(),
+                    ptr::null(),
+                    ptr::null_mut(),
+                    statuses.as_mut_ptr(),
+                );
+                eopnp_ransac_free(ransac);
+                assert_eq!(status, EopnpStatus::EOPNP_OK, "{case}: {}", message());
+            }
+            assert_eq!(out[0].focal_estimated, focal_free);
+            assert!(out[0].camera_estimated && !out[1].camera_estimated);
+            assert!(!out[1].focal_estimated && out[1].camera_n_params == 0);
+            assert!((out[0].camera_params[2] - truth.params()[2]).abs() < 1e-6);
+            // SAFETY: a handle made by `c_camera`, freed once.
+            unsafe { eopnp_camera_free(cam) };
+        }
+    }
+}
+
+#[test]
+fn principal_point_alone_keeps_the_focal_length_and_the_distortion() {
+    let truth = problems::opencv_camera();
+    let (world, pixels) = wide_problem(47, &truth, 40);
+    // The truth's distortion, its principal point off: only the principal point to find.
+    let mut params = truth.params().to_vec();
+    params[2] -= 9.0;
+    params[3] += 4.0;
+    let guess = Camera::from_colmap("OPENCV", 640, 480, params).unwrap();
+    let (w, m) = (flat3(&world), flat2(&pixels));
+    let h = Handles::new(800.0);
+    let cam = c_camera(&guess);
+    let mut p = zeroed_problem();
+    p.n = world.len();
+    p.world = w.as_ptr();
+    p.image = m.as_ptr();
+    p.camera = cam;
+    p.refine_principal_point = true;
+    let (status, s) = {
+        let mut s = garbage_solution();
+        // SAFETY: live handles, arrays of `n`.
+        let status = unsafe { eopnp_solve(h.solver, &p, &mut s) };
+        (status, s)
+    };
+    // SAFETY: a handle made by `c_camera`, freed once.
+    unsafe { eopnp_camera_free(cam) };
+    assert_eq!(status, EopnpStatus::EOPNP_OK, "{}", message());
+    let lib = Solver::default()
+        .solve(&Problem::pixels(&world, &pixels, &guess).refine_principal_point())
+        .unwrap();
+    assert_librarys(&s, &lib, false);
+    // The focal lengths and the distortion are the guess's, bit for bit; the principal point
+    // the truth's.
+    for j in [0, 1, 4, 5, 6, 7] {
+        assert_eq!(
+            s.camera_params[j].to_bits(),
+            guess.params()[j].to_bits(),
+            "{j}"
+        );
+    }
+    for j in [2, 3] {
+        assert!((s.camera_params[j] - truth.params()[j]).abs() < 1e-6, "{j}");
+    }
+}
+
+#[test]
+fn refinement_needs_pixels_through_one_camera_without_a_vertical() {
+    let truth = problems::opencv_camera();
+    let (world, pixels) = wide_problem(48, &truth, 12);
+    let normalised: Vec<Point2<f64>> = pixels
+        .iter()
+        .map(|q| truth.undistort(*q).unwrap())
+        .collect();
+    let (w, m, mn) = (flat3(&world), flat2(&pixels), flat2(&normalised));
+    let h = Handles::new(800.0);
+    let cam = c_camera(&truth);
+    let base = {
+        let mut p = zeroed_problem();
+        p.n = world.len();
+        p.world = w.as_ptr();
+        p.image = m.as_ptr();
+        p.camera = cam;
+        p
+    };
+    let check = |p: &EopnpProblem, want: EopnpStatus, needles: &[&str]| {
+        let mut s = garbage_solution();
+        // SAFETY: live handles; the problem's pointers outlive the call.
+        let status = unsafe { eopnp_solve(h.solver, p, &mut s) };
+        assert_eq!(status, want, "{}", message());
+        let mut info: EopnpErrorInfo = unsafe { std::mem::zeroed() };
+        // SAFETY: a writable info.
+        unsafe { eopnp_last_error(&mut info) };
+        assert_eq!(info.status, want);
+        for needle in needles {
+            assert!(
+                message().contains(needle),
+                "`{needle}` not in {}",
+                message()
+            );
+        }
+    };
+    // Normalised input.
+    let mut p = base;
+    p.camera = ptr::null();
+    p.image = mn.as_ptr();
+    p.refine_distortion = true;
+    check(
+        &p,
+        EopnpStatus::EOPNP_INVALID_OPTION,
+        &["`refine_distortion`", "pixels through one camera"],
+    );
+    p.refine_distortion = false;
+    p.refine_principal_point = true;
+    check(
+        &p,
+        EopnpStatus::EOPNP_INVALID_OPTION,
+        &["`refine_principal_point`"],
+    );
+    // A rig (of the one camera, at the rig's origin).
+    let identity = EopnpPose {
+        rotation: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        translation: [0.0; 3],
+    };
+    let mut rig = ptr::null_mut();
+    let cams = [cam as *const EopnpCamera];
+    // SAFETY: one live camera, one pose, a valid out-pointer.
+    let status = unsafe { eopnp_rig_create(cams.as_ptr(), &identity, 1, &mut rig) };
+    assert_eq!(status, EopnpStatus::EOPNP_OK, "{}", message());
+    let which = vec![0u32; world.len()];
+    let mut p = base;
+    p.camera = ptr::null();
+    p.rig = rig;
+    p.rig_cameras = which.as_ptr();
+    // The rig problem itself is fine.
+    assert_eq!(h.solve(&p).0, EopnpStatus::EOPNP_OK, "{}", message());
+    p.refine_principal_point = true;
+    check(
+        &p,
+        EopnpStatus::EOPNP_INVALID_OPTION,
+        &["`refine_principal_point`"],
+    );
+    p.refine_principal_point = false;
+    p.refine_distortion = true;
+    check(
+        &p,
+        EopnpStatus::EOPNP_INVALID_OPTION,
+        &["`refine_distortion`"],
+    );
+    // SAFETY: a rig made above, freed once.
+    unsafe { eopnp_rig_free(rig) };
+    // A known vertical.
+    let (gc, gw) = ([0.0, 1.0, 0.0], [0.0, 0.0, -1.0]);
+    let mut p = base;
+    p.gravity_camera = gc.as_ptr();
+    p.gravity_world = gw.as_ptr();
+    p.gravity_sigma_deg = 1.0;
+    p.refine_distortion = true;
+    check(
+        &p,
+        EopnpStatus::EOPNP_INVALID_OPTION,
+        &["`refine_distortion`", "without a known vertical"],
+    );
+    p.refine_distortion = false;
+    p.refine_principal_point = true;
+    check(
+        &p,
+        EopnpStatus::EOPNP_INVALID_OPTION,
+        &["`refine_principal_point`"],
+    );
+    // Too few points for the free parameters: OPENCV with everything free has 6 + 1 + 2 + 4 =
+    // 13, 7 points at least.
+    let mut p = base;
+    p.unknown_focal = true;
+    p.refine_principal_point = true;
+    p.refine_distortion = true;
+    p.n = 6;
+    check(
+        &p,
+        EopnpStatus::EOPNP_TOO_FEW_POINTS,
+        &["got 6, need at least 7"],
+    );
+    p.n = 7;
+    assert_eq!(h.solve(&p).0, EopnpStatus::EOPNP_OK, "{}", message());
+    // SAFETY: a handle made by `c_camera`, freed once.
+    unsafe { eopnp_camera_free(cam) };
 }

@@ -896,6 +896,122 @@ static void test_focal_and_gravity(void) {
   eopnp_solver_free(s);
 }
 
+/* The refined principal point and distortion (EopnpProblem's refine_principal_point and
+ * refine_distortion, EopnpSolution's camera_*): a SIMPLE_RADIAL camera recovered from a guess
+ * with its principal point off and no distortion, on 30 points over a wide field of view (the
+ * Rust tests compare with the library bit for bit); the camera fields zero when nothing is
+ * free; EOPNP_INVALID_OPTION naming the option for normalised or rig input or with a vertical;
+ * EOPNP_TOO_FEW_POINTS for fewer points than half the free parameters. */
+#define NW 30
+static void test_refined_intrinsics(void) {
+  static const double truth[4] = {500.0, 318.0, 243.0, -0.08}; /* f, cx, cy, k */
+  double w[3 * NW], px[2 * NW], m[2 * NW];
+  for (int i = 0; i < NW; ++i) {
+    const double x = -2.0 + 0.8 * (i % 6), y = -1.5 + 0.75 * ((i / 6) % 5);
+    const double z = 4.0 + 0.4 * ((7 * i) % 11);
+    /* The pose R = I, t = (0.1, -0.2, 0.3): world = camera - t. */
+    w[3 * i] = x - 0.1;
+    w[3 * i + 1] = y + 0.2;
+    w[3 * i + 2] = z - 0.3;
+    const double u = x / z, v = y / z, d = 1.0 + truth[3] * (u * u + v * v);
+    m[2 * i] = u;
+    m[2 * i + 1] = v;
+    px[2 * i] = truth[0] * d * u + truth[1];
+    px[2 * i + 1] = truth[0] * d * v + truth[2];
+  }
+  EopnpSolver *s = NULL;
+  EopnpCamera *guess = NULL, *guess_f = NULL;
+  EXPECT(EOPNP_OK, eopnp_solver_create(&s));
+  const double g[4] = {500.0, 325.0, 236.0, 0.0};   /* the principal point 7 px off, k = 0 */
+  const double gf[4] = {650.0, 325.0, 236.0, 0.0};  /* and the focal length 30 % off */
+  EXPECT(EOPNP_OK, eopnp_camera_from_colmap("SIMPLE_RADIAL", 640, 480, g, 4, &guess));
+  EXPECT(EOPNP_OK, eopnp_camera_from_colmap("SIMPLE_RADIAL", 640, 480, gf, 4, &guess_f));
+  EopnpProblem p = {0};
+  p.n = NW;
+  p.world = w;
+  p.image = px;
+  p.camera = guess;
+  EopnpSolution sol;
+  /* Nothing free: the camera fields zero. */
+  memset(&sol, 0xff, sizeof sol);
+  EXPECT(EOPNP_OK, eopnp_solve(s, &p, &sol));
+  CHECK(!sol.camera_estimated && sol.camera_n_params == 0 && !sol.focal_estimated);
+  {
+    int zeros = 1;
+    for (int j = 0; j < EOPNP_MAX_CAMERA_PARAMS; ++j) zeros = zeros && sol.camera_params[j] == 0.0;
+    CHECK(zeros);
+  }
+  CHECK(sol.cost > 1.0); /* the guess does not fit */
+  /* The principal point and the distortion, the focal length known. */
+  p.refine_principal_point = true;
+  p.refine_distortion = true;
+  memset(&sol, 0xff, sizeof sol);
+  EXPECT(EOPNP_OK, eopnp_solve(s, &p, &sol));
+  CHECK(sol.camera_estimated && sol.camera_n_params == 4);
+  CHECK(!sol.focal_estimated && sol.focal_x == 0.0 && sol.focal_y == 0.0);
+  CHECK(sol.camera_params[0] == 500.0); /* known: the guess's, exactly */
+  for (int j = 1; j < 4; ++j) CHECK(fabs(sol.camera_params[j] - truth[j]) < 1e-6);
+  for (int j = 4; j < EOPNP_MAX_CAMERA_PARAMS; ++j) CHECK(sol.camera_params[j] == 0.0);
+  CHECK(fabs(sol.translation[0] - 0.1) < 1e-6 && fabs(sol.translation[2] - 0.3) < 1e-6);
+  CHECK(fabs(sol.rotation[0] - 1.0) < 1e-9);
+  CHECK(sol.cost < 1e-12);
+  /* With the focal length unknown too: focal_x is the camera's first parameter. */
+  p.camera = guess_f;
+  p.unknown_focal = true;
+  memset(&sol, 0xff, sizeof sol);
+  EXPECT(EOPNP_OK, eopnp_solve(s, &p, &sol));
+  CHECK(sol.camera_estimated && sol.camera_n_params == 4 && sol.focal_estimated);
+  CHECK(sol.focal_x == sol.camera_params[0] && sol.focal_y == sol.focal_x);
+  for (int j = 0; j < 4; ++j) CHECK(fabs(sol.camera_params[j] - truth[j]) < 1e-6);
+  /* Too few points: 6 pose + 1 focal + 2 + 1 parameters need 5 points. */
+  p.n = 4;
+  EXPECT(EOPNP_TOO_FEW_POINTS, eopnp_solve(s, &p, &sol));
+  CHECK(strstr(eopnp_last_error_message(), "need at least 5") != NULL);
+  p.n = NW;
+  p.unknown_focal = false;
+  p.camera = guess;
+  /* Normalised input. */
+  EopnpProblem q = p;
+  q.camera = NULL;
+  q.image = m;
+  q.refine_principal_point = false;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &q, &sol));
+  CHECK(strstr(eopnp_last_error_message(), "`refine_distortion`") != NULL);
+  q.refine_principal_point = true;
+  q.refine_distortion = false;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &q, &sol));
+  CHECK(strstr(eopnp_last_error_message(), "`refine_principal_point`") != NULL);
+  /* A rig of the one camera. */
+  EopnpRig *rig = NULL;
+  const EopnpCamera *cams[1] = {guess};
+  EopnpPose identity = {{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}};
+  EXPECT(EOPNP_OK, eopnp_rig_create(cams, &identity, 1, &rig));
+  uint32_t which[NW] = {0};
+  q = p;
+  q.camera = NULL;
+  q.rig = rig;
+  q.rig_cameras = which;
+  q.refine_principal_point = false;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &q, &sol));
+  CHECK(strstr(eopnp_last_error_message(), "`refine_distortion`") != NULL);
+  q.refine_distortion = false;
+  EXPECT(EOPNP_OK, eopnp_solve(s, &q, &sol)); /* the rig problem itself is fine */
+  eopnp_rig_free(rig);
+  /* A vertical. */
+  const double down[3] = {0.0, 1.0, 0.0};
+  q = p;
+  q.refine_distortion = false;
+  q.gravity_camera = down;
+  q.gravity_world = down;
+  q.gravity_sigma_deg = 1.0;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_solve(s, &q, &sol));
+  CHECK(strstr(eopnp_last_error_message(), "`refine_principal_point`") != NULL);
+  CHECK(strstr(eopnp_last_error_message(), "without a known vertical") != NULL);
+  eopnp_camera_free(guess_f);
+  eopnp_camera_free(guess);
+  eopnp_solver_free(s);
+}
+
 int main(int argc, char **argv) {
   if (argc != 4) {
     fprintf(stderr, "usage: %s REFERENCE_FILE COLMAP_MODEL_DIR COLMAP_RIG_MODEL_DIR\n", argv[0]);
@@ -908,6 +1024,7 @@ int main(int argc, char **argv) {
   test_cameras();
   test_solves();
   test_focal_and_gravity();
+  test_refined_intrinsics();
   test_model(argv[2]);
   test_frames(argv[3]);
   test_threads();

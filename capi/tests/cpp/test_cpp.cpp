@@ -237,6 +237,66 @@ void test_focal_and_gravity() {
          solver.solve(eopnp::Problem::pixels(W, PX, N, guess).gravity(down, down, 1.0).unknown_focal()));
 }
 
+// The refined principal point and distortion (Problem::refine_principal_point,
+// Problem::refine_distortion, estimated_camera_params): a SIMPLE_RADIAL camera recovered from a
+// guess with its principal point off and no distortion, on 30 points over a wide field of
+// view (pose R = I, t = (0.1, -0.2, 0.3)).
+void test_refined_intrinsics() {
+  constexpr std::size_t n = 30;
+  const std::array<double, 4> truth = {500.0, 318.0, 243.0, -0.08};  // f, cx, cy, k
+  std::vector<double> w(3 * n), px(2 * n), m(2 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = -2.0 + 0.8 * (i % 6), y = -1.5 + 0.75 * ((i / 6) % 5);
+    const double z = 4.0 + 0.4 * ((7 * i) % 11);
+    w[3 * i] = x - 0.1;
+    w[3 * i + 1] = y + 0.2;
+    w[3 * i + 2] = z - 0.3;
+    const double u = x / z, v = y / z, d = 1.0 + truth[3] * (u * u + v * v);
+    m[2 * i] = u;
+    m[2 * i + 1] = v;
+    px[2 * i] = truth[0] * d * u + truth[1];
+    px[2 * i + 1] = truth[0] * d * v + truth[2];
+  }
+  const eopnp::Solver solver;
+  const auto guess = eopnp::Camera::colmap("SIMPLE_RADIAL", 640, 480, {500.0, 325.0, 236.0, 0.0});
+  const auto guess_f = eopnp::Camera::colmap("SIMPLE_RADIAL", 640, 480, {650.0, 325.0, 236.0, 0.0});
+  const auto plain = solver.solve(eopnp::Problem::pixels(w.data(), px.data(), n, guess));
+  CHECK(!eopnp::estimated_camera_params(plain).has_value());
+  CHECK(plain.cost > 1.0);
+  const auto s = solver.solve(
+      eopnp::Problem::pixels(w.data(), px.data(), n, guess).refine_principal_point().refine_distortion());
+  const auto cam = eopnp::estimated_camera_params(s);
+  CHECK(cam.has_value() && cam->size() == 4);
+  CHECK(!eopnp::estimated_focal(s).has_value());
+  if (cam && cam->size() == 4) {
+    CHECK((*cam)[0] == 500.0);
+    for (std::size_t j = 1; j < 4; ++j) CHECK(std::fabs((*cam)[j] - truth[j]) < 1e-6);
+  }
+  CHECK(std::fabs(s.translation[2] - 0.3) < 1e-6);
+  const auto all = solver.solve(eopnp::Problem::pixels(w.data(), px.data(), n, guess_f)
+                                    .unknown_focal()
+                                    .refine_principal_point()
+                                    .refine_distortion());
+  const auto f = eopnp::estimated_focal(all);
+  const auto cam_f = eopnp::estimated_camera_params(all);
+  CHECK(f.has_value() && cam_f.has_value() && cam_f->size() == 4);
+  if (f && cam_f && cam_f->size() == 4) {
+    CHECK((*f)[0] == (*cam_f)[0]);
+    for (std::size_t j = 0; j < 4; ++j) CHECK(std::fabs((*cam_f)[j] - truth[j]) < 1e-6);
+  }
+  THROWS(eopnp::InvalidOptionError, EOPNP_INVALID_OPTION,
+         solver.solve(eopnp::Problem::normalised(w.data(), m.data(), n).refine_distortion()));
+  THROWS(eopnp::InvalidOptionError, EOPNP_INVALID_OPTION,
+         solver.solve(eopnp::Problem::pixels(w.data(), px.data(), n, guess)
+                          .gravity({0.0, 1.0, 0.0}, {0.0, 1.0, 0.0}, 1.0)
+                          .refine_principal_point()));
+  THROWS(eopnp::TooFewPointsError, EOPNP_TOO_FEW_POINTS,
+         solver.solve(eopnp::Problem::pixels(w.data(), px.data(), 4, guess_f)
+                          .unknown_focal()
+                          .refine_principal_point()
+                          .refine_distortion()));
+}
+
 void test_frames(const std::string& dir) {
   const auto model = eopnp::Model::read(dir);
   const auto ids = model.frame_ids();
@@ -433,6 +493,7 @@ int main(int argc, char** argv) {
     test_interface(argv[2]);
     test_frames(argv[3]);
     test_focal_and_gravity();
+    test_refined_intrinsics();
 #ifdef EOPNP_TEST_OPENCV
     test_opencv();
 #endif
