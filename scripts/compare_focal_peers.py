@@ -6,8 +6,8 @@ solver (``poselib.p4pf``) alone, its Python bindings having no robust estimator 
 focal length (``estimate_absolute_pose`` takes a known camera).
 
     pip install numpy pycolmap poselib eopnp      # eopnp: the wheel of python/
-    python3 scripts/compare_focal_peers.py [--problems 200] [--n 100] [--levels 0 0.5 0.8]
-        [--seed 7] [--threshold 4] [--passes 3]
+    python3 scripts/compare_focal_peers.py [--problems 1000] [--n 100] [--levels 0 0.5 0.8]
+        [--seed 7] [--threshold 4] [--passes 3] [--pycolmap-max-trials N]
 
 Problems: a pinhole camera of focal length log-uniform in 300 to 3,000 px (640 x 480,
 principal point at the centre), a Haar-random rotation and a translation up to a unit per axis,
@@ -15,10 +15,12 @@ principal point at the centre), a Haar-random rotation and a translation up to a
 replaced by uniform ones (outliers). Both libraries get the camera with a focal length 1.3 times
 the truth (the starting guess), the principal point exact, the same pixel threshold
 (``RansacOptions.threshold_px``, pycolmap's ``RANSACOptions.max_error``), their default
-options otherwise, one thread (``OMP_NUM_THREADS=1``; pycolmap's RANSAC has no threads of its
+options otherwise (``--pycolmap-max-trials`` sets pycolmap's ``RANSACOptions.max_num_trials``,
+10,000 by default), one thread (``OMP_NUM_THREADS=1``; pycolmap's RANSAC has no threads of its
 own here). Errors: the focal length's relative error and the rotation error (largest angle
 between corresponding axes, degrees) against the truth; a problem without a pose counts as an
-infinite error. Time per problem: the median over ``--passes`` passes of (one pass over the
+infinite error. The last column pairs the two libraries problem by problem: the share of the
+problems where eopnp's focal length is the closer to the truth (ties, both infinite, halved). Time per problem: the median over ``--passes`` passes of (one pass over the
 level's problems) / (number of problems), inputs converted outside the timed calls.
 
 PoseLib's P4Pf: on each problem of the first level, four correspondences drawn from those kept
@@ -101,20 +103,24 @@ def poselib_p4pf(probs, rng, passes):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--problems", type=int, default=200)
+    ap.add_argument("--problems", type=int, default=1000)
     ap.add_argument("--n", type=int, default=100)
     ap.add_argument("--levels", type=float, nargs="+", default=[0.0, 0.5, 0.8])
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--threshold", type=float, default=4.0)
     ap.add_argument("--passes", type=int, default=3)
+    ap.add_argument("--pycolmap-max-trials", type=int, default=None)
     a = ap.parse_args()
     print(
         f"N = {a.n}, sigma 1 px, {a.problems} problems per level, the focal length guessed "
         f"1.3x the truth, threshold {a.threshold:g} px, one thread; medians over the problems:"
     )
     print()
-    print("| outliers | library | focal error | rotation error | failures | time per problem | pycolmap / eopnp |")
-    print("|---|---|---|---|---|---|---|")
+    print(
+        "| outliers | library | focal error | rotation error | failures | time per problem "
+        "| pycolmap / eopnp | eopnp's focal closer |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
     first = None
     for level in a.levels:
         rng = np.random.default_rng([a.seed, int(level * 100)])
@@ -136,6 +142,8 @@ def main():
         est = pycolmap.AbsolutePoseEstimationOptions()
         est.estimate_focal_length = True
         est.ransac.max_error = a.threshold
+        if a.pycolmap_max_trials is not None:
+            est.ransac.max_num_trials = a.pycolmap_max_trials
         ref = pycolmap.AbsolutePoseRefinementOptions()
         ref.refine_focal_length = True
 
@@ -168,13 +176,16 @@ def main():
                 for i, p in enumerate(probs):
                     run(p, i)
                 times.append((time.perf_counter() - t0) / len(probs))
-            rows[name] = (np.median(fe), np.median(re_), fails, np.median(times))
+            rows[name] = (np.median(fe), np.median(re_), fails, np.median(times), np.array(fe))
+        ours, theirs = rows["eopnp"][4], rows["pycolmap"][4]
+        closer = np.mean(np.where(ours == theirs, 0.5, ours < theirs))
         for name in ("eopnp", "pycolmap"):
-            fe, re_, fails, tm = rows[name]
+            fe, re_, fails, tm, _ = rows[name]
             ratio = rows["pycolmap"][3] / rows["eopnp"][3]
+            paired = f"{ratio:.1f}x | {100 * closer:.1f} %" if name == "pycolmap" else " | "
             print(
                 f"| {level:.0%} | {name} | {100 * fe:.3f} % | {re_:.4f} deg | {fails} | "
-                f"{1e3 * tm:.3f} ms | {f'{ratio:.1f}x' if name == 'pycolmap' else ''} |"
+                f"{1e3 * tm:.3f} ms | {paired} |"
             )
     count, med, p90, none, tm = poselib_p4pf(first, np.random.default_rng([a.seed, 1]), a.passes)
     print()
