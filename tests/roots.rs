@@ -3,8 +3,8 @@
 //! coefficients, near-real complex pairs, iteration. (Formerly `src/numeric/roots/tests.rs`.)
 
 use eopnp::internals::roots::{
-    cubic_real_roots, positive_real_roots, quartic_real_roots, real_roots, real_roots_near,
-    real_roots_near_above, Roots, DEFAULT_IMAG_TOL,
+    cubic_real_roots, positive_real_roots, quartic_real_roots, real_roots, real_roots_above,
+    real_roots_near, real_roots_near_above, Roots, DEFAULT_IMAG_TOL,
 };
 
 fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
@@ -249,6 +249,84 @@ fn roots_above_are_the_real_roots_above() {
         );
         for (&a, &b) in above.iter().zip(&all) {
             assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{c:?}: {a} vs {b}");
+        }
+        found += above.len();
+    }
+    assert!(found > 20_000, "{found} roots");
+}
+
+/// `real_roots_above` (the Sturm sequence, the derivative sequence where it refuses): the roots
+/// of `real_roots` above the value, for known roots, a double root (refused by the Sturm
+/// sequence: the fallback's answer), a close pair, an exact zero root, a non-finite value, and
+/// 20,000 random polynomials of degree 1 to 9 (roots within 1e-6 of the value left out; each
+/// root within 1e-9 of its counterpart or a root to the rounding level).
+#[test]
+fn sturm_roots_above_are_the_real_roots_above() {
+    let r = [-3.0, -1.0, 0.5, 2.0, 7.0];
+    let got = real_roots_above(&from_roots(&r), -2.0);
+    assert!(
+        close(got.as_slice(), &[-1.0, 0.5, 2.0, 7.0], 1e-14),
+        "{got:?}"
+    );
+    // A double root: the Sturm chain refuses, the derivative sequence's answer.
+    let c = from_roots(&[2.0, 2.0, -1.0]);
+    assert_eq!(
+        real_roots_above(&c, 0.5),
+        real_roots_near_above(&c, 0.0, 0.5)
+    );
+    assert!(close(real_roots_above(&c, 0.5).as_slice(), &[2.0], 1e-7));
+    // A pair 1e-6 apart, found by either method to well within the pair's distance.
+    let pair = [1.0, 1.0 + 1e-6, 3.0];
+    for lo in [0.0, 0.5] {
+        let got = real_roots_above(&from_roots(&pair), lo);
+        assert!(close(got.as_slice(), &pair, 1e-9), "{got:?}");
+    }
+    let c = from_roots(&[0.0, 2.0, -3.0]);
+    assert!(close(
+        real_roots_above(&c, -1.0).as_slice(),
+        &[0.0, 2.0],
+        1e-14
+    ));
+    assert_eq!(
+        real_roots_above(&from_roots(&r), f64::NEG_INFINITY).as_slice(),
+        real_roots(&from_roots(&r)).as_slice()
+    );
+    let mut next = uniform(0x3c6e_f372_fe94_f82b_u64);
+    let mut found = 0;
+    for k in 0..20_000 {
+        let degree = 1 + k % 9;
+        let c: Vec<f64> = if k % 2 == 0 {
+            let roots: Vec<f64> = (0..degree).map(|_| 20.0 * next() - 10.0).collect();
+            from_roots(&roots)
+        } else {
+            (0..=degree).map(|_| 2.0 * next() - 1.0).collect()
+        };
+        let lo = 10.0 * next() - 5.0;
+        let away = |x: &f64| (x - lo).abs() > 1e-6 * (1.0 + lo.abs());
+        let all: Vec<f64> = real_roots(&c)
+            .iter()
+            .copied()
+            .filter(|&x| x > lo && away(&x))
+            .collect();
+        let above: Vec<f64> = real_roots_above(&c, lo)
+            .iter()
+            .copied()
+            .filter(away)
+            .collect();
+        assert_eq!(
+            above.len(),
+            all.len(),
+            "{c:?} above {lo}: {above:?} vs {all:?}"
+        );
+        for (&a, &b) in above.iter().zip(&all) {
+            let (value, terms) = c.iter().rev().fold((0.0, 0.0), |(v, s), &ci| {
+                (v * a + ci, s * a.abs() + ci.abs())
+            });
+            let root = value.abs() <= 64.0 * f64::EPSILON * terms;
+            assert!(
+                (a - b).abs() <= 1e-9 * (1.0 + b.abs()) || root,
+                "{c:?}: {a} vs {b}"
+            );
         }
         found += above.len();
     }

@@ -14,7 +14,9 @@
 //! matrix `L(z)` whose null vector at a root is `(x, y, 1)`. Every `l_i` is `w` times the depth
 //! of point `i` over that of point 1, so only roots and null vectors with every `mu_k = l_k - 1`
 //! above -2 (loosely positive `l_k`) are sought: the octic's roots on `(-2, bound)` only
-//! ([`real_roots_near_above`]), the others' `x` and `y` screened before the polish. Each
+//! (isolated by the Sturm sequence, [`real_roots_above`]; with the real parts of near-real
+//! pairs, [`real_roots_near_above`], where the points are close to coplanar), the others' `x`
+//! and `y` screened before the polish. Each
 //! solution is polished by Newton's method on the three quadrics and Gauss-Newton on all four,
 //! turned into `R` (from `M`'s first two rows, well determined, and their cross product), `f`
 //! (from the third row's component along `R`'s third: that row is weak and noisy when the
@@ -31,7 +33,7 @@
 use arrayvec::ArrayVec;
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-use super::roots::real_roots_near_above;
+use super::roots::{real_roots_above, real_roots_near_above};
 use super::rotation::nearest_rotation;
 use crate::kernels::{e3q3_octic, p4pf_quadrics, P4PF_QUADRIC_EXPONENTS};
 
@@ -153,7 +155,11 @@ pub fn p4pf(world: &[Point3<f64>; 4], image: &[Point2<f64>; 4]) -> P4pfSolutions
     // move a root of a near-double pair far, so the screen is loose) are neither sought nor
     // polished: on noisy samples, 6.4 -> 5.4 us per call (the polish), and the octic's roots
     // searched above the screen only (module docs).
-    for mu in e3q3(&three, SCREEN) {
+    // Near-real pairs of the octic are sought only where the points are close to coplanar
+    // (below [`PLANAR_MAX`]): there two solutions of the three quadrics can nearly coincide and
+    // the rounding turn their pair complex; elsewhere the Sturm sequence isolates the real roots.
+    let near_real = if ratio < PLANAR_MAX { NEAR_REAL } else { 0.0 };
+    for mu in e3q3(&three, SCREEN, near_real) {
         // Gauss-Newton on all four: two solutions of the three close together (a near-double
         // root of the octic, where Newton on the three converges slowly) are told apart by the
         // fourth.
@@ -483,9 +489,16 @@ fn permuted(q: &[f64; 10], p: usize) -> [f64; 10] {
 ///
 /// Only solutions whose every coordinate exceeds `above` are sought (P4Pf: the depth ratios
 /// loosely positive; `f64::NEG_INFINITY` for all): the octic's roots on `(above, bound)` only,
-/// the others' coordinates screened before their polish.
+/// the others' coordinates screened before their polish. With `near_real > 0` the real parts of
+/// the octic's near-real complex pairs are tried too ([`real_roots_near_above`]'s `imag_tol`);
+/// with 0, the real roots alone, isolated by the Sturm sequence when `above` is finite
+/// ([`real_roots_above`]).
 #[must_use]
-pub fn e3q3(quadrics: &[[f64; 10]; 3], above: f64) -> ArrayVec<[f64; 3], MAX_P4PF_SOLUTIONS> {
+pub fn e3q3(
+    quadrics: &[[f64; 10]; 3],
+    above: f64,
+    near_real: f64,
+) -> ArrayVec<[f64; 3], MAX_P4PF_SOLUTIONS> {
     let mut out = ArrayVec::new();
     // Hide each variable in turn: the best-conditioned 3 x 3 system of the other two's squares,
     // by the ratio of its determinant to the product of its rows' norms (Hadamard's bound: 1 for
@@ -537,7 +550,12 @@ pub fn e3q3(quadrics: &[[f64; 10]; 3], above: f64) -> ArrayVec<[f64; 3], MAX_P4P
         *s = at;
         at += len;
     }
-    for &z in real_roots_near_above(octic, NEAR_REAL, above).iter() {
+    let roots = if near_real > 0.0 {
+        real_roots_near_above(octic, near_real, above)
+    } else {
+        real_roots_above(octic, above)
+    };
+    for &z in roots.iter() {
         let l = Matrix3::from_fn(|r, col| {
             let n = 3 * r + col;
             horner(&k[starts[n]..starts[n] + lens[n]], z)

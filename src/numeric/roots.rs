@@ -56,6 +56,22 @@
 //! placement check (with fallback to this method) to catch close real pairs they turn complex.
 //! Measured, `real_roots` is also the faster of the two for degrees 3 and 4.
 //!
+//! # The Sturm sequence of [`real_roots_above`]
+//!
+//! One caller trades that guarantee for speed: P4Pf's octic (`numeric/p4pf.rs`), solved for
+//! every RANSAC sample, whose roots above -2 are few and are polished afterwards by Newton's
+//! method on the quadrics they come from. [`real_roots_above`] counts them by a Sturm chain
+//! (the degree a compile-time constant, the chain's terms evaluated by Horner) and splits the
+//! interval until each piece holds one, which the bracketing above then refines: 12.6 % less
+//! time per P4Pf call on samples of four inliers, 15.4 % on random samples (`cargo bench
+//! --bench minimal`, against the derivative sequence), with the checks of `verify` (the
+//! solutions of the three quadrics against the companion matrix's count) passing for both. The
+//! cancellation that makes a chain unreliable is tested for, not assumed away: a remainder
+//! whose leading coefficient is at most `1e-9` times the largest term that cancelled into it
+//! (a multiple
+//! root, a close pair, a non-generic chain), a root at a split point or counts that contradict
+//! each other make the chain refuse, and the derivative sequence answers instead.
+//!
 //! # Near-real roots (docs/algorithm.md T8)
 //!
 //! [`real_roots_near`] additionally reports the real part of complex pairs whose imaginary part is
@@ -79,6 +95,7 @@ use crate::numeric::bounds::{Bound, Budget};
 
 mod closed;
 mod isolate;
+mod sturm;
 
 use isolate::solve_prepared;
 
@@ -439,6 +456,26 @@ pub fn real_roots_near_above(c: &[f64], imag_tol: f64, lo: f64) -> Roots {
     match prepare(c) {
         Some((p, z)) => {
             isolate::solve_above(&p, z, if imag_tol > 0.0 { imag_tol } else { 0.0 }, lo)
+        }
+        None => Roots::default(),
+    }
+}
+
+/// The distinct real roots of `c` above `lo` (ascending, to the rounding level), isolated by
+/// the Sturm sequence (module docs): the same normalisation as [`real_roots`], no near-real
+/// roots; where the sequence cannot decide (a multiple or nearly multiple root, a root at a
+/// split point), or `lo` is not finite, or `x = 0` is an exact root, the roots of
+/// [`real_roots_near_above`] without near-real ones.
+#[must_use]
+pub fn real_roots_above(c: &[f64], lo: f64) -> Roots {
+    match prepare(c) {
+        Some((p, z)) => {
+            let found = if p.n >= 1 && lo.is_finite() && !z {
+                sturm::roots_above(&p, lo)
+            } else {
+                None
+            };
+            found.unwrap_or_else(|| isolate::solve_above(&p, z, 0.0, lo))
         }
         None => Roots::default(),
     }

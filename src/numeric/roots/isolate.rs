@@ -10,7 +10,7 @@ use crate::numeric::bounds::{Bound, Budget};
 /// evaluations. [`Poly`] (any degree, loops over its coefficients) and [`Cubic`] (degree 3,
 /// straight-line) implement it, so the cubic of the P3P solver runs the same method without
 /// the loops.
-trait Horner {
+pub(super) trait Horner {
     fn degree(&self) -> usize;
     fn lead(&self) -> f64;
     fn eval(&self, x: f64) -> f64;
@@ -82,7 +82,7 @@ impl Horner for Cubic {
 /// The next trial point strictly inside (lo, hi): 0 if the bracket straddles it, the geometric
 /// mean if it spans more than a factor 2 on one side of 0, else the midpoint.
 #[inline]
-fn split(lo: f64, hi: f64) -> f64 {
+pub(super) fn split(lo: f64, hi: f64) -> f64 {
     if lo < 0.0 && hi > 0.0 {
         return 0.0;
     }
@@ -109,7 +109,14 @@ fn split(lo: f64, hi: f64) -> f64 {
 /// lo and hi are adjacent floats; with `xtol > 0`, also after a Halley or Newton step of at most
 /// `xtol (1 + |x|)` (its result returned: the error left is of the order of the step cubed or
 /// squared).
-fn bracket<P: Horner>(q: &P, mut lo: f64, mut hi: f64, s_lo: f64, x0: f64, xtol: f64) -> f64 {
+pub(super) fn bracket<P: Horner>(
+    q: &P,
+    mut lo: f64,
+    mut hi: f64,
+    s_lo: f64,
+    x0: f64,
+    xtol: f64,
+) -> f64 {
     let mut x = if x0 > lo && x0 < hi {
         x0
     } else {

@@ -352,10 +352,11 @@ pub fn e3q3_known_root(n: usize) -> Measurement {
     t.finish()
 }
 
-/// The three-quadric solver [`e3q3`]: every solution solves the three quadrics to 1e-10 (each
-/// residual relative to its terms), the planted one is among them (1e-8), and their number
-/// equals the number of real roots of the octic with `z` hidden (the companion matrix's
-/// eigenvalues: another root finder, and possibly another hidden variable than the solver's),
+/// The three-quadric solver [`e3q3`], with each of its root finders (the derivative sequence
+/// and the Sturm sequence): every solution solves the three quadrics to 1e-10 (each residual
+/// relative to its terms), the planted one is among them (1e-8), and their number equals the
+/// number of real roots of the octic with `z` hidden (the companion matrix's eigenvalues:
+/// another root finder, and possibly another hidden variable than the solver's),
 /// on every instance whose roots are not within 1e-5 of the real axis' boundary (counted in
 /// the report, not compared).
 #[must_use]
@@ -376,17 +377,24 @@ pub fn e3q3_solutions(n: usize) -> Measurement {
             st::normal(&mut rng),
         ];
         let qs = planted(&mut rng, &p);
-        let sols = e3q3(&qs, f64::NEG_INFINITY);
+        // Both root finders: the derivative sequence (every root) and the Sturm sequence
+        // (roots above a finite value, -1e6 here: below these instances' roots, or the count
+        // differs).
+        let all = e3q3(&qs, f64::NEG_INFINITY, 0.0);
+        let sturm = e3q3(&qs, -1e6, 0.0);
         let mut worst = 0.0f64;
-        for s in &sols {
-            for q in &qs {
-                let (v, scale) = quadric_at(q, s);
-                worst = worst.max(v.abs() / scale);
+        let mut found = true;
+        for sols in [&all, &sturm] {
+            for s in sols {
+                for q in &qs {
+                    let (v, scale) = quadric_at(q, s);
+                    worst = worst.max(v.abs() / scale);
+                }
             }
+            found &= sols
+                .iter()
+                .any(|s| (0..3).all(|j| (s[j] - p[j]).abs() <= 1e-8 * (1.0 + p[j].abs())));
         }
-        let found = sols
-            .iter()
-            .any(|s| (0..3).all(|j| (s[j] - p[j]).abs() <= 1e-8 * (1.0 + p[j].abs())));
         if !found {
             worst = f64::INFINITY;
         }
@@ -398,13 +406,15 @@ pub fn e3q3_solutions(n: usize) -> Measurement {
         let (roots, closest_complex) = companion_roots(&out[0..9]);
         if closest_complex < 1e-5 {
             ambiguous += 1;
-        } else if roots.len() != sols.len() {
+        } else if roots.len() != all.len() || roots.len() != sturm.len() {
             worst = f64::INFINITY;
         }
         t.record(worst, 1e-10, || {
             format!(
-                "seed {seed} sample {i}: {} solutions, companion count {}, found {found}",
-                sols.len(),
+                "seed {seed} sample {i}: {} / {} solutions (derivative / Sturm sequence), \
+                 companion count {}, found {found}",
+                all.len(),
+                sturm.len(),
                 roots.len()
             )
         });
