@@ -6,26 +6,15 @@ use eopnp::internals::roots::{
     cubic_real_roots, positive_real_roots, quartic_real_roots, real_roots, real_roots_above,
     real_roots_near, real_roots_near_above, Roots, DEFAULT_IMAG_TOL,
 };
+use eopnp_testkit::{
+    assert_roots_above, poly_from_roots as from_roots, random_polynomial, uniform_stream as uniform,
+};
 
 fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
     a.len() == b.len()
         && a.iter()
             .zip(b)
             .all(|(x, y)| (x - y).abs() <= tol * (1.0 + y.abs()))
-}
-
-/// Ascending coefficients of prod (x - r_i).
-fn from_roots(r: &[f64]) -> Vec<f64> {
-    let mut c = vec![1.0];
-    for &ri in r {
-        let mut n = vec![0.0; c.len() + 1];
-        for (i, &ci) in c.iter().enumerate() {
-            n[i + 1] += ci;
-            n[i] -= ri * ci;
-        }
-        c = n;
-    }
-    c
 }
 
 #[test]
@@ -165,13 +154,7 @@ fn positive_roots_are_the_positive_real_roots() {
     let mut next = uniform(0x9e37_79b9_7f4a_7c15_u64);
     let (mut compared, mut found) = (0, 0);
     for k in 0..20_000 {
-        let degree = 1 + k % 9;
-        let c: Vec<f64> = if k % 2 == 0 {
-            let roots: Vec<f64> = (0..degree).map(|_| 20.0 * next() - 10.0).collect();
-            from_roots(&roots)
-        } else {
-            (0..=degree).map(|_| 2.0 * next() - 1.0).collect()
-        };
+        let c = random_polynomial(k, &mut next);
         let all: Vec<f64> = real_roots(&c)
             .iter()
             .copied()
@@ -222,35 +205,16 @@ fn roots_above_are_the_real_roots_above() {
     let mut next = uniform(0x2545_f491_4f6c_dd1d_u64);
     let mut found = 0;
     for k in 0..20_000 {
-        let degree = 1 + k % 9;
-        let c: Vec<f64> = if k % 2 == 0 {
-            let roots: Vec<f64> = (0..degree).map(|_| 20.0 * next() - 10.0).collect();
-            from_roots(&roots)
-        } else {
-            (0..=degree).map(|_| 2.0 * next() - 1.0).collect()
-        };
+        let c = random_polynomial(k, &mut next);
         let lo = 10.0 * next() - 5.0;
         let tol = [0.0, DEFAULT_IMAG_TOL, 1e-2][k % 3];
-        let away = |x: &f64| (x - lo).abs() > 1e-6 * (1.0 + lo.abs());
-        let all: Vec<f64> = real_roots_near(&c, tol)
-            .iter()
-            .copied()
-            .filter(|&x| x > lo && away(&x))
-            .collect();
-        let above: Vec<f64> = real_roots_near_above(&c, tol, lo)
-            .iter()
-            .copied()
-            .filter(away)
-            .collect();
-        assert_eq!(
-            above.len(),
-            all.len(),
-            "{c:?} above {lo}: {above:?} vs {all:?}"
+        found += assert_roots_above(
+            &c,
+            lo,
+            real_roots_near_above(&c, tol, lo).as_slice(),
+            real_roots_near(&c, tol).as_slice(),
+            false,
         );
-        for (&a, &b) in above.iter().zip(&all) {
-            assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{c:?}: {a} vs {b}");
-        }
-        found += above.len();
     }
     assert!(found > 20_000, "{found} roots");
 }
@@ -294,51 +258,15 @@ fn sturm_roots_above_are_the_real_roots_above() {
     let mut next = uniform(0x3c6e_f372_fe94_f82b_u64);
     let mut found = 0;
     for k in 0..20_000 {
-        let degree = 1 + k % 9;
-        let c: Vec<f64> = if k % 2 == 0 {
-            let roots: Vec<f64> = (0..degree).map(|_| 20.0 * next() - 10.0).collect();
-            from_roots(&roots)
-        } else {
-            (0..=degree).map(|_| 2.0 * next() - 1.0).collect()
-        };
+        let c = random_polynomial(k, &mut next);
         let lo = 10.0 * next() - 5.0;
-        let away = |x: &f64| (x - lo).abs() > 1e-6 * (1.0 + lo.abs());
-        let all: Vec<f64> = real_roots(&c)
-            .iter()
-            .copied()
-            .filter(|&x| x > lo && away(&x))
-            .collect();
-        let above: Vec<f64> = real_roots_above(&c, lo)
-            .iter()
-            .copied()
-            .filter(away)
-            .collect();
-        assert_eq!(
-            above.len(),
-            all.len(),
-            "{c:?} above {lo}: {above:?} vs {all:?}"
+        found += assert_roots_above(
+            &c,
+            lo,
+            real_roots_above(&c, lo).as_slice(),
+            real_roots(&c).as_slice(),
+            true,
         );
-        for (&a, &b) in above.iter().zip(&all) {
-            let (value, terms) = c.iter().rev().fold((0.0, 0.0), |(v, s), &ci| {
-                (v * a + ci, s * a.abs() + ci.abs())
-            });
-            let root = value.abs() <= 64.0 * f64::EPSILON * terms;
-            assert!(
-                (a - b).abs() <= 1e-9 * (1.0 + b.abs()) || root,
-                "{c:?}: {a} vs {b}"
-            );
-        }
-        found += above.len();
     }
     assert!(found > 20_000, "{found} roots");
-}
-
-/// A deterministic stream of uniform draws in [0, 1) from `seed` (SplitMix64), so that a
-/// failure reproduces.
-fn uniform(mut state: u64) -> impl FnMut() -> f64 {
-    move || {
-        let z = eopnp_testkit::splitmix64(state);
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
 }

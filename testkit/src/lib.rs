@@ -11,6 +11,7 @@
 
 mod lm;
 mod metrics;
+mod polynomial;
 mod problem;
 mod rotation;
 mod seed;
@@ -20,6 +21,9 @@ pub use lm::{
     Camera, LmFocalResult, LmResult, NORMALISED, PIXEL_CAMERA,
 };
 pub use metrics::{max_of, mean, median, pose_of, rot_err_deg, trans_err_pct, trans_err_rel};
+pub use polynomial::{
+    assert_roots_above, is_root_to_rounding, poly_from_roots, random_polynomial, uniform_stream,
+};
 pub use problem::{Problem, ProblemOptions, RotationKind, Scene};
 pub use rotation::{axis_angle, exp_so3, haar_rotation, rotation_near_180};
 pub use seed::{

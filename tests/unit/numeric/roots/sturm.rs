@@ -4,19 +4,9 @@
 
 use super::super::{prepare, real_roots, Roots};
 use super::roots_above;
-
-fn from_roots(r: &[f64]) -> Vec<f64> {
-    let mut c = vec![1.0];
-    for &ri in r {
-        let mut n = vec![0.0; c.len() + 1];
-        for (i, &ci) in c.iter().enumerate() {
-            n[i + 1] += ci;
-            n[i] -= ri * ci;
-        }
-        c = n;
-    }
-    c
-}
+use eopnp_testkit::{
+    assert_roots_above, poly_from_roots as from_roots, random_polynomial, uniform_stream,
+};
 
 fn sturm(c: &[f64], lo: f64) -> Option<Roots> {
     let (p, zero) = prepare(c).expect("a polynomial");
@@ -57,45 +47,16 @@ fn known_roots_above_a_value() {
 /// the rounding's band, 1.1e-6 apart in one of these polynomials).
 #[test]
 fn decides_and_agrees_with_the_derivative_sequence() {
-    let mut state = 0x5851_f42d_4c95_7f2d_u64;
-    let mut next = move || {
-        let z = eopnp_testkit::splitmix64(state);
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniform_stream(0x5851_f42d_4c95_7f2d_u64);
     let (mut decided, mut found) = (0, 0);
     for k in 0..20_000 {
-        let degree = 1 + k % 9;
-        let c: Vec<f64> = if k % 2 == 0 {
-            let roots: Vec<f64> = (0..degree).map(|_| 20.0 * next() - 10.0).collect();
-            from_roots(&roots)
-        } else {
-            (0..=degree).map(|_| 2.0 * next() - 1.0).collect()
-        };
+        let c = random_polynomial(k, &mut next);
         let lo = 10.0 * next() - 5.0;
         let Some(got) = sturm(&c, lo) else {
             continue;
         };
         decided += 1;
-        let away = |x: &f64| (x - lo).abs() > 1e-6 * (1.0 + lo.abs());
-        let all: Vec<f64> = real_roots(&c)
-            .iter()
-            .copied()
-            .filter(|&x| x > lo && away(&x))
-            .collect();
-        let got: Vec<f64> = got.iter().copied().filter(away).collect();
-        assert_eq!(got.len(), all.len(), "{c:?} above {lo}: {got:?} vs {all:?}");
-        for (&a, &b) in got.iter().zip(&all) {
-            let (value, terms) = c.iter().rev().fold((0.0, 0.0), |(v, s), &ci| {
-                (v * a + ci, s * a.abs() + ci.abs())
-            });
-            let root = value.abs() <= 64.0 * f64::EPSILON * terms;
-            assert!(
-                (a - b).abs() <= 1e-9 * (1.0 + b.abs()) || root,
-                "{c:?}: {a} vs {b}"
-            );
-        }
-        found += got.len();
+        found += assert_roots_above(&c, lo, got.as_slice(), real_roots(&c).as_slice(), true);
     }
     println!("decided {decided} of 20000, {found} roots");
     assert!(decided >= 19_900, "decided on {decided} of 20000");
