@@ -168,6 +168,22 @@ fn register_with_an_unknown_focal_length_recovers_the_model_cameras() {
         );
         assert!(error <= 0.01, "image {id}: focal length off by {error} %");
         assert!(reg.rotation_error_deg <= 0.01, "image {id}");
+        // rmse_px is through the estimated camera: the RMS of the reprojections, recomputed.
+        let (world, pixels) = truth.correspondences(*id);
+        let squares: f64 = world
+            .iter()
+            .zip(&pixels)
+            .map(|(x, u)| {
+                let p = reg.solution.rotation * x.coords + reg.solution.translation;
+                (estimated.project(nalgebra::Point2::new(p.x / p.z, p.y / p.z)) - u).norm_squared()
+            })
+            .sum();
+        let rmse = (squares / world.len() as f64).sqrt();
+        assert!(
+            (reg.rmse_px - rmse).abs() <= 1e-9 * rmse,
+            "image {id}: rmse_px {} vs {rmse}",
+            reg.rmse_px
+        );
         // Pose and focal length minimise the pixel error together: not above COLMAP's pose
         // through COLMAP's camera (the same correspondences).
         let colmap_rmse = register_image(&truth, *id, &solver, None)
