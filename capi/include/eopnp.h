@@ -450,7 +450,8 @@ typedef struct EopnpRansacStats {
   double micros;
 } EopnpRansacStats;
 
-// The registration of one image of a COLMAP model (`eopnp_model_register`).
+// The registration of one image of a COLMAP model (`eopnp_model_register`,
+// `eopnp_model_register_with`).
 typedef struct EopnpRegistration {
   // The image's id.
   uint32_t image_id;
@@ -471,13 +472,44 @@ typedef struct EopnpRegistration {
   double rotation_error_deg;
   // `|t - t_model| / |t_model|`, percent.
   double translation_error_pct;
-  // RMS pixel residual of the solved pose (over the inliers with RANSAC).
+  // RMS pixel residual of the solved pose (over the inliers with RANSAC), through the
+  // estimated camera when an intrinsic was free (`solution.camera_params`).
   double rmse_px;
   // RMS pixel residual of the model's pose, on the same points.
   double model_rmse_px;
   // Wall time of the solve, microseconds.
   double micros;
+  // `focal_error_pct` holds the estimated focal length's error: an intrinsic was free
+  // (`eopnp_model_register_with`; also with only the principal point or the distortion
+  // refined, whose error is then 0). False through the model's camera.
+  bool has_focal_error;
+  // With `has_focal_error`: the error of the estimated camera's focal length against the model
+  // camera's, percent (the larger of the two axes' `100 |f - f_model| / f_model`); 0
+  // otherwise.
+  double focal_error_pct;
 } EopnpRegistration;
+
+// The intrinsics registration re-estimates with the pose (`eopnp_model_register_with`,
+// `eopnp_model_register_batch_with`), the model's camera of the image being the starting
+// guess: `EopnpProblem`'s fields of the same names, with the same rules and statuses.
+// Zero-initialise it (`EopnpFreeIntrinsics f = {0};`: none free, as a NULL pointer) and set the
+// fields you need.
+typedef struct EopnpFreeIntrinsics {
+  // The focal length is unknown and estimated with the pose (the model camera's two focal
+  // lengths scaled alike); `EopnpRegistration::focal_error_pct` is the estimate's error
+  // against the model camera's. As `EopnpProblem::unknown_focal`.
+  bool unknown_focal;
+  // With `unknown_focal`: the range of the (first) focal length sought, pixels
+  // (`0 < focal_min_px < focal_max_px`, else `EOPNP_INVALID_OPTION`). Both 0: a tenth to ten
+  // times the model camera's. Set without `unknown_focal`: `EOPNP_INVALID_ARGUMENT`.
+  double focal_min_px;
+  // See `focal_min_px`.
+  double focal_max_px;
+  // The principal point is refined with the pose (`EopnpProblem::refine_principal_point`).
+  bool refine_principal_point;
+  // The distortion parameters are refined with the pose (`EopnpProblem::refine_distortion`).
+  bool refine_distortion;
+} EopnpFreeIntrinsics;
 
 // The registration of one frame of a COLMAP model with rigs (`eopnp_model_register_frame`):
 // the pose of the frame's rig from the correspondences of all its images, each through its own
@@ -929,6 +961,7 @@ enum EopnpStatus eopnp_model_camera(const struct EopnpModel *model,
 // through its camera (the library's `colmap::register_image`), with RANSAC when `ransac` is
 // not NULL, else by a plain solve; with the errors against the model's own pose. Into `*out`.
 // An unknown image or camera: `EOPNP_REGISTER_ERROR`; a solver failure: its own status.
+// `eopnp_model_register_with` also re-estimates intrinsics.
 //
 // # Safety
 // `model`, `solver` NULL or live; `ransac` NULL or live; `out` NULL or writable.
@@ -937,6 +970,27 @@ enum EopnpStatus eopnp_model_register(const struct EopnpModel *model,
                                       const struct EopnpSolver *solver,
                                       const struct EopnpRansac *ransac,
                                       struct EopnpRegistration *out);
+
+// Registers image `image_id` of the model as `eopnp_model_register` does, re-estimating with
+// the pose the intrinsics that `*intrinsics` makes free, the model's camera the starting guess
+// (the library's `colmap::register_image_with`: with `unknown_focal`, COLMAP's registration
+// with an unknown focal length). `intrinsics` NULL (or all zero): none, as
+// `eopnp_model_register`.
+// `out->solution` has the estimated camera (`focal_estimated` with `unknown_focal`,
+// `camera_estimated` and `camera_params` with any), `out->focal_error_pct` its focal length's
+// error against the model camera's, and `out->rmse_px` is through it. Bad options:
+// `EopnpProblem`'s statuses for its fields of the same names (`EOPNP_INVALID_OPTION` for a
+// bad range, `EOPNP_INVALID_ARGUMENT` for a range without `unknown_focal`,
+// `EOPNP_TOO_FEW_POINTS` for fewer correspondences than half the free parameters).
+//
+// # Safety
+// As `eopnp_model_register`; `intrinsics` NULL or a readable `EopnpFreeIntrinsics`.
+enum EopnpStatus eopnp_model_register_with(const struct EopnpModel *model,
+                                           uint32_t image_id,
+                                           const struct EopnpSolver *solver,
+                                           const struct EopnpRansac *ransac,
+                                           const struct EopnpFreeIntrinsics *intrinsics,
+                                           struct EopnpRegistration *out);
 
 // Registers `count` images of the model (each as `eopnp_model_register`) in parallel on
 // `threads` threads (0: rayon's global pool): `out[i]`, `statuses[i]` for `image_ids[i]`.
@@ -953,6 +1007,23 @@ enum EopnpStatus eopnp_model_register_batch(const struct EopnpModel *model,
                                             size_t threads,
                                             struct EopnpRegistration *out,
                                             enum EopnpStatus *statuses);
+
+// Registers `count` images of the model, each as `eopnp_model_register_with` with the same
+// `intrinsics` (NULL: none), in parallel as `eopnp_model_register_batch` does. A range without
+// `unknown_focal` fails the whole call (`EOPNP_INVALID_ARGUMENT`, no status written); the
+// library's checks of the options (a bad range: `EOPNP_INVALID_OPTION`) are each image's.
+//
+// # Safety
+// As `eopnp_model_register_batch`; `intrinsics` NULL or a readable `EopnpFreeIntrinsics`.
+enum EopnpStatus eopnp_model_register_batch_with(const struct EopnpModel *model,
+                                                 const uint32_t *image_ids,
+                                                 size_t count,
+                                                 const struct EopnpSolver *solver,
+                                                 const struct EopnpRansac *ransac,
+                                                 const struct EopnpFreeIntrinsics *intrinsics,
+                                                 size_t threads,
+                                                 struct EopnpRegistration *out,
+                                                 enum EopnpStatus *statuses);
 
 // The ids of the model's frames (models with rigs: `rigs.txt`/`frames.txt` or their binary
 // forms; none otherwise), ascending, as `eopnp_model_image_ids` gives the images'.

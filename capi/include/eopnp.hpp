@@ -446,6 +446,48 @@ inline std::optional<std::vector<double>> estimated_camera_params(const Solution
   return std::vector<double>(s.camera_params, s.camera_params + n);
 }
 
+/// The intrinsics a registration re-estimates with the pose (Model::register_image,
+/// Model::register_batch), the model's camera being the starting guess; the options of
+/// Problem::unknown_focal, refine_principal_point and refine_distortion, with their rules and
+/// exceptions. Nothing free by default:
+///   model.register_image(id, solver, nullptr, eopnp::FreeIntrinsics().unknown_focal())
+/// gives the estimated focal length in reg.solution (estimated_focal()) and its error against
+/// the model camera's in focal_error_pct(reg).
+class FreeIntrinsics {
+ public:
+  FreeIntrinsics() : f_{} {}
+  /// The focal length is unknown: sought between a tenth and ten times the model camera's, or
+  /// between `min_px` and `max_px` (0 < min_px < max_px, else InvalidOptionError).
+  FreeIntrinsics& unknown_focal(double min_px = 0.0, double max_px = 0.0) {
+    f_.unknown_focal = true;
+    f_.focal_min_px = min_px;
+    f_.focal_max_px = max_px;
+    return *this;
+  }
+  /// The principal point is refined with the pose.
+  FreeIntrinsics& refine_principal_point() {
+    f_.refine_principal_point = true;
+    return *this;
+  }
+  /// The distortion parameters are refined with the pose.
+  FreeIntrinsics& refine_distortion() {
+    f_.refine_distortion = true;
+    return *this;
+  }
+  /// The C struct.
+  const EopnpFreeIntrinsics& c() const noexcept { return f_; }
+
+ private:
+  EopnpFreeIntrinsics f_;
+};
+
+/// The estimated focal length's error against the model camera's, percent, of a registration
+/// with free intrinsics (FreeIntrinsics); nothing through the model's camera.
+inline std::optional<double> focal_error_pct(const Registration& r) {
+  if (!r.has_focal_error) return std::nullopt;
+  return r.focal_error_pct;
+}
+
 // -------------------------------------------------------------------------------------------
 // Solver and RANSAC.
 
@@ -685,24 +727,28 @@ class Model {
     detail::check(eopnp_model_camera(h_.get(), camera_id, &c));
     return Camera(c);
   }
-  /// Registers image `image_id` (with RANSAC when `ransac` is not null).
+  /// Registers image `image_id` (with RANSAC when `ransac` is not null), re-estimating with the
+  /// pose the intrinsics that `intrinsics` makes free (none by default; FreeIntrinsics).
   Registration register_image(std::uint32_t image_id, const Solver& solver,
-                              const Ransac* ransac = nullptr) const {
+                              const Ransac* ransac = nullptr,
+                              const FreeIntrinsics& intrinsics = FreeIntrinsics()) const {
     Registration r{};
-    detail::check(eopnp_model_register(h_.get(), image_id, solver.get(),
-                                       ransac ? ransac->get() : nullptr, &r));
+    detail::check(eopnp_model_register_with(h_.get(), image_id, solver.get(),
+                                            ransac ? ransac->get() : nullptr, &intrinsics.c(), &r));
     return r;
   }
-  /// Registers the images `image_ids` on `threads` threads (0: one per core). Each image's
-  /// status is in `statuses` (resized); throws only for a failure of the call itself.
+  /// Registers the images `image_ids` on `threads` threads (0: one per core), each as
+  /// register_image with `intrinsics`. Each image's status is in `statuses` (resized); throws
+  /// only for a failure of the call itself.
   std::vector<Registration> register_batch(const std::vector<std::uint32_t>& image_ids,
                                            const Solver& solver, const Ransac* ransac,
-                                           std::size_t threads, std::vector<Status>& statuses) const {
+                                           std::size_t threads, std::vector<Status>& statuses,
+                                           const FreeIntrinsics& intrinsics = FreeIntrinsics()) const {
     std::vector<Registration> out(image_ids.size());
     statuses.assign(image_ids.size(), EOPNP_PANIC);
-    const EopnpStatus st = eopnp_model_register_batch(
+    const EopnpStatus st = eopnp_model_register_batch_with(
         h_.get(), image_ids.data(), image_ids.size(), solver.get(), ransac ? ransac->get() : nullptr,
-        threads, out.data(), statuses.data());
+        &intrinsics.c(), threads, out.data(), statuses.data());
     if (st != EOPNP_OK && st != EOPNP_PANIC) {
       for (Status x : statuses)
         if (x == EOPNP_PANIC) detail::throw_status(st);

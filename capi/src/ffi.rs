@@ -3,6 +3,7 @@
 use std::borrow::Cow;
 use std::collections::HashMap;
 use std::ffi::{c_char, CStr};
+use std::ptr;
 use std::sync::{Arc, Mutex};
 
 use eopnp::camera::Camera;
@@ -183,12 +184,97 @@ struct Inputs<'a> {
     observed: Observed<'a>,
     focal: Option<(f64, f64)>,
     gravity: Option<Gravity>,
+    free: Free,
+}
+
+/// The free intrinsics of a problem (`EopnpProblem`'s `unknown_focal`, `focal_min_px`,
+/// `focal_max_px`, `refine_principal_point`, `refine_distortion`) or of a registration
+/// (`EopnpFreeIntrinsics`' fields of the same names), checked; none by default.
+#[derive(Clone, Copy, Debug, Default)]
+struct Free {
     /// The focal length is unknown: in the default range (`None`) or in `(min_px, max_px)`.
     unknown_focal: Option<Option<(f64, f64)>>,
-    /// The principal point is refined (`EopnpProblem::refine_principal_point`).
+    /// The principal point is refined.
     refine_principal_point: bool,
-    /// The distortion parameters are refined (`EopnpProblem::refine_distortion`).
+    /// The distortion parameters are refined.
     refine_distortion: bool,
+}
+
+impl Free {
+    /// The fields' one check: a range without `unknown_focal` is `EOPNP_INVALID_ARGUMENT`. The
+    /// library checks the rest when it solves (a bad range, input these options do not take:
+    /// `InvalidOption` naming the option).
+    fn new(
+        unknown_focal: bool,
+        focal_min_px: f64,
+        focal_max_px: f64,
+        refine_principal_point: bool,
+        refine_distortion: bool,
+    ) -> Res<Self> {
+        let range =
+            (focal_min_px != 0.0 || focal_max_px != 0.0).then_some((focal_min_px, focal_max_px));
+        if range.is_some() && !unknown_focal {
+            return Err(Failure::invalid(
+                "`focal_min_px`/`focal_max_px` are set without `unknown_focal`",
+            ));
+        }
+        Ok(Free {
+            unknown_focal: unknown_focal.then_some(range),
+            refine_principal_point,
+            refine_distortion,
+        })
+    }
+
+    fn of_problem(p: &EopnpProblem) -> Res<Self> {
+        Free::new(
+            p.unknown_focal,
+            p.focal_min_px,
+            p.focal_max_px,
+            p.refine_principal_point,
+            p.refine_distortion,
+        )
+    }
+
+    /// A registration's: none for NULL.
+    ///
+    /// # Safety
+    /// `f` NULL or a readable `EopnpFreeIntrinsics`.
+    unsafe fn of_registration(f: *const EopnpFreeIntrinsics) -> Res<Self> {
+        if f.is_null() {
+            return Ok(Free::default());
+        }
+        let f = get(f, "intrinsics")?;
+        Free::new(
+            f.unknown_focal,
+            f.focal_min_px,
+            f.focal_max_px,
+            f.refine_principal_point,
+            f.refine_distortion,
+        )
+    }
+
+    /// `problem` with these intrinsics free.
+    fn apply<'p>(&self, mut problem: Problem<'p>) -> Problem<'p> {
+        problem = match self.unknown_focal {
+            Some(Some((lo, hi))) => problem.unknown_focal_within(lo, hi),
+            Some(None) => problem.unknown_focal(),
+            None => problem,
+        };
+        // The library checks the input these need (pixels through one camera, no vertical):
+        // `InvalidOption` naming the option otherwise.
+        if self.refine_principal_point {
+            problem = problem.refine_principal_point();
+        }
+        if self.refine_distortion {
+            problem = problem.refine_distortion();
+        }
+        problem
+    }
+
+    /// The focal length is unknown: a solution's `focal_estimated` (`EopnpSolution::of`).
+    fn focal(&self) -> bool {
+        self.unknown_focal.is_some()
+    }
 }
 
 /// The known vertical of a problem: `None` without one; `EOPNP_INVALID_ARGUMENT` for a half-set
@@ -265,14 +351,7 @@ impl<'a> Inputs<'a> {
         };
         let focal = (p.focal_x != 0.0 || p.focal_y != 0.0).then_some((p.focal_x, p.focal_y));
         let gravity = gravity(p.gravity_camera, p.gravity_world, p.gravity_sigma_deg)?;
-        let range = (p.focal_min_px != 0.0 || p.focal_max_px != 0.0)
-            .then_some((p.focal_min_px, p.focal_max_px));
-        if range.is_some() && !p.unknown_focal {
-            return Err(Failure::invalid(
-                "`focal_min_px`/`focal_max_px` are set without `unknown_focal`",
-            ));
-        }
-        let unknown_focal = p.unknown_focal.then_some(range);
+        let free = Free::of_problem(p)?;
         Ok(Inputs {
             world,
             image,
@@ -280,9 +359,7 @@ impl<'a> Inputs<'a> {
             observed,
             focal,
             gravity,
-            unknown_focal,
-            refine_principal_point: p.refine_principal_point,
-            refine_distortion: p.refine_distortion,
+            free,
         })
     }
 
@@ -301,25 +378,12 @@ impl<'a> Inputs<'a> {
         if let Some(g) = self.gravity {
             problem = problem.gravity(g);
         }
-        problem = match self.unknown_focal {
-            Some(Some((lo, hi))) => problem.unknown_focal_within(lo, hi),
-            Some(None) => problem.unknown_focal(),
-            None => problem,
-        };
-        // The library checks the input these need (pixels through one camera, no vertical):
-        // `InvalidOption` naming the option otherwise.
-        if self.refine_principal_point {
-            problem = problem.refine_principal_point();
-        }
-        if self.refine_distortion {
-            problem = problem.refine_distortion();
-        }
-        problem
+        self.free.apply(problem)
     }
 
     /// A solution of this problem for C (`focal_estimated` with an unknown focal length).
     fn solution(&self, s: &eopnp::Solution) -> EopnpSolution {
-        EopnpSolution::of(s, self.unknown_focal.is_some())
+        EopnpSolution::of(s, self.free.focal())
     }
 
     fn n(&self) -> usize {
@@ -1512,15 +1576,17 @@ pub unsafe extern "C" fn eopnp_model_camera(
     })
 }
 
-fn registration(r: &Registration) -> EopnpRegistration {
+/// `r` for C; `free`: the intrinsics it was registered with.
+fn registration(r: &Registration, free: &Free) -> EopnpRegistration {
     EopnpRegistration {
         image_id: r.image_id,
         has_ransac: r.ransac.is_some(),
         n: r.n as u64,
         inliers: r.inliers as u64,
         skipped: r.skipped as u64,
-        // Registration solves through the model's cameras: no intrinsic is free.
-        solution: EopnpSolution::of(&r.solution, false),
+        // `focal_estimated` with an unknown focal length; the estimated camera whenever an
+        // intrinsic was free (the solution has one).
+        solution: EopnpSolution::of(&r.solution, free.focal()),
         ransac: r
             .ransac
             .as_ref()
@@ -1530,13 +1596,50 @@ fn registration(r: &Registration) -> EopnpRegistration {
         rmse_px: r.rmse_px,
         model_rmse_px: r.model_rmse_px,
         micros: r.micros,
+        has_focal_error: r.focal_error_pct.is_some(),
+        focal_error_pct: r.focal_error_pct.unwrap_or(0.0),
     }
+}
+
+/// The optional RANSAC handle of the registration functions: none for NULL.
+///
+/// # Safety
+/// `ransac` NULL or live.
+unsafe fn optional_ransac<'a>(ransac: *const EopnpRansac) -> Res<Option<&'a Ransac>> {
+    if ransac.is_null() {
+        Ok(None)
+    } else {
+        Ok(Some(&get(ransac, "ransac")?.ransac))
+    }
+}
+
+/// `eopnp_model_register_with`'s body (`eopnp_model_register`: `intrinsics` NULL).
+///
+/// # Safety
+/// As `eopnp_model_register_with`.
+unsafe fn register_one(
+    model: *const EopnpModel,
+    image_id: u32,
+    solver: *const EopnpSolver,
+    ransac: *const EopnpRansac,
+    intrinsics: *const EopnpFreeIntrinsics,
+    out: *mut EopnpRegistration,
+) -> Res<()> {
+    let model = &get(model, "model")?.model;
+    let solver = &get(solver, "solver")?.solver;
+    let ransac = optional_ransac(ransac)?;
+    let free = Free::of_registration(intrinsics)?;
+    let out = get_mut(out, "out")?;
+    let r = colmap::register_image_with(model, image_id, solver, ransac, |p| free.apply(p))?;
+    *out = registration(&r, &free);
+    Ok(())
 }
 
 /// Registers image `image_id` of the model: its pose from its 2D points with a 3D point,
 /// through its camera (the library's `colmap::register_image`), with RANSAC when `ransac` is
 /// not NULL, else by a plain solve; with the errors against the model's own pose. Into `*out`.
 /// An unknown image or camera: `EOPNP_REGISTER_ERROR`; a solver failure: its own status.
+/// `eopnp_model_register_with` also re-estimates intrinsics.
 ///
 /// # Safety
 /// `model`, `solver` NULL or live; `ransac` NULL or live; `out` NULL or writable.
@@ -1548,19 +1651,83 @@ pub unsafe extern "C" fn eopnp_model_register(
     ransac: *const EopnpRansac,
     out: *mut EopnpRegistration,
 ) -> EopnpStatus {
-    guard(|| {
-        let model = &get(model, "model")?.model;
-        let solver = &get(solver, "solver")?.solver;
-        let ransac = if ransac.is_null() {
-            None
-        } else {
-            Some(&get(ransac, "ransac")?.ransac)
-        };
-        let out = get_mut(out, "out")?;
-        let r = colmap::register_image(model, image_id, solver, ransac)?;
-        *out = registration(&r);
-        Ok(())
-    })
+    guard(|| register_one(model, image_id, solver, ransac, ptr::null(), out))
+}
+
+/// Registers image `image_id` of the model as `eopnp_model_register` does, re-estimating with
+/// the pose the intrinsics that `*intrinsics` makes free, the model's camera the starting guess
+/// (the library's `colmap::register_image_with`: with `unknown_focal`, COLMAP's registration
+/// with an unknown focal length). `intrinsics` NULL (or all zero): none, as
+/// `eopnp_model_register`.
+/// `out->solution` has the estimated camera (`focal_estimated` with `unknown_focal`,
+/// `camera_estimated` and `camera_params` with any), `out->focal_error_pct` its focal length's
+/// error against the model camera's, and `out->rmse_px` is through it. Bad options:
+/// `EopnpProblem`'s statuses for its fields of the same names (`EOPNP_INVALID_OPTION` for a
+/// bad range, `EOPNP_INVALID_ARGUMENT` for a range without `unknown_focal`,
+/// `EOPNP_TOO_FEW_POINTS` for fewer correspondences than half the free parameters).
+///
+/// # Safety
+/// As `eopnp_model_register`; `intrinsics` NULL or a readable `EopnpFreeIntrinsics`.
+#[no_mangle]
+pub unsafe extern "C" fn eopnp_model_register_with(
+    model: *const EopnpModel,
+    image_id: u32,
+    solver: *const EopnpSolver,
+    ransac: *const EopnpRansac,
+    intrinsics: *const EopnpFreeIntrinsics,
+    out: *mut EopnpRegistration,
+) -> EopnpStatus {
+    guard(|| register_one(model, image_id, solver, ransac, intrinsics, out))
+}
+
+/// `eopnp_model_register_batch_with`'s body (`eopnp_model_register_batch`: `intrinsics`
+/// NULL).
+///
+/// # Safety
+/// As `eopnp_model_register_batch_with`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn register_many(
+    model: *const EopnpModel,
+    image_ids: *const u32,
+    count: usize,
+    solver: *const EopnpSolver,
+    ransac: *const EopnpRansac,
+    intrinsics: *const EopnpFreeIntrinsics,
+    threads: usize,
+    out: *mut EopnpRegistration,
+    statuses: *mut EopnpStatus,
+) -> Res<()> {
+    let model = &get(model, "model")?.model;
+    let solver = &get(solver, "solver")?.solver;
+    let ransac = optional_ransac(ransac)?;
+    let free = Free::of_registration(intrinsics)?;
+    let ids = slice(image_ids, count, "image_ids")?;
+    let out = slice_mut(out, count, "out")?;
+    let statuses = slice_mut(statuses, count, "statuses")?;
+    let results = run_in(threads, || {
+        use rayon::prelude::*;
+        ids.par_iter()
+            .map_init(
+                || Registrar::new(model),
+                |reg, id| reg.register_with(*id, solver, ransac, |p| free.apply(p)),
+            )
+            .collect::<Vec<_>>()
+    })?;
+    let mut failures = Vec::new();
+    for (i, r) in results.into_iter().enumerate() {
+        match r {
+            Ok(r) => {
+                out[i] = registration(&r, &free);
+                statuses[i] = OK;
+            }
+            Err(e) => {
+                let f = Failure::from(e);
+                statuses[i] = f.info.status;
+                failures.push((i, f));
+            }
+        }
+    }
+    first_failure(failures)
 }
 
 /// Registers `count` images of the model (each as `eopnp_model_register`) in parallel on
@@ -1582,40 +1749,43 @@ pub unsafe extern "C" fn eopnp_model_register_batch(
     statuses: *mut EopnpStatus,
 ) -> EopnpStatus {
     guard(|| {
-        let model = &get(model, "model")?.model;
-        let solver = &get(solver, "solver")?.solver;
-        let ransac = if ransac.is_null() {
-            None
-        } else {
-            Some(&get(ransac, "ransac")?.ransac)
-        };
-        let ids = slice(image_ids, count, "image_ids")?;
-        let out = slice_mut(out, count, "out")?;
-        let statuses = slice_mut(statuses, count, "statuses")?;
-        let results = run_in(threads, || {
-            use rayon::prelude::*;
-            ids.par_iter()
-                .map_init(
-                    || Registrar::new(model),
-                    |reg, id| reg.register(*id, solver, ransac),
-                )
-                .collect::<Vec<_>>()
-        })?;
-        let mut failures = Vec::new();
-        for (i, r) in results.into_iter().enumerate() {
-            match r {
-                Ok(r) => {
-                    out[i] = registration(&r);
-                    statuses[i] = OK;
-                }
-                Err(e) => {
-                    let f = Failure::from(e);
-                    statuses[i] = f.info.status;
-                    failures.push((i, f));
-                }
-            }
-        }
-        first_failure(failures)
+        register_many(
+            model,
+            image_ids,
+            count,
+            solver,
+            ransac,
+            ptr::null(),
+            threads,
+            out,
+            statuses,
+        )
+    })
+}
+
+/// Registers `count` images of the model, each as `eopnp_model_register_with` with the same
+/// `intrinsics` (NULL: none), in parallel as `eopnp_model_register_batch` does. A range without
+/// `unknown_focal` fails the whole call (`EOPNP_INVALID_ARGUMENT`, no status written); the
+/// library's checks of the options (a bad range: `EOPNP_INVALID_OPTION`) are each image's.
+///
+/// # Safety
+/// As `eopnp_model_register_batch`; `intrinsics` NULL or a readable `EopnpFreeIntrinsics`.
+#[no_mangle]
+pub unsafe extern "C" fn eopnp_model_register_batch_with(
+    model: *const EopnpModel,
+    image_ids: *const u32,
+    count: usize,
+    solver: *const EopnpSolver,
+    ransac: *const EopnpRansac,
+    intrinsics: *const EopnpFreeIntrinsics,
+    threads: usize,
+    out: *mut EopnpRegistration,
+    statuses: *mut EopnpStatus,
+) -> EopnpStatus {
+    guard(|| {
+        register_many(
+            model, image_ids, count, solver, ransac, intrinsics, threads, out, statuses,
+        )
     })
 }
 

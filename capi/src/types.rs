@@ -283,7 +283,32 @@ pub struct EopnpRansacStats {
     pub micros: f64,
 }
 
-/// The registration of one image of a COLMAP model (`eopnp_model_register`).
+/// The intrinsics registration re-estimates with the pose (`eopnp_model_register_with`,
+/// `eopnp_model_register_batch_with`), the model's camera of the image being the starting
+/// guess: `EopnpProblem`'s fields of the same names, with the same rules and statuses.
+/// Zero-initialise it (`EopnpFreeIntrinsics f = {0};`: none free, as a NULL pointer) and set the
+/// fields you need.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EopnpFreeIntrinsics {
+    /// The focal length is unknown and estimated with the pose (the model camera's two focal
+    /// lengths scaled alike); `EopnpRegistration::focal_error_pct` is the estimate's error
+    /// against the model camera's. As `EopnpProblem::unknown_focal`.
+    pub unknown_focal: bool,
+    /// With `unknown_focal`: the range of the (first) focal length sought, pixels
+    /// (`0 < focal_min_px < focal_max_px`, else `EOPNP_INVALID_OPTION`). Both 0: a tenth to ten
+    /// times the model camera's. Set without `unknown_focal`: `EOPNP_INVALID_ARGUMENT`.
+    pub focal_min_px: f64,
+    /// See `focal_min_px`.
+    pub focal_max_px: f64,
+    /// The principal point is refined with the pose (`EopnpProblem::refine_principal_point`).
+    pub refine_principal_point: bool,
+    /// The distortion parameters are refined with the pose (`EopnpProblem::refine_distortion`).
+    pub refine_distortion: bool,
+}
+
+/// The registration of one image of a COLMAP model (`eopnp_model_register`,
+/// `eopnp_model_register_with`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EopnpRegistration {
@@ -306,12 +331,21 @@ pub struct EopnpRegistration {
     pub rotation_error_deg: f64,
     /// `|t - t_model| / |t_model|`, percent.
     pub translation_error_pct: f64,
-    /// RMS pixel residual of the solved pose (over the inliers with RANSAC).
+    /// RMS pixel residual of the solved pose (over the inliers with RANSAC), through the
+    /// estimated camera when an intrinsic was free (`solution.camera_params`).
     pub rmse_px: f64,
     /// RMS pixel residual of the model's pose, on the same points.
     pub model_rmse_px: f64,
     /// Wall time of the solve, microseconds.
     pub micros: f64,
+    /// `focal_error_pct` holds the estimated focal length's error: an intrinsic was free
+    /// (`eopnp_model_register_with`; also with only the principal point or the distortion
+    /// refined, whose error is then 0). False through the model's camera.
+    pub has_focal_error: bool,
+    /// With `has_focal_error`: the error of the estimated camera's focal length against the model
+    /// camera's, percent (the larger of the two axes' `100 |f - f_model| / f_model`); 0
+    /// otherwise.
+    pub focal_error_pct: f64,
 }
 
 /// The registration of one frame of a COLMAP model with rigs (`eopnp_model_register_frame`):

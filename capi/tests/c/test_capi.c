@@ -708,6 +708,74 @@ static void test_model(const char *dir) {
   EXPECT(EOPNP_NULL_POINTER, eopnp_model_register_batch(model, ids, 6, NULL, NULL, 1, regs, statuses));
   EXPECT(EOPNP_NULL_POINTER, eopnp_model_register_batch(model, ids, 6, s, NULL, 1, NULL, statuses));
   EXPECT(EOPNP_NULL_POINTER, eopnp_model_register_batch(model, ids, 6, s, NULL, 1, regs, NULL));
+
+  /* Free intrinsics: the focal length re-estimated from the model camera's own (image 1 sees
+   * camera 3, images.txt). */
+  EopnpFreeIntrinsics fi = {0};
+  fi.unknown_focal = true;
+  CHECK(ids[0] == 1);
+  memset(&reg, 0xff, sizeof reg);
+  EXPECT(EOPNP_OK, eopnp_model_register_with(model, ids[0], s, NULL, &fi, &reg));
+  CHECK(reg.image_id == ids[0] && !reg.has_ransac && reg.rotation_error_deg < 0.01);
+  CHECK(reg.has_focal_error && reg.focal_error_pct >= 0.0 && reg.focal_error_pct < 0.01);
+  CHECK(reg.solution.focal_estimated && reg.solution.camera_estimated);
+  CHECK(reg.solution.camera_n_params == 4 && reg.solution.camera_params[0] == reg.solution.focal_x);
+  {
+    EopnpCamera *c3 = NULL;
+    EopnpCameraInfo info;
+    EXPECT(EOPNP_OK, eopnp_model_camera(model, 3, &c3));
+    EXPECT(EOPNP_OK, eopnp_camera_info(c3, &info));
+    eopnp_camera_free(c3);
+    CHECK(reg.focal_error_pct == 100.0 * fabs(reg.solution.focal_x - info.fx) / info.fx);
+  }
+  /* NULL and all-zero intrinsics: plain registration. */
+  EopnpRegistration plain, with;
+  EopnpFreeIntrinsics no_free = {0};
+  EXPECT(EOPNP_OK, eopnp_model_register(model, ids[2], s, NULL, &plain));
+  CHECK(!plain.has_focal_error && plain.focal_error_pct == 0.0 && !plain.solution.camera_estimated);
+  memset(&with, 0xff, sizeof with);
+  EXPECT(EOPNP_OK, eopnp_model_register_with(model, ids[2], s, NULL, NULL, &with));
+  CHECK(memcmp(with.solution.rotation, plain.solution.rotation, sizeof plain.solution.rotation) == 0);
+  CHECK(!with.has_focal_error && with.focal_error_pct == 0.0 && !with.solution.focal_estimated);
+  memset(&with, 0xff, sizeof with);
+  EXPECT(EOPNP_OK, eopnp_model_register_with(model, ids[2], s, NULL, &no_free, &with));
+  CHECK(memcmp(with.solution.translation, plain.solution.translation,
+               sizeof plain.solution.translation) == 0);
+  CHECK(!with.has_focal_error && !with.solution.camera_estimated);
+  /* The distortion refined, the focal length known: its error 0. */
+  EopnpFreeIntrinsics dist = {0};
+  dist.refine_distortion = true;
+  EXPECT(EOPNP_OK, eopnp_model_register_with(model, ids[0], s, r, &dist, &with));
+  CHECK(with.has_ransac && with.has_focal_error && with.focal_error_pct == 0.0);
+  CHECK(with.solution.camera_estimated && !with.solution.focal_estimated);
+  /* Bad options: a range min > max, a range without unknown_focal. */
+  fi.focal_min_px = 2000.0;
+  fi.focal_max_px = 1000.0;
+  EXPECT(EOPNP_INVALID_OPTION, eopnp_model_register_with(model, ids[0], s, NULL, &fi, &with));
+  CHECK(strstr(eopnp_last_error_message(), "unknown focal length") != NULL);
+  fi.unknown_focal = false;
+  EXPECT(EOPNP_INVALID_ARGUMENT, eopnp_model_register_with(model, ids[0], s, NULL, &fi, &with));
+  CHECK(strstr(eopnp_last_error_message(), "unknown_focal") != NULL);
+  fi.unknown_focal = true;
+  EXPECT(EOPNP_INVALID_OPTION,
+         eopnp_model_register_batch_with(model, ids, 6, s, NULL, &fi, 2, regs, statuses));
+  for (int i = 0; i < 6; ++i) CHECK(statuses[i] == EOPNP_INVALID_OPTION);
+  EXPECT(EOPNP_REGISTER_ERROR, eopnp_model_register_with(model, 12345, s, NULL, &fi, &with));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_model_register_with(NULL, ids[0], s, NULL, &fi, &with));
+  EXPECT(EOPNP_NULL_POINTER, eopnp_model_register_with(model, ids[0], s, NULL, &fi, NULL));
+  /* The batch: one call at a time. */
+  fi.focal_min_px = 0.0;
+  fi.focal_max_px = 0.0;
+  EXPECT(EOPNP_OK, eopnp_model_register_batch_with(model, ids, 6, s, r, &fi, 2, regs, statuses));
+  for (int i = 0; i < 6; ++i) {
+    CHECK(statuses[i] == EOPNP_OK && regs[i].has_focal_error && regs[i].focal_error_pct < 0.01);
+    EXPECT(EOPNP_OK, eopnp_model_register_with(model, ids[i], s, r, &fi, &with));
+    CHECK(memcmp(&with.focal_error_pct, &regs[i].focal_error_pct, sizeof with.focal_error_pct) == 0);
+    CHECK(memcmp(with.solution.rotation, regs[i].solution.rotation,
+                 sizeof with.solution.rotation) == 0);
+  }
+  EXPECT(EOPNP_NULL_POINTER,
+         eopnp_model_register_batch_with(model, ids, 6, s, NULL, &fi, 1, NULL, statuses));
   eopnp_ransac_free(r);
   eopnp_solver_free(s);
   eopnp_model_free(model);

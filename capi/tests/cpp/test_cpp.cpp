@@ -411,6 +411,29 @@ void test_interface(const std::string& model_dir) {
     const auto one = model.register_image(ids[i], moved, &ransac);
     CHECK(std::memcmp(one.solution.rotation, regs[i].solution.rotation, sizeof one.solution.rotation) == 0);
   }
+  // Free intrinsics (FreeIntrinsics): the focal length re-estimated from the model camera's.
+  const auto focal = eopnp::FreeIntrinsics().unknown_focal();
+  const auto fr = model.register_image(ids[0], moved, nullptr, focal);
+  const auto fe = eopnp::focal_error_pct(fr);
+  CHECK(fe.has_value() && *fe >= 0.0 && *fe < 0.01 && fr.rotation_error_deg < 0.01);
+  const auto ff = eopnp::estimated_focal(fr.solution);
+  const auto fc = eopnp::estimated_camera_params(fr.solution);
+  CHECK(ff.has_value() && fc.has_value() && fc->size() == 4 && (*fc)[0] == (*ff)[0]);
+  CHECK(!eopnp::focal_error_pct(model.register_image(ids[0], moved)).has_value());
+  const auto dist = model.register_image(ids[0], moved, &ransac, eopnp::FreeIntrinsics().refine_distortion());
+  CHECK(eopnp::focal_error_pct(dist) == std::optional<double>(0.0));
+  CHECK(!eopnp::estimated_focal(dist.solution).has_value() && eopnp::estimated_camera_params(dist.solution));
+  THROWS(eopnp::InvalidOptionError, EOPNP_INVALID_OPTION,
+         model.register_image(ids[0], moved, nullptr, eopnp::FreeIntrinsics().unknown_focal(2000.0, 1000.0)));
+  std::vector<eopnp::Status> f_statuses;
+  const auto fregs = model.register_batch(ids, moved, nullptr, 2, f_statuses, focal);
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    const auto one = model.register_image(ids[i], moved, nullptr, focal);
+    CHECK(f_statuses[i] == EOPNP_OK && fregs[i].has_focal_error);
+    CHECK(std::memcmp(&one.focal_error_pct, &fregs[i].focal_error_pct, sizeof one.focal_error_pct) == 0);
+    CHECK(std::memcmp(one.solution.translation, fregs[i].solution.translation,
+                      sizeof one.solution.translation) == 0);
+  }
   // RANSAC batches: problem i with the seed problem_seed(seed, i); an invalid problem's status.
   std::vector<eopnp::Status> r_statuses;
   const auto rs = ransac.estimate_batch(
