@@ -708,23 +708,28 @@ fn refinement_needs_pixels_through_one_camera_without_a_vertical() {
             );
         }
     };
+    // Each of the two options alone on `p` is refused, the message naming it and `why`.
+    let refused = |p: &EopnpProblem, why: &str| {
+        let mut q = *p;
+        q.refine_distortion = true;
+        check(
+            &q,
+            EopnpStatus::EOPNP_INVALID_OPTION,
+            &["`refine_distortion`", why],
+        );
+        let mut q = *p;
+        q.refine_principal_point = true;
+        check(
+            &q,
+            EopnpStatus::EOPNP_INVALID_OPTION,
+            &["`refine_principal_point`", why],
+        );
+    };
     // Normalised input.
     let mut p = base;
     p.camera = ptr::null();
     p.image = mn.as_ptr();
-    p.refine_distortion = true;
-    check(
-        &p,
-        EopnpStatus::EOPNP_INVALID_OPTION,
-        &["`refine_distortion`", "pixels through one camera"],
-    );
-    p.refine_distortion = false;
-    p.refine_principal_point = true;
-    check(
-        &p,
-        EopnpStatus::EOPNP_INVALID_OPTION,
-        &["`refine_principal_point`"],
-    );
+    refused(&p, "pixels through one camera");
     // A rig (of the one camera, at the rig's origin).
     let identity = EopnpPose {
         rotation: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
@@ -742,19 +747,7 @@ fn refinement_needs_pixels_through_one_camera_without_a_vertical() {
     p.rig_cameras = which.as_ptr();
     // The rig problem itself is fine.
     assert_eq!(h.solve(&p).0, EopnpStatus::EOPNP_OK, "{}", message());
-    p.refine_principal_point = true;
-    check(
-        &p,
-        EopnpStatus::EOPNP_INVALID_OPTION,
-        &["`refine_principal_point`"],
-    );
-    p.refine_principal_point = false;
-    p.refine_distortion = true;
-    check(
-        &p,
-        EopnpStatus::EOPNP_INVALID_OPTION,
-        &["`refine_distortion`"],
-    );
+    refused(&p, "pixels through one camera");
     // SAFETY: a rig made above, freed once.
     unsafe { eopnp_rig_free(rig) };
     // A known vertical.
@@ -763,19 +756,7 @@ fn refinement_needs_pixels_through_one_camera_without_a_vertical() {
     p.gravity_camera = gc.as_ptr();
     p.gravity_world = gw.as_ptr();
     p.gravity_sigma_deg = 1.0;
-    p.refine_distortion = true;
-    check(
-        &p,
-        EopnpStatus::EOPNP_INVALID_OPTION,
-        &["`refine_distortion`", "without a known vertical"],
-    );
-    p.refine_distortion = false;
-    p.refine_principal_point = true;
-    check(
-        &p,
-        EopnpStatus::EOPNP_INVALID_OPTION,
-        &["`refine_principal_point`"],
-    );
+    refused(&p, "without a known vertical");
     // Too few points for the free parameters: OPENCV with everything free has 6 + 1 + 2 + 4 =
     // 13, 7 points at least.
     let mut p = base;
