@@ -33,6 +33,17 @@ fn zeroed_problem() -> EopnpProblem {
     unsafe { std::mem::zeroed() }
 }
 
+/// The problem of the packed points `w` (x, y, z) and `m` (x, y), through `camera` (NULL:
+/// normalised points); every other field zero.
+fn problem(w: &[f64], m: &[f64], camera: *const EopnpCamera) -> EopnpProblem {
+    let mut p = zeroed_problem();
+    p.n = w.len() / 3;
+    p.world = w.as_ptr();
+    p.image = m.as_ptr();
+    p.camera = camera;
+    p
+}
+
 fn message() -> String {
     // SAFETY: a NUL-terminated string owned by this thread's slot.
     unsafe { CStr::from_ptr(eopnp_last_error_message()) }
@@ -89,11 +100,7 @@ fn unknown_focal_is_recovered_from_a_wrong_guess_as_the_library_does() {
     let px = pixels(&syn, 1200.0);
     let (w, m) = (flat3(&syn.world), flat2(&px));
     let h = Handles::new(800.0);
-    let mut p = zeroed_problem();
-    p.n = syn.world.len();
-    p.world = w.as_ptr();
-    p.image = m.as_ptr();
-    p.camera = h.camera;
+    let mut p = problem(&w, &m, h.camera);
     // Known focal length: not estimated.
     let (status, s) = h.solve(&p);
     assert_eq!(status, EopnpStatus::EOPNP_OK);
@@ -160,11 +167,7 @@ fn unknown_focal_through_ransac() {
     }
     let (w, m) = (flat3(&syn.world), flat2(&px));
     let h = Handles::new(700.0);
-    let mut p = zeroed_problem();
-    p.n = syn.world.len();
-    p.world = w.as_ptr();
-    p.image = m.as_ptr();
-    p.camera = h.camera;
+    let mut p = problem(&w, &m, h.camera);
     p.unknown_focal = true;
     let mut ransac = ptr::null_mut();
     let mut s = zeroed_solution();
@@ -204,10 +207,7 @@ fn gravity_solves_as_the_library_does() {
     let (w, m) = (flat3(&syn.world), flat2(&syn.normalised));
     let (gc, gw) = down(&syn);
     let h = Handles::new(800.0);
-    let mut p = zeroed_problem();
-    p.n = syn.world.len();
-    p.world = w.as_ptr();
-    p.image = m.as_ptr();
+    let mut p = problem(&w, &m, ptr::null());
     p.gravity_camera = gc.as_ptr();
     p.gravity_world = gw.as_ptr();
     p.gravity_sigma_deg = 0.05;
@@ -241,10 +241,7 @@ fn a_contradicted_vertical_is_gravity_mismatch_with_angle_and_sigmas() {
     assert!(off > 4.0, "{off}");
     let tilted = [tilted.x, tilted.y, tilted.z];
     let h = Handles::new(800.0);
-    let mut p = zeroed_problem();
-    p.n = syn.world.len();
-    p.world = w.as_ptr();
-    p.image = m.as_ptr();
+    let mut p = problem(&w, &m, ptr::null());
     p.gravity_camera = tilted.as_ptr();
     p.gravity_world = gw.as_ptr();
     p.gravity_sigma_deg = 0.1;
@@ -282,14 +279,7 @@ fn bad_verticals_and_focal_options_have_their_status() {
     let (gc, gw) = down(&syn);
     let zero = [0.0; 3];
     let h = Handles::new(900.0);
-    let base = {
-        let mut p = zeroed_problem();
-        p.n = syn.world.len();
-        p.world = w.as_ptr();
-        p.image = m.as_ptr();
-        p.camera = h.camera;
-        p
-    };
+    let base = problem(&w, &m, h.camera);
     let check = |p: &EopnpProblem, want: EopnpStatus, needle: &str| {
         let (status, _) = h.solve(p);
         assert_eq!(status, want, "{}", message());
@@ -509,11 +499,7 @@ fn refined_principal_point_and_distortion_are_the_librarys_and_the_truth() {
             let (w, m) = (flat3(&world), flat2(&pixels));
             let h = Handles::new(800.0);
             let cam = c_camera(&guess);
-            let mut p = zeroed_problem();
-            p.n = world.len();
-            p.world = w.as_ptr();
-            p.image = m.as_ptr();
-            p.camera = cam;
+            let mut p = problem(&w, &m, cam);
             p.unknown_focal = focal_free;
             let case = format!("{} focal_free {focal_free}", truth.model().name());
             // Nothing refined but maybe the focal length: the camera fields say so.
@@ -639,11 +625,7 @@ fn principal_point_alone_keeps_the_focal_length_and_the_distortion() {
     let (w, m) = (flat3(&world), flat2(&pixels));
     let h = Handles::new(800.0);
     let cam = c_camera(&guess);
-    let mut p = zeroed_problem();
-    p.n = world.len();
-    p.world = w.as_ptr();
-    p.image = m.as_ptr();
-    p.camera = cam;
+    let mut p = problem(&w, &m, cam);
     p.refine_principal_point = true;
     let (status, s) = {
         let mut s = garbage_solution();
@@ -683,14 +665,7 @@ fn refinement_needs_pixels_through_one_camera_without_a_vertical() {
     let (w, m, mn) = (flat3(&world), flat2(&pixels), flat2(&normalised));
     let h = Handles::new(800.0);
     let cam = c_camera(&truth);
-    let base = {
-        let mut p = zeroed_problem();
-        p.n = world.len();
-        p.world = w.as_ptr();
-        p.image = m.as_ptr();
-        p.camera = cam;
-        p
-    };
+    let base = problem(&w, &m, cam);
     let check = |p: &EopnpProblem, want: EopnpStatus, needles: &[&str]| {
         let mut s = garbage_solution();
         // SAFETY: live handles; the problem's pointers outlive the call.
