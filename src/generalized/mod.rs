@@ -119,13 +119,12 @@ pub(crate) fn solve(
         let (r, t) = to_original(&rays, &cost, &m.r);
         checks.push(finish(opts, &rays, &grouped, input, &cost, m, &r, &t));
     }
+    // Best first (most points in front, then the lowest cost), sorted in place: an
+    // `ArrayVec` of `MAX_CANDIDATES` solutions is tens of kilobytes, never moved or collected.
     checks.sort_by(|a, b| order(&a.0, &b.0));
     vertical::verdict(checks[0].1)?;
-    let mut solutions: ArrayVec<Solution, MAX_CANDIDATES> =
-        checks.iter().map(|(s, _)| *s).collect();
-    rank(&mut solutions);
     if let Some(all) = all {
-        for s in &solutions {
+        for (s, _) in &checks {
             let duplicate = all.iter().any(|o: &Solution| {
                 (o.rotation - s.rotation).norm() <= 1e-6
                     && (o.translation - s.translation).norm() <= 1e-6 * (1.0 + s.translation.norm())
@@ -135,7 +134,7 @@ pub(crate) fn solve(
             }
         }
     }
-    Ok(solutions[0])
+    Ok(checks[0].0)
 }
 
 /// The maximum-likelihood pose of the basin of `initial` (`x_rig = R X + t`): the pixel
@@ -405,11 +404,6 @@ fn finish(
 }
 
 /// Best first: most points in front, then the lowest cost.
-fn rank(s: &mut ArrayVec<Solution, MAX_CANDIDATES>) {
-    s.sort_by(order);
-}
-
-/// [`rank`]'s order.
 fn order(a: &Solution, b: &Solution) -> core::cmp::Ordering {
     (!a.cheirality_ok)
         .cmp(&!b.cheirality_ok)
