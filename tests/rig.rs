@@ -5,7 +5,7 @@
 use eopnp::camera::Camera;
 use eopnp::covariance::NoiseModel;
 use eopnp::ransac::Ransac;
-use eopnp::{DegenerateKind, Loss, PnpError, Problem, Rig, Solver};
+use eopnp::{DegenerateKind, InputKind, Loss, PnpError, Problem, Rig, Solver};
 use nalgebra::{
     Isometry3, Matrix3, Point2, Point3, Rotation3, Translation3, UnitQuaternion, Vector3,
 };
@@ -377,6 +377,64 @@ fn bad_rig_input_is_a_typed_error() {
         solver.solve(&Problem::rig(&c.world, &pixels, &c.cameras, &c.rig)),
         Err(PnpError::NonFinite { .. })
     ));
+    // Each bad value reported with its index and kind; the first bad correspondence wins.
+    let mut world = c.world.clone();
+    world[4].z = f64::NAN;
+    let mut weights = vec![1.0; 20];
+    weights[6] = -0.5;
+    let mut nan_weight = vec![1.0; 20];
+    nan_weight[9] = f64::NAN;
+    let cases: [(&[Point3<f64>], &[Point2<f64>], Option<&[f64]>, PnpError); 5] = [
+        (
+            &world,
+            &c.pixels,
+            None,
+            PnpError::NonFinite {
+                index: 4,
+                input: InputKind::World,
+            },
+        ),
+        (
+            &c.world,
+            &pixels,
+            None,
+            PnpError::NonFinite {
+                index: 2,
+                input: InputKind::Image,
+            },
+        ),
+        (
+            &c.world,
+            &c.pixels,
+            Some(&weights),
+            PnpError::InvalidWeight { index: 6 },
+        ),
+        (
+            &c.world,
+            &c.pixels,
+            Some(&nan_weight),
+            PnpError::NonFinite {
+                index: 9,
+                input: InputKind::Weight,
+            },
+        ),
+        (
+            &world,
+            &pixels,
+            Some(&weights),
+            PnpError::NonFinite {
+                index: 2,
+                input: InputKind::Image,
+            },
+        ),
+    ];
+    for (world, pixels, weights, expected) in cases {
+        let mut problem = Problem::rig(world, pixels, &c.cameras, &c.rig);
+        if let Some(w) = weights {
+            problem = problem.weights(w);
+        }
+        assert_eq!(solver.solve(&problem).unwrap_err(), expected);
+    }
 }
 
 /// Cameras that share one centre (baseline 0, looking different ways): every ray through one

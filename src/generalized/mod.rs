@@ -18,7 +18,6 @@ mod rays;
 mod refine;
 
 pub(crate) use rays::{one_camera, rays, Rays, RigInput};
-use refine::Grouped;
 pub(crate) use refine::{pixel_error2, refine as refine_pixels};
 
 use arrayvec::ArrayVec;
@@ -91,8 +90,8 @@ pub(crate) fn solve(
 ) -> Result<Solution, PnpError> {
     check_loss(opts)?;
     let rays = rays::rays(input)?;
-    let cost = working_cost(&rays, input).ok_or(PnpError::NoSolution)?;
-    let minima = search(opts, &rays, input, &cost);
+    let cost = working_cost(&rays).ok_or(PnpError::NoSolution)?;
+    let minima = search(opts, &rays, &cost);
     if minima.is_empty() {
         return Err(PnpError::NoSolution);
     }
@@ -112,12 +111,11 @@ pub(crate) fn solve(
             .take_while(|m| rival(m))
             .count()
     };
-    let grouped = Grouped::new(&rays, input.rig, input.world, input.pixels);
     // A vertical the images contradict (at the best minimum) is reported as such.
     let mut checks: ArrayVec<(Solution, Option<VerticalCheck>), MAX_CANDIDATES> = ArrayVec::new();
     for m in minima.iter().take(count) {
         let (r, t) = to_original(&rays, &cost, &m.r);
-        checks.push(finish(opts, &rays, &grouped, input, &cost, m, &r, &t));
+        checks.push(finish(opts, &rays, input, &cost, m, &r, &t));
     }
     // Best first (most points in front, then the lowest cost), sorted in place: an
     // `ArrayVec` of `MAX_CANDIDATES` solutions is tens of kilobytes, never moved or collected.
@@ -146,7 +144,7 @@ pub(crate) fn refine_from(
 ) -> Result<Solution, PnpError> {
     check_loss(opts)?;
     let rays = rays::rays(input)?;
-    let cost = working_cost(&rays, input).ok_or(PnpError::NoSolution)?;
+    let cost = working_cost(&rays).ok_or(PnpError::NoSolution)?;
     let rw = *initial.0;
     let m = Minimum {
         r: rw,
@@ -157,10 +155,7 @@ pub(crate) fn refine_from(
     };
     let mut opts = *opts;
     opts.refinement = Refinement::Reprojection;
-    let grouped = Grouped::new(&rays, input.rig, input.world, input.pixels);
-    let (sol, check) = finish(
-        &opts, &rays, &grouped, input, &cost, &m, initial.0, initial.1,
-    );
+    let (sol, check) = finish(&opts, &rays, input, &cost, &m, initial.0, initial.1);
     vertical::verdict(check)?;
     Ok(sol)
 }
@@ -174,22 +169,18 @@ fn check_loss(opts: &RigOptions) -> Result<(), PnpError> {
 }
 
 /// The working frame's point of ray `k`: world point, centre, direction, weight.
-fn working(
-    rays: &Rays,
-    input: &RigInput<'_>,
-    k: usize,
-) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64) {
+fn working(rays: &Rays, k: usize) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64) {
     let r = &rays.rays[k];
     (
-        (input.world[r.index].coords - rays.x_mean) / rays.scale,
+        (rays.obs.world[k].coords - rays.x_mean) / rays.scale,
         (r.centre - rays.c_mean) / rays.scale,
         r.direction,
         r.weight,
     )
 }
 
-fn working_cost(rays: &Rays, input: &RigInput<'_>) -> Option<Cost> {
-    Cost::new(rays.rays.len(), |k| working(rays, input, k))
+fn working_cost(rays: &Rays) -> Option<Cost> {
+    Cost::new(rays.rays.len(), |k| working(rays, k))
 }
 
 /// The pose in the caller's frame of the working frame's rotation `r` (the translation the
@@ -201,11 +192,11 @@ fn to_original(rays: &Rays, cost: &Cost, r: &Matrix3<f64>) -> (Matrix3<f64>, Vec
 }
 
 /// Points in front of their ray's centre at the working-frame rotation `r`.
-fn in_front(rays: &Rays, input: &RigInput<'_>, cost: &Cost, r: &Matrix3<f64>) -> usize {
+fn in_front(rays: &Rays, cost: &Cost, r: &Matrix3<f64>) -> usize {
     let t = cost.translation(r);
     (0..rays.rays.len())
         .filter(|&k| {
-            let (x, c, v, _) = working(rays, input, k);
+            let (x, c, v, _) = working(rays, k);
             (r * x + t - c).dot(&v) > 0.0
         })
         .count()
@@ -214,8 +205,8 @@ fn in_front(rays: &Rays, input: &RigInput<'_>, cost: &Cost, r: &Matrix3<f64>) ->
 /// The search: every start refined by Newton (but starts within [`IN_BASIN`] of a refined
 /// minimum, unless exhaustive), distinct minima sorted with the most points in front first,
 /// then by cost.
-fn search(opts: &RigOptions, rays: &Rays, input: &RigInput<'_>, cost: &Cost) -> Vec<Minimum> {
-    let starts = starts(rays, input, cost, opts.exhaustive);
+fn search(opts: &RigOptions, rays: &Rays, cost: &Cost) -> Vec<Minimum> {
+    let starts = starts(rays, cost, opts.exhaustive);
     let mut minima: Vec<Minimum> = Vec::new();
     let tol = opts.newton_step_tolerance.max(1e-12);
     for (r0, source) in starts {
@@ -240,7 +231,7 @@ fn search(opts: &RigOptions, rays: &Rays, input: &RigInput<'_>, cost: &Cost) -> 
     // The points in front rank several minima (one needs no count: its refinement counts them).
     if minima.len() > 1 {
         for m in &mut minima {
-            m.in_front = in_front(rays, input, cost, &m.r);
+            m.in_front = in_front(rays, cost, &m.r);
         }
     }
     let n = rays.rays.len();
@@ -255,12 +246,7 @@ fn search(opts: &RigOptions, rays: &Rays, input: &RigInput<'_>, cost: &Cost) -> 
 /// exact rotation for noise-free data), the quadratic part's null vector (the sign of positive
 /// determinant), and the
 /// gP3P poses of a few spread triples of rays (at most [`GP3P_MAX_RAYS`] rays, or exhaustive).
-fn starts(
-    rays: &Rays,
-    input: &RigInput<'_>,
-    cost: &Cost,
-    exhaustive: bool,
-) -> Vec<(Matrix3<f64>, CandidateSource)> {
+fn starts(rays: &Rays, cost: &Cost, exhaustive: bool) -> Vec<(Matrix3<f64>, CandidateSource)> {
     let mut out = Vec::new();
     let mut hom = SMatrix::<f64, 10, 10>::zeros();
     hom.fixed_view_mut::<9, 9>(0, 0).copy_from(&cost.m);
@@ -299,7 +285,7 @@ fn starts(
         return out;
     }
     for triple in spread_triples(rays) {
-        let world: [Point3<f64>; 3] = triple.map(|k| input.world[rays.rays[k].index]);
+        let world: [Point3<f64>; 3] = triple.map(|k| rays.obs.world[k]);
         let centres = triple.map(|k| Point3::from(rays.rays[k].centre));
         let dirs = triple.map(|k| rays.rays[k].direction);
         for pose in gp3p(&world, &centres, &dirs) {
@@ -339,7 +325,6 @@ fn spread_triples(rays: &Rays) -> Vec<[usize; 3]> {
 fn finish(
     opts: &RigOptions,
     rays: &Rays,
-    grouped: &Grouped,
     input: &RigInput<'_>,
     cost: &Cost,
     m: &Minimum,
@@ -363,12 +348,9 @@ fn finish(
     } else {
         opts.reprojection_iterations
     };
-    let e = refine::refine_grouped(
-        grouped,
+    let e = refine::refine(
         rays,
         input.rig,
-        input.world,
-        input.pixels,
         opts.loss,
         (r, t),
         iterations,
@@ -383,9 +365,9 @@ fn finish(
         (e.iterations, e.converged)
     };
     let n = rays.rays.len();
-    let covariance = opts.covariance.and_then(|noise| {
-        refine::covariance(rays, input.rig, input.world, input.pixels, &r, &t, noise)
-    });
+    let covariance = opts
+        .covariance
+        .and_then(|noise| refine::covariance(rays, input.rig, &r, &t, noise));
     let mut sol = Solution::from_parts(r, t);
     sol.cost = cost_px.min(f64::MAX);
     sol.algebraic_cost = algebraic;

@@ -6,7 +6,11 @@ use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use crate::camera::Projector;
 use crate::error::{DegenerateKind, InputKind, PnpError};
+use crate::pipeline::refine_rig::RigCamera;
 use crate::rig::Rig;
+
+/// Pixels undistorted at a time (a bit each in the failure mask).
+const UNDISTORT_CHUNK: usize = 64;
 
 /// A rig problem as the solver reads it.
 #[derive(Clone, Copy)]
@@ -35,11 +39,27 @@ pub(crate) struct Ray {
     pub direction: Vector3<f64>,
 }
 
+/// The kept correspondences' observations as the pixel refinement reads them, in the rays'
+/// order (grouped by camera): world points, pixels, weights, and one [`RigCamera`] per run of
+/// one camera's rays.
+#[derive(Clone)]
+pub(crate) struct Observations {
+    pub world: Vec<Point3<f64>>,
+    pub pixels: Vec<Point2<f64>>,
+    /// Empty when every weight is 1.
+    pub weights: Vec<f64>,
+    pub cameras: Vec<RigCamera>,
+    /// The sum of the weights, in the rays' order.
+    pub weight_sum: f64,
+}
+
 /// The rays of a problem and what the later stages need of it.
 #[derive(Clone)]
 pub(crate) struct Rays {
     /// Grouped by camera (in the input's order within each camera).
     pub rays: Vec<Ray>,
+    /// Their observations, in the same order.
+    pub obs: Observations,
     /// The projectors of the rig's cameras, by index.
     pub projectors: Vec<Projector>,
     /// Correspondences left out: their pixel could not be undistorted.
@@ -51,6 +71,53 @@ pub(crate) struct Rays {
     /// The scatter of the centred world points, smallest eigenvalue over the largest: the
     /// planarity ratio of the central solver's `branch`.
     pub planarity: f64,
+}
+
+impl Rays {
+    /// The rays `keep` selects (one flag per ray) with their observations, in the same
+    /// working frame: RANSAC's inlier sets.
+    pub(crate) fn subset(&self, rig: &Rig, keep: &[bool]) -> Rays {
+        let pick = |k: &usize| keep[*k];
+        let kept: Vec<usize> = (0..self.rays.len()).filter(pick).collect();
+        let rays: Vec<Ray> = kept.iter().map(|&k| self.rays[k]).collect();
+        let weighted = rays.iter().any(|r| r.weight != 1.0);
+        let obs = Observations {
+            world: kept.iter().map(|&k| self.obs.world[k]).collect(),
+            pixels: kept.iter().map(|&k| self.obs.pixels[k]).collect(),
+            weights: if weighted {
+                rays.iter().map(|r| r.weight).collect()
+            } else {
+                Vec::new()
+            },
+            cameras: runs(&rays, rig, &self.projectors),
+            weight_sum: rays.iter().map(|r| r.weight).sum(),
+        };
+        Rays {
+            rays,
+            obs,
+            projectors: self.projectors.clone(),
+            ..*self
+        }
+    }
+}
+
+/// One [`RigCamera`] per run of rays of one camera.
+fn runs(rays: &[Ray], rig: &Rig, projectors: &[Projector]) -> Vec<RigCamera> {
+    let mut out: Vec<RigCamera> = Vec::new();
+    let mut start = 0;
+    while start < rays.len() {
+        let cam = rays[start].camera;
+        let end = start + rays[start..].iter().take_while(|r| r.camera == cam).count();
+        let (rk, tk) = rig.pose(cam);
+        out.push(RigCamera {
+            projector: projectors[cam],
+            rotation: *rk,
+            translation: *tk,
+            range: start..end,
+        });
+        start = end;
+    }
+    out
 }
 
 /// The camera every correspondence is in, if they are all in one (after checking the indices'
@@ -109,102 +176,82 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             });
         }
     }
-    for i in 0..n {
-        if !input.world[i].coords.iter().all(|v| v.is_finite()) {
-            return Err(PnpError::NonFinite {
-                index: i,
-                input: InputKind::World,
-            });
-        }
-        let p = input.pixels[i];
-        if !(p.x.is_finite() && p.y.is_finite()) {
-            return Err(PnpError::NonFinite {
-                index: i,
-                input: InputKind::Image,
-            });
-        }
-        if let Some(w) = input.weights {
-            if !w[i].is_finite() {
-                return Err(PnpError::NonFinite {
-                    index: i,
-                    input: InputKind::Weight,
-                });
-            }
-            if w[i] < 0.0 {
-                return Err(PnpError::InvalidWeight { index: i });
-            }
-        }
-        if input.cameras[i] as usize >= input.rig.cameras().len() {
-            return Err(PnpError::UnknownCamera {
-                index: i,
-                camera: input.cameras[i],
-            });
+    if !all_valid(input) {
+        if let Some(e) = first_invalid(input) {
+            return Err(e);
         }
     }
+    let n_cams = input.rig.cameras().len();
     let projectors: Vec<Projector> = input.rig.cameras().iter().map(|c| c.projector()).collect();
-    // The correspondences grouped by camera (in their order within each camera), each
-    // camera's pixels undistorted in bulk with its model dispatched once.
-    let n_cams = projectors.len();
-    let mut start = vec![0usize; n_cams + 1];
+    // The correspondences grouped by camera (in their order within each camera) by a counting
+    // sort: `end[k]` ends camera k's run and starts camera k + 1's.
+    let mut end = vec![0usize; n_cams + 1];
     for &c in input.cameras {
-        start[c as usize + 1] += 1;
+        end[c as usize + 1] += 1;
     }
     for k in 0..n_cams {
-        start[k + 1] += start[k];
+        end[k + 1] += end[k];
     }
     let mut order = vec![0usize; n];
-    let mut next = start.clone();
     for (i, &c) in input.cameras.iter().enumerate() {
-        order[next[c as usize]] = i;
-        next[c as usize] += 1;
+        let at = &mut end[c as usize];
+        order[*at] = i;
+        *at += 1;
     }
+    // The pixels in the grouped order: undistorted camera by camera, a chunk at a time, then
+    // compacted in place to the kept ones (the refinement's observations).
+    let mut pixels: Vec<Point2<f64>> = order.iter().map(|&i| input.pixels[i]).collect();
     let mut rays = Vec::with_capacity(n);
+    let mut world = Vec::with_capacity(n);
+    let mut weights = Vec::new();
     let mut skipped = 0;
     // The weighted sums of the centroids, in the rays' order.
     let (mut wsum, mut xw, mut cw) = (0.0f64, Vector3::zeros(), Vector3::zeros());
-    // The pixels in the grouped order, undistorted camera by camera into `points`.
-    let pixels: Vec<Point2<f64>> = order.iter().map(|&i| input.pixels[i]).collect();
-    let mut points = vec![Point2::origin(); n];
-    let mut ok = vec![true; n];
+    let mut points = [Point2::origin(); UNDISTORT_CHUNK];
     for k in 0..n_cams {
-        let range = start[k]..start[k + 1];
-        if range.is_empty() {
-            continue;
-        }
-        let (idx, ok_k) = (&order[range.clone()], &mut ok[range.clone()]);
-        projectors[k].undistort_into(
-            &pixels[range.clone()],
-            &mut points[range.clone()],
-            None,
-            |j| {
-                ok_k[j] = false;
-            },
-        );
-        let (ok_k, points_k) = (&ok[range.clone()], &points[range]);
+        let (begin, stop) = (if k == 0 { 0 } else { end[k - 1] }, end[k]);
         let (rk, _) = input.rig.pose(k);
         let centre = input.rig.centre(k).coords;
-        for (j, &i) in idx.iter().enumerate() {
-            if !ok_k[j] {
-                skipped += 1;
-                continue;
-            }
-            let weight = input.weights.map_or(1.0, |w| w[i]);
-            if !(weight > 0.0) {
-                continue;
-            }
-            let m = points_k[j];
-            let direction = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0)).normalize();
-            wsum += weight;
-            xw += input.world[i].coords * weight;
-            cw += centre * weight;
-            rays.push(Ray {
-                index: i,
-                camera: k,
-                weight,
-                centre,
-                direction,
+        let mut at = begin;
+        while at < stop {
+            let len = UNDISTORT_CHUNK.min(stop - at);
+            let mut failed = 0u64;
+            projectors[k].undistort_into(&pixels[at..at + len], &mut points[..len], None, |j| {
+                failed |= 1 << j;
             });
+            for (j, m) in points[..len].iter().enumerate() {
+                let (g, i) = (at + j, order[at + j]);
+                if failed >> j & 1 == 1 {
+                    skipped += 1;
+                    continue;
+                }
+                let weight = input.weights.map_or(1.0, |w| w[i]);
+                if !(weight > 0.0) {
+                    continue;
+                }
+                let direction = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0)).normalize();
+                wsum += weight;
+                xw += input.world[i].coords * weight;
+                cw += centre * weight;
+                pixels[rays.len()] = pixels[g];
+                world.push(input.world[i]);
+                if input.weights.is_some() {
+                    weights.push(weight);
+                }
+                rays.push(Ray {
+                    index: i,
+                    camera: k,
+                    weight,
+                    centre,
+                    direction,
+                });
+            }
+            at += len;
         }
+    }
+    pixels.truncate(rays.len());
+    if weights.iter().all(|&w| w == 1.0) {
+        weights = Vec::new();
     }
     if rays.len() < 4 {
         return Err(PnpError::TooFewPoints {
@@ -212,16 +259,16 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             need: 4,
         });
     }
-    let first = input.world[rays[0].index];
-    if rays.iter().all(|r| input.world[r.index] == first) {
+    let first = world[0];
+    if world.iter().all(|x| *x == first) {
         return Err(PnpError::Degenerate(DegenerateKind::CoincidentWorldPoints));
     }
     // The working frame: weighted centroids, the RMS distance of the world points.
     let x_mean = xw / wsum;
     let c_mean = cw / wsum;
     let mut sc = [0.0f64; 6];
-    for r in &rays {
-        let d = input.world[r.index].coords - x_mean;
+    for (x, r) in world.iter().zip(&rays) {
+        let d = x.coords - x_mean;
         let wd = d * r.weight;
         sc[0] += wd.x * d.x;
         sc[1] += wd.x * d.y;
@@ -252,8 +299,8 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     let axis = eig.eigenvectors.column(order[2]).into_owned();
     // (Squared distances: no square root per point.)
     let (mut off_line2, mut along2) = (0.0f64, 0.0f64);
-    for r in &rays {
-        let d = input.world[r.index].coords - x_mean;
+    for x in &world {
+        let d = x.coords - x_mean;
         let a = d.dot(&axis);
         off_line2 = off_line2.max((d - axis * a).norm_squared());
         along2 = along2.max(a * a);
@@ -261,8 +308,16 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     if off_line2 <= 1e-16 * along2 {
         return Err(PnpError::Degenerate(DegenerateKind::CollinearWorldPoints));
     }
+    let obs = Observations {
+        cameras: runs(&rays, input.rig, &projectors),
+        weight_sum: rays.iter().map(|r| r.weight).sum(),
+        world,
+        pixels,
+        weights,
+    };
     Ok(Rays {
         rays,
+        obs,
         projectors,
         skipped,
         x_mean,
@@ -270,4 +325,67 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
         scale,
         planarity: ev[0].max(0.0) / ev[2],
     })
+}
+
+/// Every value finite, every weight at least 0, every camera index known: one pass without
+/// branches (`0 x` is 0 for a finite `x` and NaN otherwise).
+fn all_valid(input: &RigInput<'_>) -> bool {
+    let zero = |v: f64| 0.0 * v;
+    let mut nan = 0.0f64;
+    for (x, m) in input.world.iter().zip(input.pixels) {
+        nan += zero(x.x) + zero(x.y) + zero(x.z) + zero(m.x) + zero(m.y);
+    }
+    let mut least = 0.0f64;
+    if let Some(w) = input.weights {
+        for &v in w {
+            nan += zero(v);
+            least = least.min(v);
+        }
+    }
+    let n_cams = input.rig.cameras().len();
+    let highest = input
+        .cameras
+        .iter()
+        .copied()
+        .max()
+        .map_or(0, |c| c as usize + 1);
+    nan == 0.0 && least >= 0.0 && highest <= n_cams
+}
+
+/// The error of the first invalid correspondence (in the order of the checks: a non-finite
+/// world point, pixel or weight, a negative weight, an unknown camera), if any.
+fn first_invalid(input: &RigInput<'_>) -> Option<PnpError> {
+    for i in 0..input.world.len() {
+        if !input.world[i].coords.iter().all(|v| v.is_finite()) {
+            return Some(PnpError::NonFinite {
+                index: i,
+                input: InputKind::World,
+            });
+        }
+        let p = input.pixels[i];
+        if !(p.x.is_finite() && p.y.is_finite()) {
+            return Some(PnpError::NonFinite {
+                index: i,
+                input: InputKind::Image,
+            });
+        }
+        if let Some(w) = input.weights {
+            if !w[i].is_finite() {
+                return Some(PnpError::NonFinite {
+                    index: i,
+                    input: InputKind::Weight,
+                });
+            }
+            if w[i] < 0.0 {
+                return Some(PnpError::InvalidWeight { index: i });
+            }
+        }
+        if input.cameras[i] as usize >= input.rig.cameras().len() {
+            return Some(PnpError::UnknownCamera {
+                index: i,
+                camera: input.cameras[i],
+            });
+        }
+    }
+    None
 }

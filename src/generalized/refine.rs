@@ -7,11 +7,10 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 use super::rays::Rays;
 use crate::covariance::{NoiseModel, PoseCovariance};
-use crate::pipeline::refine_rig::{refine_rig, RigCamera, RigPixels};
+use crate::pipeline::refine_rig::{refine_rig, RigPixels};
 use crate::pipeline::vertical::{Vertical, VerticalCheck};
 use crate::pipeline::Loss;
 use crate::rig::Rig;
-use nalgebra::Point3;
 
 /// The outcome of a refinement.
 #[derive(Clone, Copy, Debug)]
@@ -43,17 +42,15 @@ pub(crate) struct Refined {
 fn normal_equations(
     rays: &Rays,
     rig: &Rig,
-    world: &[Point3<f64>],
-    pixels: &[nalgebra::Point2<f64>],
     loss: Loss,
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
 ) -> (Matrix6<f64>, Vector6<f64>) {
     let mut h = [0.0; 21];
     let mut g = [0.0; 6];
-    for ry in &rays.rays {
+    for (k, ry) in rays.rays.iter().enumerate() {
         let (rk, tk) = rig.pose(ry.camera);
-        let q = r * world[ry.index].coords;
+        let q = r * rays.obs.world[k].coords;
         let p = rk * (q + t) + tk;
         if !(p.z != 0.0) {
             continue;
@@ -61,7 +58,7 @@ fn normal_equations(
         let iz = 1.0 / p.z;
         let (x, y) = (p.x * iz, p.y * iz);
         let ((u, v), jp) = rays.projectors[ry.camera].project_with_jacobian(x, y);
-        let obs = pixels[ry.index];
+        let obs = rays.obs.pixels[k];
         let (e0, e1) = (u - obs.x, v - obs.y);
         let w = ry.weight * loss.eval(e0 * e0 + e1 * e1).1;
         // Rows of J_pi d(x/z, y/z)/dp, then times R_c (a^T R_c = (R_c^T a)^T).
@@ -99,43 +96,33 @@ fn normal_equations(
 pub(crate) fn pixel_error2(
     rays: &Rays,
     rig: &Rig,
-    world: &[Point3<f64>],
-    pixels: &[nalgebra::Point2<f64>],
     k: usize,
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
 ) -> f64 {
     let ry = &rays.rays[k];
     let (rk, tk) = rig.pose(ry.camera);
-    let p = rk * (r * world[ry.index].coords + t) + tk;
+    let p = rk * (r * rays.obs.world[k].coords + t) + tk;
     if !(p.z > 0.0) {
         return f64::INFINITY;
     }
     let (u, v) = rays.projectors[ry.camera].project(p.x / p.z, p.y / p.z);
-    let obs = pixels[ry.index];
+    let obs = rays.obs.pixels[k];
     (u - obs.x).powi(2) + (v - obs.y).powi(2)
 }
 
 /// `sum w rho(|e|^2)` and `sum w |e|^2` at the pose (infinite if a point is at depth 0; one
 /// behind its camera projects through `(x / z, y / z)`, as in [`normal_equations`]) and the number of
 /// observations in front of their camera.
-fn evaluate(
-    rays: &Rays,
-    rig: &Rig,
-    world: &[Point3<f64>],
-    pixels: &[nalgebra::Point2<f64>],
-    loss: Loss,
-    r: &Matrix3<f64>,
-    t: &Vector3<f64>,
-) -> Evaluated {
+fn evaluate(rays: &Rays, rig: &Rig, loss: Loss, r: &Matrix3<f64>, t: &Vector3<f64>) -> Evaluated {
     let mut out = Evaluated {
         cost: 0.0,
         squared: 0.0,
         front: 0,
     };
-    for ry in &rays.rays {
+    for (k, ry) in rays.rays.iter().enumerate() {
         let (rk, tk) = rig.pose(ry.camera);
-        let p = rk * (r * world[ry.index].coords + t) + tk;
+        let p = rk * (r * rays.obs.world[k].coords + t) + tk;
         let front = p.z > 0.0;
         if !(p.z != 0.0) {
             out.cost = f64::INFINITY;
@@ -143,7 +130,7 @@ fn evaluate(
         }
         out.front += usize::from(front);
         let (u, v) = rays.projectors[ry.camera].project(p.x / p.z, p.y / p.z);
-        let obs = pixels[ry.index];
+        let obs = rays.obs.pixels[k];
         let e2 = (u - obs.x).powi(2) + (v - obs.y).powi(2);
         out.cost += ry.weight * loss.eval(e2).0;
         out.squared += ry.weight * e2;
@@ -159,116 +146,33 @@ struct Evaluated {
     front: usize,
 }
 
-/// A rig problem's observations as the refinement reads them: grouped by camera (one
-/// [`RigCamera`] per run of rays of one camera: `rays` groups them, and a subset keeps the
-/// grouping), built once per solve.
-pub(crate) struct Grouped {
-    xs: Vec<Point3<f64>>,
-    ms: Vec<nalgebra::Point2<f64>>,
-    /// Empty when every weight is 1.
-    ws: Vec<f64>,
-    cameras: Vec<RigCamera>,
-    weight_sum: f64,
-}
-
-impl Grouped {
-    pub(crate) fn new(
-        rays: &Rays,
-        rig: &Rig,
-        world: &[Point3<f64>],
-        pixels: &[nalgebra::Point2<f64>],
-    ) -> Self {
-        let rs = &rays.rays;
-        let xs = rs.iter().map(|r| world[r.index]).collect();
-        let ms = rs.iter().map(|r| pixels[r.index]).collect();
-        let weighted = rs.iter().any(|r| r.weight != 1.0);
-        let ws = if weighted {
-            rs.iter().map(|r| r.weight).collect()
-        } else {
-            Vec::new()
-        };
-        let mut cameras: Vec<RigCamera> = Vec::new();
-        let mut start = 0;
-        while start < rs.len() {
-            let cam = rs[start].camera;
-            let end = start + rs[start..].iter().take_while(|r| r.camera == cam).count();
-            let (rk, tk) = rig.pose(cam);
-            cameras.push(RigCamera {
-                projector: rays.projectors[cam],
-                rotation: *rk,
-                translation: *tk,
-                range: start..end,
-            });
-            start = end;
-        }
-        Grouped {
-            xs,
-            ms,
-            ws,
-            cameras,
-            weight_sum: rs.iter().map(|r| r.weight).sum(),
-        }
-    }
-}
-
-/// [`refine_grouped`] with the observations grouped here.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn refine(
-    rays: &Rays,
-    rig: &Rig,
-    world: &[Point3<f64>],
-    pixels: &[nalgebra::Point2<f64>],
-    loss: Loss,
-    r0: &Matrix3<f64>,
-    t0: &Vector3<f64>,
-    max_iterations: u32,
-    exact_start: bool,
-) -> Refined {
-    let grouped = Grouped::new(rays, rig, world, pixels);
-    let start = (r0, t0);
-    refine_grouped(
-        &grouped,
-        rays,
-        rig,
-        world,
-        pixels,
-        loss,
-        start,
-        max_iterations,
-        exact_start,
-        None,
-    )
-}
-
 /// Levenberg-Marquardt from `(r, t)` (the original frame), at most `max_iterations`
 /// iterations: the central pixel refinement's iteration and pass, per camera
-/// ([`crate::pipeline::refine_rig`], in the rays' working frame), on `grouped` (the rays'
-/// observations); then the costs, the squared error and the points in front at the returned pose
+/// ([`crate::pipeline::refine_rig`], in the rays' working frame), on the rays' observations;
+/// then the costs, the squared error and the points in front at the returned pose
 /// (the iteration's own with the squared loss, otherwise [`evaluate`]). `exact_start`: the start
 /// is an exact fit (the object-space cost at its rounding level), from which the last
 /// Gauss-Newton step is applied ([`crate::pipeline::ReprojOptions`]).
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn refine_grouped(
-    grouped: &Grouped,
+pub(crate) fn refine(
     rays: &Rays,
     rig: &Rig,
-    world: &[Point3<f64>],
-    pixels: &[nalgebra::Point2<f64>],
     loss: Loss,
     (r0, t0): (&Matrix3<f64>, &Vector3<f64>),
     max_iterations: u32,
     exact_start: bool,
     vertical: Option<Vertical>,
 ) -> Refined {
-    let weight_sum = grouped.weight_sum;
+    let obs = &rays.obs;
+    let weight_sum = obs.weight_sum;
     let (mut r, mut t, mut iterations, mut converged) = (*r0, *t0, 0, false);
     let mut check = None;
     if max_iterations > 0 {
         let px = RigPixels {
-            world: &grouped.xs,
-            pixels: &grouped.ms,
-            weights: (!grouped.ws.is_empty()).then_some(&grouped.ws[..]),
-            cameras: &grouped.cameras,
+            world: &obs.world,
+            pixels: &obs.pixels,
+            weights: (!obs.weights.is_empty()).then_some(&obs.weights[..]),
+            cameras: &obs.cameras,
             loss,
         };
         let frame = (rays.x_mean, rays.scale);
@@ -292,7 +196,7 @@ pub(crate) fn refine_grouped(
             }
         }
     }
-    let e = evaluate(rays, rig, world, pixels, loss, &r, &t);
+    let e = evaluate(rays, rig, loss, &r, &t);
     Refined {
         r,
         t,
@@ -312,16 +216,14 @@ pub(crate) fn refine_grouped(
 pub(crate) fn covariance(
     rays: &Rays,
     rig: &Rig,
-    world: &[Point3<f64>],
-    pixels: &[nalgebra::Point2<f64>],
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
     noise: NoiseModel,
 ) -> Option<PoseCovariance> {
     // The squared loss: `J^T W J` with the weights alone; the sums of [`evaluate`] (infinite
     // if a point is at depth 0: no covariance).
-    let (jtj, _) = normal_equations(rays, rig, world, pixels, Loss::Squared, r, t);
-    let sums = evaluate(rays, rig, world, pixels, Loss::Squared, r, t);
+    let (jtj, _) = normal_equations(rays, rig, Loss::Squared, r, t);
+    let sums = evaluate(rays, rig, Loss::Squared, r, t);
     if !sums.cost.is_finite() {
         return None;
     }

@@ -64,8 +64,7 @@ impl Ransac {
             c.len()
         };
         let score = |r: &Matrix3<f64>, t: &Vector3<f64>, bound: f64| -> Option<Scored> {
-            let errors =
-                (0..m).map(|k| pixel_error2(&rays, input.rig, input.world, input.pixels, k, r, t));
+            let errors = (0..m).map(|k| pixel_error2(&rays, input.rig, k, r, t));
             let (cost, inliers) = msac(errors, th2, bound)?;
             Some(Scored {
                 r: *r,
@@ -103,7 +102,7 @@ impl Ransac {
             let Some(s) = sample else {
                 continue;
             };
-            let world: [Point3<f64>; 3] = s.map(|k| input.world[rays.rays[k].index]);
+            let world: [Point3<f64>; 3] = s.map(|k| rays.obs.world[k]);
             let centres = s.map(|k| Point3::from(rays.rays[k].centre));
             let dirs = s.map(|k| rays.rays[k].direction);
             let poses = if let Some(up) = &upright {
@@ -182,8 +181,9 @@ impl Ransac {
             let px: Vec<nalgebra::Point2<f64>> = rays
                 .rays
                 .iter()
-                .filter(|r| r.camera == c)
-                .map(|r| input.pixels[r.index])
+                .zip(&rays.obs.pixels)
+                .filter(|(r, _)| r.camera == c)
+                .map(|(_, p)| *p)
                 .collect();
             if !px.is_empty() {
                 rate += chance::chance_inlier_rate(&px, (1.0, 1.0), thf) * px.len() as f64;
@@ -240,7 +240,7 @@ fn inlier_mask(
     th2: f64,
 ) -> Vec<bool> {
     (0..rays.rays.len())
-        .map(|k| pixel_error2(rays, input.rig, input.world, input.pixels, k, r, t) < th2)
+        .map(|k| pixel_error2(rays, input.rig, k, r, t) < th2)
         .collect()
 }
 
@@ -259,25 +259,16 @@ fn fit(
     if count < MIN_FIT_POINTS.min(rays.rays.len()) {
         return None;
     }
-    let mut sub = rays.clone();
-    sub.rays = rays
-        .rays
-        .iter()
-        .zip(&mask)
-        .filter(|(_, m)| **m)
-        .map(|(r, _)| *r)
-        .collect();
+    let sub = rays.subset(input.rig, &mask);
     let opts = solver.rig_options();
     let e = refine_pixels(
         &sub,
         input.rig,
-        input.world,
-        input.pixels,
         opts.loss,
-        r,
-        t,
+        (r, t),
         super::FINAL_STEPS.max(20),
         false,
+        None,
     );
     (e.cost.is_finite() && e.r.iter().all(|x| x.is_finite())).then_some((e.r, e.t))
 }
