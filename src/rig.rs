@@ -2,7 +2,7 @@
 
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
-use crate::camera::Camera;
+use crate::camera::{Camera, Projector};
 use crate::error::PnpError;
 
 /// A rig of calibrated cameras fixed relative to each other (a car's or a headset's cameras, a
@@ -27,12 +27,21 @@ use crate::error::PnpError;
 /// assert!((rig.centre(1) - nalgebra::Point3::new(0.12, 0.0, 0.0)).norm() < 1e-15);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Rig {
     cameras: Vec<Camera>,
     cam_from_rig: Vec<Isometry3<f64>>,
     /// Each camera's rotation `R_k` as a matrix.
     rotations: Vec<Matrix3<f64>>,
+    /// Each camera's projection, formed once (every solve reads it).
+    projectors: Vec<Projector>,
+}
+
+/// Two rigs are equal when their cameras and poses are (the rest is formed from them).
+impl PartialEq for Rig {
+    fn eq(&self, other: &Rig) -> bool {
+        self.cameras == other.cameras && self.cam_from_rig == other.cam_from_rig
+    }
 }
 
 impl Rig {
@@ -58,11 +67,13 @@ impl Rig {
             .iter()
             .map(|(_, p)| p.rotation.to_rotation_matrix().into_inner())
             .collect();
-        let (cameras, cam_from_rig) = cameras.into_iter().unzip();
+        let (cameras, cam_from_rig): (Vec<Camera>, _) = cameras.into_iter().unzip();
+        let projectors = cameras.iter().map(Camera::projector).collect();
         Ok(Rig {
             cameras,
             cam_from_rig,
             rotations,
+            projectors,
         })
     }
 
@@ -85,6 +96,11 @@ impl Rig {
     #[must_use]
     pub fn centre(&self, k: usize) -> Point3<f64> {
         Point3::from(-(self.rotations[k].transpose() * self.cam_from_rig[k].translation.vector))
+    }
+
+    /// Camera `k`'s projection.
+    pub(crate) fn projector(&self, k: usize) -> &Projector {
+        &self.projectors[k]
     }
 
     /// Camera `k`'s rotation `R_k` and translation `t_k`.

@@ -173,7 +173,7 @@ fn working(rays: &Rays, k: usize) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>, 
     let r = &rays.rays[k];
     (
         (rays.obs.world[k].coords - rays.x_mean) / rays.scale,
-        (r.centre - rays.c_mean) / rays.scale,
+        rays.working_centres[r.camera],
         r.direction,
         r.weight,
     )

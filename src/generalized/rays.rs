@@ -4,7 +4,6 @@
 
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
-use crate::camera::Projector;
 use crate::error::{DegenerateKind, InputKind, PnpError};
 use crate::pipeline::refine_rig::RigCamera;
 use crate::rig::Rig;
@@ -60,14 +59,14 @@ pub(crate) struct Rays {
     pub rays: Vec<Ray>,
     /// Their observations, in the same order.
     pub obs: Observations,
-    /// The projectors of the rig's cameras, by index.
-    pub projectors: Vec<Projector>,
     /// Correspondences left out: their pixel could not be undistorted.
     pub skipped: usize,
     /// The working frame: world points `(X - x_mean) / scale`, centres `(c - c_mean) / scale`.
     pub x_mean: Vector3<f64>,
     pub c_mean: Vector3<f64>,
     pub scale: f64,
+    /// Each camera's centre in the working frame, by index.
+    pub working_centres: Vec<Vector3<f64>>,
     /// The scatter of the centred world points, smallest eigenvalue over the largest: the
     /// planarity ratio of the central solver's `branch`.
     pub planarity: f64,
@@ -89,20 +88,20 @@ impl Rays {
             } else {
                 Vec::new()
             },
-            cameras: runs(&rays, rig, &self.projectors),
+            cameras: runs(&rays, rig),
             weight_sum: rays.iter().map(|r| r.weight).sum(),
         };
         Rays {
             rays,
             obs,
-            projectors: self.projectors.clone(),
+            working_centres: self.working_centres.clone(),
             ..*self
         }
     }
 }
 
 /// One [`RigCamera`] per run of rays of one camera.
-fn runs(rays: &[Ray], rig: &Rig, projectors: &[Projector]) -> Vec<RigCamera> {
+fn runs(rays: &[Ray], rig: &Rig) -> Vec<RigCamera> {
     let mut out: Vec<RigCamera> = Vec::new();
     let mut start = 0;
     while start < rays.len() {
@@ -110,7 +109,7 @@ fn runs(rays: &[Ray], rig: &Rig, projectors: &[Projector]) -> Vec<RigCamera> {
         let end = start + rays[start..].iter().take_while(|r| r.camera == cam).count();
         let (rk, tk) = rig.pose(cam);
         out.push(RigCamera {
-            projector: projectors[cam],
+            projector: *rig.projector(cam),
             rotation: *rk,
             translation: *tk,
             range: start..end,
@@ -182,7 +181,6 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
         }
     }
     let n_cams = input.rig.cameras().len();
-    let projectors: Vec<Projector> = input.rig.cameras().iter().map(|c| c.projector()).collect();
     // The correspondences grouped by camera (in their order within each camera) by a counting
     // sort: `end[k]` ends camera k's run and starts camera k + 1's.
     let mut end = vec![0usize; n_cams + 1];
@@ -208,17 +206,24 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     // The weighted sums of the centroids, in the rays' order.
     let (mut wsum, mut xw, mut cw) = (0.0f64, Vector3::zeros(), Vector3::zeros());
     let mut points = [Point2::origin(); UNDISTORT_CHUNK];
+    let mut cameras = Vec::with_capacity(n_cams);
     for k in 0..n_cams {
         let (begin, stop) = (if k == 0 { 0 } else { end[k - 1] }, end[k]);
+        let first = rays.len();
         let (rk, _) = input.rig.pose(k);
         let centre = input.rig.centre(k).coords;
         let mut at = begin;
         while at < stop {
             let len = UNDISTORT_CHUNK.min(stop - at);
             let mut failed = 0u64;
-            projectors[k].undistort_into(&pixels[at..at + len], &mut points[..len], None, |j| {
-                failed |= 1 << j;
-            });
+            input.rig.projector(k).undistort_into(
+                &pixels[at..at + len],
+                &mut points[..len],
+                None,
+                |j| {
+                    failed |= 1 << j;
+                },
+            );
             for (j, m) in points[..len].iter().enumerate() {
                 let (g, i) = (at + j, order[at + j]);
                 if failed >> j & 1 == 1 {
@@ -247,6 +252,15 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
                 });
             }
             at += len;
+        }
+        if rays.len() > first {
+            let (rk, tk) = input.rig.pose(k);
+            cameras.push(RigCamera {
+                projector: *input.rig.projector(k),
+                rotation: *rk,
+                translation: *tk,
+                range: first..rays.len(),
+            });
         }
     }
     pixels.truncate(rays.len());
@@ -295,30 +309,40 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     // Collinear: every centred point within 1e-8 of its distance from the centroid of the
     // principal line, as the central solver's `frame` (its second singular value at most
     // 1e-8 times the first). Measured on the points themselves (one O(N) pass), not on the
-    // scatter's small eigenvalue, whose rounding is u times the largest.
-    let axis = eig.eigenvectors.column(order[2]).into_owned();
-    // (Squared distances: no square root per point.)
-    let (mut off_line2, mut along2) = (0.0f64, 0.0f64);
-    for x in &world {
-        let d = x.coords - x_mean;
-        let a = d.dot(&axis);
-        off_line2 = off_line2.max((d - axis * a).norm_squared());
-        along2 = along2.max(a * a);
-    }
-    if off_line2 <= 1e-16 * along2 {
-        return Err(PnpError::Degenerate(DegenerateKind::CollinearWorldPoints));
+    // scatter's small eigenvalue, whose rounding is u times the largest. The pass is not
+    // needed when the second eigenvalue alone rules it out: the largest squared distance off
+    // the line is at least the weighted mean, `(ev[0] + ev[1]) scale^2`, and the largest along
+    // it at most `sum w |d|^2 / w_min = wsum scale^2 / w_min`; the eigenvalues' rounding (u
+    // times the largest, 1) is far below the margin of 1e-12.
+    let w_min = weights.iter().copied().fold(1.0f64, f64::min);
+    if !(ev[1] > 1e-12 * (wsum / w_min)) {
+        let axis = eig.eigenvectors.column(order[2]).into_owned();
+        // (Squared distances: no square root per point.)
+        let (mut off_line2, mut along2) = (0.0f64, 0.0f64);
+        for x in &world {
+            let d = x.coords - x_mean;
+            let a = d.dot(&axis);
+            off_line2 = off_line2.max((d - axis * a).norm_squared());
+            along2 = along2.max(a * a);
+        }
+        if off_line2 <= 1e-16 * along2 {
+            return Err(PnpError::Degenerate(DegenerateKind::CollinearWorldPoints));
+        }
     }
     let obs = Observations {
-        cameras: runs(&rays, input.rig, &projectors),
-        weight_sum: rays.iter().map(|r| r.weight).sum(),
+        cameras,
+        weight_sum: wsum,
         world,
         pixels,
         weights,
     };
+    let working_centres = (0..n_cams)
+        .map(|k| (input.rig.centre(k).coords - c_mean) / scale)
+        .collect();
     Ok(Rays {
         rays,
         obs,
-        projectors,
+        working_centres,
         skipped,
         x_mean,
         c_mean,

@@ -57,7 +57,7 @@ fn normal_equations(
         }
         let iz = 1.0 / p.z;
         let (x, y) = (p.x * iz, p.y * iz);
-        let ((u, v), jp) = rays.projectors[ry.camera].project_with_jacobian(x, y);
+        let ((u, v), jp) = rig.projector(ry.camera).project_with_jacobian(x, y);
         let obs = rays.obs.pixels[k];
         let (e0, e1) = (u - obs.x, v - obs.y);
         let w = ry.weight * loss.eval(e0 * e0 + e1 * e1).1;
@@ -106,7 +106,7 @@ pub(crate) fn pixel_error2(
     if !(p.z > 0.0) {
         return f64::INFINITY;
     }
-    let (u, v) = rays.projectors[ry.camera].project(p.x / p.z, p.y / p.z);
+    let (u, v) = rig.projector(ry.camera).project(p.x / p.z, p.y / p.z);
     let obs = rays.obs.pixels[k];
     (u - obs.x).powi(2) + (v - obs.y).powi(2)
 }
@@ -129,7 +129,7 @@ fn evaluate(rays: &Rays, rig: &Rig, loss: Loss, r: &Matrix3<f64>, t: &Vector3<f6
             continue;
         }
         out.front += usize::from(front);
-        let (u, v) = rays.projectors[ry.camera].project(p.x / p.z, p.y / p.z);
+        let (u, v) = rig.projector(ry.camera).project(p.x / p.z, p.y / p.z);
         let obs = rays.obs.pixels[k];
         let e2 = (u - obs.x).powi(2) + (v - obs.y).powi(2);
         out.cost += ry.weight * loss.eval(e2).0;
