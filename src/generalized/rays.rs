@@ -5,6 +5,7 @@
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use crate::error::{DegenerateKind, InputKind, PnpError};
+use crate::numeric::mat3::sym_eigen3_closed;
 use crate::pipeline::refine_rig::RigCamera;
 use crate::rig::Rig;
 
@@ -234,7 +235,9 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
                 if !(weight > 0.0) {
                     continue;
                 }
-                let direction = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0)).normalize();
+                // (Normalised below, in a pass of its own: the square root and divisions of
+                // one ray then overlap the next's.)
+                let direction = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0));
                 wsum += weight;
                 xw += input.world[i].coords * weight;
                 cw += centre * weight;
@@ -262,6 +265,9 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
                 range: first..rays.len(),
             });
         }
+    }
+    for r in &mut rays {
+        r.direction = r.direction.normalize();
     }
     pixels.truncate(rays.len());
     if weights.iter().all(|&w| w == 1.0) {
@@ -302,10 +308,10 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             DegenerateKind::ScaleOutOfRange
         }));
     }
-    let eig = (scatter / (scale * scale)).symmetric_eigen();
-    let mut order = [0usize, 1, 2];
-    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let ev = order.map(|i| eig.eigenvalues[i]);
+    // Eigenvalues descending, each to about u times the largest (1).
+    let (vals, vecs) = sym_eigen3_closed(&(scatter / (scale * scale)))
+        .ok_or(PnpError::Degenerate(DegenerateKind::ScaleOutOfRange))?;
+    let ev = [vals[2], vals[1], vals[0]];
     // Collinear: every centred point within 1e-8 of its distance from the centroid of the
     // principal line, as the central solver's `frame` (its second singular value at most
     // 1e-8 times the first). Measured on the points themselves (one O(N) pass), not on the
@@ -316,7 +322,7 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     // times the largest, 1) is far below the margin of 1e-12.
     let w_min = weights.iter().copied().fold(1.0f64, f64::min);
     if !(ev[1] > 1e-12 * (wsum / w_min)) {
-        let axis = eig.eigenvectors.column(order[2]).into_owned();
+        let axis = vecs.column(0).into_owned();
         // (Squared distances: no square root per point.)
         let (mut off_line2, mut along2) = (0.0f64, 0.0f64);
         for x in &world {
@@ -352,18 +358,16 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
 }
 
 /// Every value finite, every weight at least 0, every camera index known: one pass without
-/// branches (`0 x` is 0 for a finite `x` and NaN otherwise).
+/// branches or a dependency chain longer than a bitwise `and`.
 fn all_valid(input: &RigInput<'_>) -> bool {
-    let zero = |v: f64| 0.0 * v;
-    let mut nan = 0.0f64;
+    let mut ok = true;
     for (x, m) in input.world.iter().zip(input.pixels) {
-        nan += zero(x.x) + zero(x.y) + zero(x.z) + zero(m.x) + zero(m.y);
+        ok &=
+            x.x.is_finite() & x.y.is_finite() & x.z.is_finite() & m.x.is_finite() & m.y.is_finite();
     }
-    let mut least = 0.0f64;
     if let Some(w) = input.weights {
         for &v in w {
-            nan += zero(v);
-            least = least.min(v);
+            ok &= v.is_finite() & (v >= 0.0);
         }
     }
     let n_cams = input.rig.cameras().len();
@@ -373,7 +377,7 @@ fn all_valid(input: &RigInput<'_>) -> bool {
         .copied()
         .max()
         .map_or(0, |c| c as usize + 1);
-    nan == 0.0 && least >= 0.0 && highest <= n_cams
+    ok && highest <= n_cams
 }
 
 /// The error of the first invalid correspondence (in the order of the checks: a non-finite
