@@ -27,7 +27,7 @@ use crate::covariance::NoiseModel;
 use crate::error::PnpError;
 use crate::numeric::gp3p::gp3p;
 use crate::numeric::linalg::smallest_eigenvector;
-use crate::numeric::rotation::{candidate_to_rotation, nearest_rotation};
+use crate::numeric::rotation::{candidate_to_rotation, nearest_rotation_polar};
 use crate::pipeline::vertical::{self, Vertical, VerticalCheck};
 use crate::pipeline::{
     CandidateSource, Loss, Refinement, Solution, Solutions, EXACT_FIT, MAX_CANDIDATES,
@@ -264,7 +264,7 @@ fn starts(rays: &Rays, cost: &Cost, exhaustive: bool) -> Vec<(Matrix3<f64>, Cand
     if let Some(z) = z {
         if z[9].abs() > 1e-9 * z.norm() {
             let r = V9::from_fn(|k, _| z[k] / z[9]);
-            if let Some(rot) = nearest_rotation(&Matrix3::from_fn(|a, b| r[3 * a + b])) {
+            if let Some(rot) = nearest_rotation_polar(&Matrix3::from_fn(|a, b| r[3 * a + b])) {
                 out.push((rot, CandidateSource::Generalized));
             }
         }

@@ -118,6 +118,21 @@ pub(crate) fn candidate_to_rotation(r: &[f64; 9]) -> Option<Matrix3<f64>> {
     polar_rotation(&a).or_else(|| nearest_rotation(&a))
 }
 
+/// [`nearest_rotation`] of `a` as it is (no sign taken away, unlike [`candidate_to_rotation`]):
+/// by [`polar_rotation`] when `det a > 0` (the orthogonal polar factor is then the nearest
+/// rotation), by the SVD otherwise. Returns `None` for non-finite or zero `a`.
+pub(crate) fn nearest_rotation_polar(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    if !a.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let amax = a.amax();
+    if amax == 0.0 {
+        return None;
+    }
+    let a = a / pow2_scale(amax);
+    polar_rotation(&a).or_else(|| nearest_rotation(&a))
+}
+
 /// Scaled Newton steps of [`polar_rotation`], at most.
 const POLAR_ITERATIONS: usize = 8;
 /// [`polar_rotation`] stops after a step that changes the matrix by at most this (Frobenius
