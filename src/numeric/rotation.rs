@@ -104,7 +104,14 @@ pub(crate) fn nearest_rotation(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
 /// determinant is negative, project with [`nearest_rotation`]. Returns `None` for non-finite or
 /// zero `r`.
 pub(crate) fn candidate_to_rotation(r: &[f64; 9]) -> Option<Matrix3<f64>> {
-    let a = Matrix3::from_row_slice(r);
+    let a = pow2_scaled(&Matrix3::from_row_slice(r))?;
+    let a = if a.determinant() < 0.0 { -a } else { a };
+    polar_rotation(&a).or_else(|| nearest_rotation(&a))
+}
+
+/// `a` divided by a power of two near its largest entry (exact), so that its determinant
+/// cannot overflow or underflow; `None` for non-finite or zero `a`.
+fn pow2_scaled(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     if !a.iter().all(|x| x.is_finite()) {
         return None;
     }
@@ -112,24 +119,14 @@ pub(crate) fn candidate_to_rotation(r: &[f64; 9]) -> Option<Matrix3<f64>> {
     if amax == 0.0 {
         return None;
     }
-    // Exact power-of-two scaling so the determinant cannot overflow or underflow.
-    let a = a / pow2_scale(amax);
-    let a = if a.determinant() < 0.0 { -a } else { a };
-    polar_rotation(&a).or_else(|| nearest_rotation(&a))
+    Some(a / pow2_scale(amax))
 }
 
 /// [`nearest_rotation`] of `a` as it is (no sign taken away, unlike [`candidate_to_rotation`]):
 /// by [`polar_rotation`] when `det a > 0` (the orthogonal polar factor is then the nearest
 /// rotation), by the SVD otherwise. Returns `None` for non-finite or zero `a`.
 pub(crate) fn nearest_rotation_polar(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
-    if !a.iter().all(|x| x.is_finite()) {
-        return None;
-    }
-    let amax = a.amax();
-    if amax == 0.0 {
-        return None;
-    }
-    let a = a / pow2_scale(amax);
+    let a = pow2_scaled(a)?;
     polar_rotation(&a).or_else(|| nearest_rotation(&a))
 }
 

@@ -295,6 +295,37 @@ fn polar_rotation_is_the_nearest_rotation() {
     assert!(polar_rotation(&Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0))).is_none());
 }
 
+/// The polar route is the SVD's nearest rotation for every matrix, with a negative determinant
+/// (the SVD's fallback, no sign taken away; distinct singular values there, so that the
+/// nearest rotation is unique) and at scales the determinant would not survive.
+#[test]
+fn nearest_rotation_polar_is_the_nearest_rotation() {
+    let mut rng = Pcg64::seed_from_u64(11);
+    for k in 0..2000 {
+        let r = rand_rot(&mut rng);
+        let size = 10f64.powf(-9.0 + 9.0 * (k as f64 / 2000.0));
+        let noise = Matrix3::from_fn(|_, _| rng.random_range(-size..size));
+        let shape = if k % 3 == 0 {
+            Matrix3::from_diagonal(&Vector3::new(3.0, 2.0, -1.0))
+        } else {
+            Matrix3::identity()
+        };
+        let scale = 10f64.powi(rng.random_range(-200..200));
+        let a = (r * shape + noise) * scale;
+        let p = nearest_rotation_polar(&a).expect("finite and nonzero");
+        let q = nearest_rotation(&(a / scale)).unwrap();
+        assert!(
+            orth_err(&p) < ORTH_TOL && (p.determinant() - 1.0).abs() < ORTH_TOL,
+            "{k}"
+        );
+        assert!((p - q).amax() < 1e-12, "{k}: {:e}", (p - q).amax());
+    }
+    assert!(nearest_rotation_polar(&Matrix3::zeros()).is_none());
+    let mut bad = Matrix3::identity();
+    bad[(1, 2)] = f64::INFINITY;
+    assert!(nearest_rotation_polar(&bad).is_none());
+}
+
 #[test]
 fn candidate_to_rotation_sign_and_skip() {
     let r = Rotation3::from_scaled_axis(Vector3::new(0.2, -1.0, 2.0)).into_inner();
