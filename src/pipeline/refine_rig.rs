@@ -87,7 +87,8 @@ struct CameraPass<'a> {
     world: &'a [Point3<f64>],
     pixels: &'a [Point2<f64>],
     weights: Option<&'a [f64]>,
-    k: PassInputs,
+    /// (By reference: the job is moved by value into the lens model's dispatch.)
+    k: &'a PassInputs,
     loss: Loss,
     check: bool,
     h: Option<&'a mut Hessian>,
@@ -111,7 +112,7 @@ impl ProjectionJob for CameraPass<'_> {
 
 impl CameraPass<'_> {
     fn with<M: Metric>(self, metric: &M) -> Option<Normal> {
-        let (k, w, m, wt) = (&self.k, self.world, self.pixels, self.weights);
+        let (k, w, m, wt) = (self.k, self.world, self.pixels, self.weights);
         match (self.check, self.h) {
             (true, Some(h)) => pass::<true, true, M>(k, metric, w, m, wt, Some(h)),
             (false, Some(h)) => pass::<false, true, M>(k, metric, w, m, wt, Some(h)),
@@ -147,18 +148,20 @@ impl RigResiduals<'_> {
             a: cam.rotation * p.a,
             t: cam.rotation * p.t + cam.translation * self.inv_d,
         };
+        // Each camera's `J^T W J`: every entry written by its pass, so one buffer serves all.
+        let mut hk: Hessian = [[0.0; 6]; 6];
         for cam in self.px.cameras {
             if cam.range.is_empty() {
                 continue;
             }
             let pose_k = at(pose, cam);
             let ref_k = reference.map(|rf| at(rf, cam));
-            let mut hk: Hessian = [[0.0; 6]; 6];
+            let k = PassInputs::new(&self.c, self.inv_weight, &pose_k, ref_k.as_ref());
             let job = CameraPass {
                 world: &self.px.world[cam.range.clone()],
                 pixels: &self.px.pixels[cam.range.clone()],
                 weights: self.px.weights.map(|w| &w[cam.range.clone()]),
-                k: PassInputs::new(&self.c, self.inv_weight, &pose_k, ref_k.as_ref()),
+                k: &k,
                 loss: self.px.loss,
                 check: reference.is_some(),
                 h: h.is_some().then_some(&mut hk),
