@@ -101,6 +101,17 @@ impl Rays {
     }
 }
 
+/// Camera `k` of the rig as the refinement reads it, with its observations `range`.
+fn rig_camera(rig: &Rig, k: usize, range: core::ops::Range<usize>) -> RigCamera {
+    let (rk, tk) = rig.pose(k);
+    RigCamera {
+        projector: *rig.projector(k),
+        rotation: *rk,
+        translation: *tk,
+        range,
+    }
+}
+
 /// One [`RigCamera`] per run of rays of one camera.
 fn runs(rays: &[Ray], rig: &Rig) -> Vec<RigCamera> {
     let mut out: Vec<RigCamera> = Vec::new();
@@ -108,13 +119,7 @@ fn runs(rays: &[Ray], rig: &Rig) -> Vec<RigCamera> {
     while start < rays.len() {
         let cam = rays[start].camera;
         let end = start + rays[start..].iter().take_while(|r| r.camera == cam).count();
-        let (rk, tk) = rig.pose(cam);
-        out.push(RigCamera {
-            projector: *rig.projector(cam),
-            rotation: *rk,
-            translation: *tk,
-            range: start..end,
-        });
+        out.push(rig_camera(rig, cam, start..end));
         start = end;
     }
     out
@@ -257,13 +262,7 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
             at += len;
         }
         if rays.len() > first {
-            let (rk, tk) = input.rig.pose(k);
-            cameras.push(RigCamera {
-                projector: *input.rig.projector(k),
-                rotation: *rk,
-                translation: *tk,
-                range: first..rays.len(),
-            });
+            cameras.push(rig_camera(input.rig, k, first..rays.len()));
         }
     }
     for r in &mut rays {
