@@ -384,7 +384,14 @@ fn bad_rig_input_is_a_typed_error() {
     weights[6] = -0.5;
     let mut nan_weight = vec![1.0; 20];
     nan_weight[9] = f64::NAN;
-    let cases: [(&[Point3<f64>], &[Point2<f64>], Option<&[f64]>, PnpError); 5] = [
+    // World points, pixels, weights, and the error they must give.
+    type Case<'a> = (
+        &'a [Point3<f64>],
+        &'a [Point2<f64>],
+        Option<&'a [f64]>,
+        PnpError,
+    );
+    let cases: [Case<'_>; 5] = [
         (
             &world,
             &c.pixels,

@@ -685,20 +685,18 @@ fn refinement_needs_pixels_through_one_camera_without_a_vertical() {
     };
     // Each of the two options alone on `p` is refused, the message naming it and `why`.
     let refused = |p: &EopnpProblem, why: &str| {
-        let mut q = *p;
-        q.refine_distortion = true;
-        check(
-            &q,
-            EopnpStatus::EOPNP_INVALID_OPTION,
-            &["`refine_distortion`", why],
-        );
-        let mut q = *p;
-        q.refine_principal_point = true;
-        check(
-            &q,
-            EopnpStatus::EOPNP_INVALID_OPTION,
-            &["`refine_principal_point`", why],
-        );
+        type Set = fn(&mut EopnpProblem);
+        let options: [(&str, Set); 2] = [
+            ("`refine_distortion`", |q| q.refine_distortion = true),
+            ("`refine_principal_point`", |q| {
+                q.refine_principal_point = true
+            }),
+        ];
+        for (name, set) in options {
+            let mut q = *p;
+            set(&mut q);
+            check(&q, EopnpStatus::EOPNP_INVALID_OPTION, &[name, why]);
+        }
     };
     // Normalised input.
     let mut p = base;
