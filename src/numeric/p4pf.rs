@@ -313,7 +313,7 @@ fn planar(world: &[Point3<f64>; 4], m: &[Vector3<f64>; 4], si: f64) -> Option<P4
         .iter()
         .map(|p| (p.coords - mean) * (p.coords - mean).transpose())
         .sum::<Matrix3<f64>>();
-    let (_, vecs) = super::mat3::sym_eigen3(&scatter)?;
+    let (_, vecs) = super::mat3::sym_eigen3_closed(&scatter)?;
     // The plane's frame: e1, e2 across it, n = e1 x e2 (a rotation, rows e1, e2, n).
     let (e1, e2) = (vecs.column(0).into_owned(), vecs.column(1).into_owned());
     let n = e1.cross(&e2);
@@ -326,44 +326,17 @@ fn planar(world: &[Point3<f64>; 4], m: &[Vector3<f64>; 4], si: f64) -> Option<P4
         return None;
     }
     let y: [Vector3<f64>; 4] = world.map(|p| frame * (p.coords - mean) / scale);
-    // The homography `m ~ H (y1, y2, 1)`, `h33 = 1` (the plane's centroid is in front).
-    let mut a8 = nalgebra::SMatrix::<f64, 8, 8>::zeros();
-    let mut b8 = nalgebra::SVector::<f64, 8>::zeros();
-    for i in 0..4 {
-        let (y1, y2) = (y[i].x, y[i].y);
-        let (u, v) = (m[i].x, m[i].y);
-        let r = 2 * i;
-        a8.set_row(
-            r,
-            &nalgebra::RowSVector::<f64, 8>::from_row_slice(&[
-                y1,
-                y2,
-                1.0,
-                0.0,
-                0.0,
-                0.0,
-                -u * y1,
-                -u * y2,
-            ]),
-        );
-        a8.set_row(
-            r + 1,
-            &nalgebra::RowSVector::<f64, 8>::from_row_slice(&[
-                0.0,
-                0.0,
-                0.0,
-                y1,
-                y2,
-                1.0,
-                -v * y1,
-                -v * y2,
-            ]),
-        );
-        b8[r] = u;
-        b8[r + 1] = v;
+    // The homography `m ~ H (y1, y2, 1)`, scaled to `h33 = 1` (the plane's centroid is in
+    // front): the one projective map of four points in general position, `H = B A^-1` with `A`
+    // and `B` the maps of the canonical basis and `(1, 1, 1)` to the four points on each side.
+    let hm = frame4(&y.map(|p| Vector3::new(p.x, p.y, 1.0)))
+        .and_then(|a| a.try_inverse())
+        .zip(frame4(m))
+        .map(|(a_inv, b)| b * a_inv)?;
+    let hm = hm / hm[(2, 2)];
+    if !hm.iter().all(|v| v.is_finite()) {
+        return None;
     }
-    let h = a8.lu().solve(&b8)?;
-    let hm = Matrix3::new(h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0);
     let (h1, h2) = (hm.column(0), hm.column(1));
     // k = w^2: k (h11 h12 + h21 h22) + h31 h32 = 0, k (|h1_xy|^2 - |h2_xy|^2) + h31^2 - h32^2 = 0.
     let (a1, b1) = (h1.x * h2.x + h1.y * h2.y, h1.z * h2.z);
@@ -398,6 +371,16 @@ fn planar(world: &[Point3<f64>; 4], m: &[Vector3<f64>; 4], si: f64) -> Option<P4
         translation,
         focal,
     })
+}
+
+/// The projective frame of four points (homogeneous, three of them, and the fourth, in general
+/// position): the matrix that takes the canonical basis to the first three (up to scale) and
+/// `(1, 1, 1)` to the fourth. `None` if three of them are collinear (it is singular).
+fn frame4(p: &[Vector3<f64>; 4]) -> Option<Matrix3<f64>> {
+    let b = Matrix3::from_columns(&[p[0], p[1], p[2]]);
+    let l = b.try_inverse()? * p[3];
+    let f = b * Matrix3::from_diagonal(&l);
+    (l.iter().all(|v| *v != 0.0) && f.iter().all(|v| v.is_finite())).then_some(f)
 }
 
 /// The exponents of a quadric's coefficients `[xx, xy, yy, xz, yz, zz, x, y, z, 1]` (the
