@@ -490,19 +490,21 @@ pub fn e3q3(
     // Hide each variable in turn: the best-conditioned 3 x 3 system of the other two's squares,
     // by the ratio of its determinant to the product of its rows' norms (Hadamard's bound: 1 for
     // orthogonal rows, 0 for a singular system).
+    // (Squared, without the square roots: the same order.)
     let mut best: Option<(usize, f64)> = None;
     for p in 0..3 {
         let c = Matrix3::from_fn(|i, j| quadrics[i][PERMUTED_INVERSE[p][j]]);
-        let rows = c.row(0).norm() * c.row(1).norm() * c.row(2).norm();
-        let ratio = c.determinant().abs() / rows;
-        if best.is_none_or(|b| ratio > b.1) {
-            best = Some((p, ratio));
+        let rows = c.row(0).norm_squared() * c.row(1).norm_squared() * c.row(2).norm_squared();
+        let det = c.determinant();
+        let ratio2 = det * det / rows;
+        if best.is_none_or(|b| ratio2 > b.1) {
+            best = Some((p, ratio2));
         }
     }
-    let Some((p, ratio)) = best else {
+    let Some((p, ratio2)) = best else {
         return out;
     };
-    if !(ratio > 1e-12) {
+    if !(ratio2 > 1e-24) {
         return out;
     }
     let qs = quadrics.map(|q| permuted(&q, p));
