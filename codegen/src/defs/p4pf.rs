@@ -231,10 +231,18 @@ pub fn e3q3_octic() -> Kernel {
             .mul(&rows[r2][c2])
             .sub(&rows[r1][c2].mul(&rows[r2][c1]))
     };
+    // The determinant by the first row's cofactors, each minor's coefficients named: the
+    // products of polynomials in `z` stay factored (282 multiplications and 237 additions,
+    // where the common subexpressions of the expanded determinant took 478 and 387).
+    let minors = [
+        k.define_upoly("m1", &minor(1, 2, 1, 2)),
+        k.define_upoly("m2", &minor(1, 2, 0, 2)),
+        k.define_upoly("m3", &minor(1, 2, 0, 1)),
+    ];
     let det = rows[0][0]
-        .mul(&minor(1, 2, 1, 2))
-        .sub(&rows[0][1].mul(&minor(1, 2, 0, 2)))
-        .add(&rows[0][2].mul(&minor(1, 2, 0, 1)));
+        .mul(&minors[0])
+        .sub(&rows[0][1].mul(&minors[1]))
+        .add(&rows[0][2].mul(&minors[2]));
     assert!(det.degree() <= 8, "det L is an octic");
     for n in 0..9 {
         k.output(&format!("d{n}"), det.coeff(n));
