@@ -445,17 +445,32 @@ pub fn real_roots_near(c: &[f64], imag_tol: f64) -> Roots {
     }
 }
 
-/// The roots of [`real_roots_near`] above `lo`, found on `(lo, bound)` only: every level of the
-/// derivative sequence searched above `lo` (less work when only the roots above a known value
-/// matter, as for the P4Pf octic's depth ratios); `lo` at or below the root bound's negative
-/// (or NaN) searches everywhere. A root at `lo` itself is not reported; near-real roots come
-/// from the critical points above `lo`. The derivatives' roots (bracket ends only) are refined to
-/// a relative Halley step of 1e-7, the polynomial's to the rounding level as [`real_roots`]'s.
+/// The roots of [`real_roots_near`] above `lo`, found on `(lo, bound)` only (less work when only
+/// the roots above a known value matter, as for the P4Pf octic's depth ratios); `lo` at or below
+/// the root bound's negative (or NaN) searches everywhere. A root at `lo` itself is not
+/// reported; near-real roots come from the critical points above `lo`, the real roots of `p'`
+/// there, which the Sturm sequence of `p'` isolates ([`real_roots_above`]'s; where it refuses,
+/// every level of the derivative sequence is searched above `lo`, its roots refined to a relative
+/// Halley step of 1e-7). The polynomial's roots are bracketed between the critical points and
+/// refined to the rounding level, as [`real_roots`]'s. On the focal RANSAC's P4Pf calls whose
+/// points are close to coplanar (18 % of the samples at 80 % outliers), this took 9,380
+/// instructions a call where the derivative sequence took 12,780 (callgrind; the sequence
+/// refused on 99 of 20,502).
 #[must_use]
 pub fn real_roots_near_above(c: &[f64], imag_tol: f64, lo: f64) -> Roots {
     match prepare(c) {
         Some((p, z)) => {
-            isolate::solve_above(&p, z, if imag_tol > 0.0 { imag_tol } else { 0.0 }, lo)
+            let imag_tol = if imag_tol > 0.0 { imag_tol } else { 0.0 };
+            let bound = p.root_bound();
+            let crit = if p.n >= 2 && !z && lo > -bound && lo < bound {
+                sturm::roots_above(&p.derivative(), lo)
+            } else {
+                None
+            };
+            match crit {
+                Some(crit) => isolate::solve_above_at(&p, crit.as_slice(), z, imag_tol, lo),
+                None => isolate::solve_above(&p, z, imag_tol, lo),
+            }
         }
         None => Roots::default(),
     }
