@@ -71,15 +71,12 @@ impl<const N: usize> Sturm<N> {
             let q1 = a[m + 1] * b[m];
             let q0 = (a[m] - q1 * b[m - 1]) * b[m];
             let next = &mut rest[0];
-            let mut terms: f64 = 0.0;
             for i in 0..m {
                 let below = if i >= 1 { b[i - 1] } else { 0.0 };
                 next[i] = q1 * below + q0 * b[i] - a[i];
-                terms = terms
-                    .max(a[i].abs())
-                    .max((q1 * below).abs())
-                    .max((q0 * b[i]).abs());
             }
+            let below = if m >= 2 { b[m - 2] } else { 0.0 };
+            let terms = a[m - 1].abs().max((q1 * below).abs()).max((q0 * b[m - 1]).abs());
             let lead = next[m - 1];
             let scale = 1.0 / lead.abs();
             generic &= lead.abs() > GENERIC * terms && scale.is_finite();
