@@ -59,7 +59,7 @@
 //! # The Sturm sequence of [`real_roots_above`]
 //!
 //! One caller trades that guarantee for speed: P4Pf's octic (`numeric/p4pf.rs`), solved for
-//! every RANSAC sample, whose roots above -2 are few and are polished afterwards by Newton's
+//! every RANSAC sample, whose roots above -1 are few and are polished afterwards by Newton's
 //! method on the quadrics they come from. [`real_roots_above`] counts them by a Sturm chain
 //! (the degree a compile-time constant, the chain's terms evaluated by Horner) and splits the
 //! interval until each piece holds one, which the bracketing above then refines: 12.6 % less
@@ -70,7 +70,9 @@
 //! whose leading coefficient is at most `1e-9` times the largest term that cancelled into it
 //! (a multiple
 //! root, a close pair, a non-generic chain), a root at a split point or counts that contradict
-//! each other make the chain refuse, and the derivative sequence answers instead.
+//! each other make the chain refuse, and the derivative sequence answers instead. Where P4Pf
+//! also wants the near-real roots ([`real_roots_near_above`]), the same chain isolates the
+//! critical points, the roots of `p'`.
 //!
 //! # Near-real roots (docs/algorithm.md T8)
 //!
@@ -468,7 +470,7 @@ pub fn real_roots_near_above(c: &[f64], imag_tol: f64, lo: f64) -> Roots {
                 None
             };
             match crit {
-                Some(crit) => isolate::solve_above_at(&p, crit.as_slice(), z, imag_tol, lo),
+                Some(crit) => isolate::solve_above_at(&p, crit.as_slice(), imag_tol, lo),
                 None => isolate::solve_above(&p, z, imag_tol, lo),
             }
         }

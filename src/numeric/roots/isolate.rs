@@ -380,14 +380,9 @@ pub(super) fn solve_above(p: &Poly, zero_root: bool, imag_tol: f64, lo: f64) -> 
 }
 
 /// [`solve_above`] given the critical points `crit` (the real roots of `p'` above `lo`,
-/// ascending): `p`'s roots bracketed between them, its near-real ones (`imag_tol > 0`) from them.
-pub(super) fn solve_above_at(
-    p: &Poly,
-    crit: &[f64],
-    zero_root: bool,
-    imag_tol: f64,
-    lo: f64,
-) -> Roots {
+/// ascending), for a polynomial without an exact zero root: `p`'s roots bracketed between
+/// them, its near-real ones (`imag_tol > 0`) from them.
+pub(super) fn solve_above_at(p: &Poly, crit: &[f64], imag_tol: f64, lo: f64) -> Roots {
     let f = p.eval(lo);
     let mut out = roots_above(
         p,
@@ -397,9 +392,6 @@ pub(super) fn solve_above_at(
         (f64::NAN, 0.0),
         split,
     );
-    if zero_root && lo < 0.0 {
-        out.push(0.0);
-    }
     if imag_tol > 0.0 && p.n >= 2 {
         near_real(p, crit, imag_tol, &mut out);
     }

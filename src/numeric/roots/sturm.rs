@@ -53,8 +53,8 @@ impl<const N: usize> Sturm<N> {
     fn new(p: &Poly) -> Option<Self> {
         let mut c = [[0.0; NC]; NC];
         let s0 = 1.0 / p.c[N].abs();
-        for i in 0..=N {
-            c[0][i] = p.c[i] * s0;
+        for (ci, pi) in c[0].iter_mut().zip(&p.c).take(N + 1) {
+            *ci = pi * s0;
         }
         let s1 = s0 / N as f64;
         for i in 1..=N {
@@ -76,7 +76,10 @@ impl<const N: usize> Sturm<N> {
                 next[i] = q1 * below + q0 * b[i] - a[i];
             }
             let below = if m >= 2 { b[m - 2] } else { 0.0 };
-            let terms = a[m - 1].abs().max((q1 * below).abs()).max((q0 * b[m - 1]).abs());
+            let terms = a[m - 1]
+                .abs()
+                .max((q1 * below).abs())
+                .max((q0 * b[m - 1]).abs());
             let lead = next[m - 1];
             let scale = 1.0 / lead.abs();
             generic &= lead.abs() > GENERIC * terms && scale.is_finite();
