@@ -598,15 +598,22 @@ pub fn e3q3(
 /// far less accurate than that; Newton's polish brings a real solution to the rounding level,
 /// and the real part of a complex pair, which solves nothing, stays far above it).
 fn solves(qs: &[[f64; 10]; 3], v: &[f64; 3]) -> bool {
-    let m = monomials(v);
-    qs.iter().all(|q| {
-        let (mut value, mut scale) = (0.0, 0.0);
-        for i in 0..10 {
-            let t = q[i] * m[i];
-            value += t;
-            scale += t.abs();
-        }
-        value.abs() <= 1e-8 * scale
+    residuals_within(qs, v, &values3(qs, v), 1e-8)
+}
+
+/// The three quadrics at `v`.
+#[inline]
+fn values3(qs: &[[f64; 10]; 3], v: &[f64; 3]) -> [f64; 3] {
+    [eval(&qs[0], v), eval(&qs[1], v), eval(&qs[2], v)]
+}
+
+/// Whether each quadric's value `f` at `v` is at most `tol` times the sum of its terms'
+/// absolute values there.
+fn residuals_within(qs: &[[f64; 10]; 3], v: &[f64; 3], f: &[f64; 3], tol: f64) -> bool {
+    let m = monomials(v).map(f64::abs);
+    qs.iter().zip(f).all(|(q, fk)| {
+        let terms: f64 = q.iter().zip(&m).map(|(c, mi)| c.abs() * mi).sum();
+        fk.abs() <= tol * terms
     })
 }
 
@@ -615,19 +622,12 @@ fn solves(qs: &[[f64; 10]; 3], v: &[f64; 3]) -> bool {
 /// of its terms' absolute values: the Sturm sequence's roots mostly start there, and a step
 /// from there only chases rounding noise).
 fn polish(qs: &[[f64; 10]; 3], mut v: [f64; 3]) -> [f64; 3] {
-    let values = |v: &[f64; 3]| [eval(&qs[0], v), eval(&qs[1], v), eval(&qs[2], v)];
+    let values = |v: &[f64; 3]| values3(qs, v);
     let largest = |f: &[f64; 3]| f[0].abs().max(f[1].abs()).max(f[2].abs());
-    let rounded = |f: &[f64; 3], v: &[f64; 3]| {
-        let m = monomials(v).map(f64::abs);
-        qs.iter().zip(f).all(|(q, fk)| {
-            let terms: f64 = q.iter().zip(&m).map(|(c, mi)| c.abs() * mi).sum();
-            fk.abs() <= ROUNDED * terms
-        })
-    };
     let mut f = values(&v);
     let mut r = largest(&f);
     for _ in 0..NEWTON_ITERATIONS {
-        if rounded(&f, &v) {
+        if residuals_within(qs, &v, &f, ROUNDED) {
             break;
         }
         let j = Matrix3::from_rows(&[

@@ -470,7 +470,7 @@ pub fn real_roots_near_above(c: &[f64], imag_tol: f64, lo: f64) -> Roots {
                 None
             };
             match crit {
-                Some(crit) => isolate::solve_above_at(&p, crit.as_slice(), imag_tol, lo),
+                Some(crit) => isolate::solve_above_at(&p, bound, crit.as_slice(), z, imag_tol, lo),
                 None => isolate::solve_above(&p, z, imag_tol, lo),
             }
         }

@@ -355,44 +355,55 @@ pub(super) fn solve_above(p: &Poly, zero_root: bool, imag_tol: f64, lo: f64) -> 
     if r > lo && r < bound {
         cur.push(r);
     }
-    let mut crit = Roots::default();
-    for k in (0..n - 1).rev() {
-        crit = cur;
+    if n == 1 {
+        out = cur;
+        if zero_root && lo < 0.0 {
+            out.push(0.0);
+        }
+        out.sort_dedup();
+        return out;
+    }
+    // Each derivative's roots above `lo`, down to `p'`'s: the critical points.
+    for k in (1..n - 1).rev() {
         let f = d[k].eval(lo);
         cur = roots_above(
             &d[k],
-            crit.as_slice(),
+            cur.as_slice(),
             (lo, sgn(f), d[k].negligible(lo, f)),
             bound,
-            (f64::NAN, if k == 0 { 0.0 } else { LEVEL_XTOL }),
+            (f64::NAN, LEVEL_XTOL),
             split,
         );
     }
-    out = cur;
-    if zero_root && lo < 0.0 {
-        out.push(0.0);
-    }
-    if imag_tol > 0.0 && n >= 2 {
-        near_real(p, crit.as_slice(), imag_tol, &mut out);
-    }
-    out.sort_dedup();
-    out
+    solve_above_at(p, bound, cur.as_slice(), zero_root, imag_tol, lo)
 }
 
-/// [`solve_above`] given the critical points `crit` (the real roots of `p'` above `lo`,
-/// ascending), for a polynomial without an exact zero root: `p`'s roots bracketed between
-/// them, its near-real ones (`imag_tol > 0`) from them.
-pub(super) fn solve_above_at(p: &Poly, crit: &[f64], imag_tol: f64, lo: f64) -> Roots {
+/// [`solve_above`]'s last level, given `p`'s root bound and its critical points `crit` (the real
+/// roots of `p'` above `lo`, ascending; of degree 2 or more): `p`'s roots bracketed between them and
+/// refined to the rounding level, the exact zero root (`zero_root`, reported if above `lo`),
+/// and the near-real roots (`imag_tol > 0`) from the critical points.
+pub(super) fn solve_above_at(
+    p: &Poly,
+    bound: f64,
+    crit: &[f64],
+    zero_root: bool,
+    imag_tol: f64,
+    lo: f64,
+) -> Roots {
     let f = p.eval(lo);
     let mut out = roots_above(
         p,
         crit,
         (lo, sgn(f), p.negligible(lo, f)),
-        p.root_bound(),
+        bound,
         (f64::NAN, 0.0),
         split,
     );
-    if imag_tol > 0.0 && p.n >= 2 {
+    // The exact zero root first, so that the capacity can only ever cut near-real extras.
+    if zero_root && lo < 0.0 {
+        out.push(0.0);
+    }
+    if imag_tol > 0.0 {
         near_real(p, crit, imag_tol, &mut out);
     }
     out.sort_dedup();
