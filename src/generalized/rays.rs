@@ -5,6 +5,7 @@
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use crate::error::{DegenerateKind, InputKind, PnpError};
+use crate::numeric::lanes::dispatched;
 use crate::numeric::mat3::sym_eigen3_closed;
 use crate::pipeline::refine_rig::RigCamera;
 use crate::rig::Rig;
@@ -202,73 +203,82 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
         order[*at] = i;
         *at += 1;
     }
-    // The pixels in the grouped order: undistorted camera by camera, a chunk at a time, then
-    // compacted in place to the kept ones (the refinement's observations).
-    let mut pixels: Vec<Point2<f64>> = order.iter().map(|&i| input.pixels[i]).collect();
-    let mut rays = Vec::with_capacity(n);
-    let mut world = Vec::with_capacity(n);
-    let mut weights = Vec::new();
-    let mut skipped = 0;
+    // Camera by camera, a chunk of its pixels at a time: gathered in the grouped order,
+    // undistorted, turned into unit directions of the rig frame, then written at the end of
+    // the kept ones (each entry written, the count advanced only for a kept one: a pixel that
+    // does not undistort, or of weight 0, is overwritten by the next).
+    let zero_ray = Ray {
+        index: 0,
+        camera: 0,
+        weight: 0.0,
+        centre: Vector3::zeros(),
+        direction: Vector3::zeros(),
+    };
+    let mut rays = vec![zero_ray; n];
+    let mut world = vec![Point3::origin(); n];
+    let mut pixels = vec![Point2::origin(); n];
+    let mut weights = if input.weights.is_some() {
+        vec![0.0; n]
+    } else {
+        Vec::new()
+    };
+    let (mut kept, mut skipped) = (0usize, 0usize);
     // The weighted sums of the centroids, in the rays' order.
     let (mut wsum, mut xw, mut cw) = (0.0f64, Vector3::zeros(), Vector3::zeros());
+    let mut src = [Point2::origin(); UNDISTORT_CHUNK];
     let mut points = [Point2::origin(); UNDISTORT_CHUNK];
+    let mut dirs = [[0.0f64; UNDISTORT_CHUNK]; 3];
     let mut cameras = Vec::with_capacity(n_cams);
     for k in 0..n_cams {
         let (begin, stop) = (if k == 0 { 0 } else { end[k - 1] }, end[k]);
-        let first = rays.len();
+        let first = kept;
         let (rk, _) = input.rig.pose(k);
         let centre = input.rig.centre(k).coords;
-        let mut at = begin;
-        while at < stop {
-            let len = UNDISTORT_CHUNK.min(stop - at);
+        for chunk in order[begin..stop].chunks(UNDISTORT_CHUNK) {
+            let len = chunk.len();
+            for (s, &i) in src.iter_mut().zip(chunk) {
+                *s = input.pixels[i];
+            }
             let mut failed = 0u64;
-            input.rig.projector(k).undistort_into(
-                &pixels[at..at + len],
-                &mut points[..len],
-                None,
-                |j| {
+            input
+                .rig
+                .projector(k)
+                .undistort_into(&src[..len], &mut points[..len], None, |j| {
                     failed |= 1 << j;
-                },
-            );
-            for (j, m) in points[..len].iter().enumerate() {
-                let (g, i) = (at + j, order[at + j]);
-                if failed >> j & 1 == 1 {
-                    skipped += 1;
-                    continue;
-                }
+                });
+            unit_directions(rk, &points[..len], &mut dirs);
+            for (j, &i) in chunk.iter().enumerate() {
+                let ok = failed >> j & 1 == 0;
+                skipped += usize::from(!ok);
                 let weight = input.weights.map_or(1.0, |w| w[i]);
-                if !(weight > 0.0) {
-                    continue;
+                let keep = ok & (weight > 0.0);
+                let wk = if keep { weight } else { 0.0 };
+                wsum += wk;
+                xw += input.world[i].coords * wk;
+                cw += centre * wk;
+                world[kept] = input.world[i];
+                pixels[kept] = src[j];
+                if let Some(w) = weights.get_mut(kept) {
+                    *w = weight;
                 }
-                // (Normalised below, in a pass of its own: the square root and divisions of
-                // one ray then overlap the next's.)
-                let direction = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0));
-                wsum += weight;
-                xw += input.world[i].coords * weight;
-                cw += centre * weight;
-                pixels[rays.len()] = pixels[g];
-                world.push(input.world[i]);
-                if input.weights.is_some() {
-                    weights.push(weight);
-                }
-                rays.push(Ray {
+                rays[kept] = Ray {
                     index: i,
                     camera: k,
                     weight,
                     centre,
-                    direction,
-                });
+                    direction: Vector3::new(dirs[0][j], dirs[1][j], dirs[2][j]),
+                };
+                kept += usize::from(keep);
             }
-            at += len;
         }
-        if rays.len() > first {
-            cameras.push(rig_camera(input.rig, k, first..rays.len()));
+        if kept > first {
+            cameras.push(rig_camera(input.rig, k, first..kept));
         }
     }
-    for r in &mut rays {
-        r.direction = r.direction.normalize();
-    }
-    pixels.truncate(rays.len());
+    rays.truncate(kept);
+    world.truncate(kept);
+    weights.truncate(kept);
+    pixels.truncate(kept);
     if weights.iter().all(|&w| w == 1.0) {
         weights = Vec::new();
     }
@@ -354,6 +364,33 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
         scale,
         planarity: ev[0].max(0.0) / ev[2],
     })
+}
+
+dispatched! {
+/// The unit directions `R_k^T (m, 1) / |R_k^T (m, 1)|` of a chunk's points `m` (in the rig
+/// frame, camera `k`'s rotation `R_k`), coordinate by coordinate in `out`: vectorised across
+/// points, built for the processor ([`crate::numeric::lanes::dispatched`]). The same operations
+/// as nalgebra's `normalize` (the norm, then each coordinate divided by it).
+fn unit_directions[][](
+        rk: &Matrix3<f64>,
+        points: &[Point2<f64>],
+        out: &mut [[f64; UNDISTORT_CHUNK]; 3],
+    ) -> () = unit_directions_body;
+}
+
+#[inline(always)]
+fn unit_directions_body(
+    rk: &Matrix3<f64>,
+    points: &[Point2<f64>],
+    out: &mut [[f64; UNDISTORT_CHUNK]; 3],
+) {
+    let [ox, oy, oz] = out;
+    for (((m, x), y), z) in points.iter().zip(ox).zip(oy).zip(oz) {
+        // R^T (m.x, m.y, 1): column a of R dotted with (m.x, m.y, 1).
+        let d = rk.tr_mul(&Vector3::new(m.x, m.y, 1.0));
+        let norm = d.norm();
+        (*x, *y, *z) = (d.x / norm, d.y / norm, d.z / norm);
+    }
 }
 
 /// Every value finite, every weight at least 0, every camera index known: one pass without
