@@ -47,6 +47,9 @@ pub(crate) struct Ray {
 pub(crate) struct Observations {
     pub world: Vec<Point3<f64>>,
     pub pixels: Vec<Point2<f64>>,
+    /// The pixels undistorted: normalised image points (a camera without distortion refines
+    /// on these, [`RigCamera::rows`]).
+    pub normalised: Vec<Point2<f64>>,
     /// Empty when every weight is 1.
     pub weights: Vec<f64>,
     pub cameras: Vec<RigCamera>,
@@ -85,6 +88,7 @@ impl Rays {
         let obs = Observations {
             world: kept.iter().map(|&k| self.obs.world[k]).collect(),
             pixels: kept.iter().map(|&k| self.obs.pixels[k]).collect(),
+            normalised: kept.iter().map(|&k| self.obs.normalised[k]).collect(),
             weights: if weighted {
                 rays.iter().map(|r| r.weight).collect()
             } else {
@@ -105,8 +109,11 @@ impl Rays {
 /// Camera `k` of the rig as the refinement reads it, with its observations `range`.
 fn rig_camera(rig: &Rig, k: usize, range: core::ops::Range<usize>) -> RigCamera {
     let (rk, tk) = rig.pose(k);
+    let camera = &rig.cameras()[k];
+    let (fx, fy) = camera.focal_lengths();
     RigCamera {
         projector: *rig.projector(k),
+        rows: (!camera.has_distortion()).then_some((fx * fx, fy * fy)),
         rotation: *rk,
         translation: *tk,
         range,
@@ -217,6 +224,7 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     let mut rays = vec![zero_ray; n];
     let mut world = vec![Point3::origin(); n];
     let mut pixels = vec![Point2::origin(); n];
+    let mut normalised = vec![Point2::origin(); n];
     let mut weights = if input.weights.is_some() {
         vec![0.0; n]
     } else {
@@ -258,6 +266,7 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
                 cw += centre * wk;
                 world[kept] = input.world[i];
                 pixels[kept] = src[j];
+                normalised[kept] = points[j];
                 if let Some(w) = weights.get_mut(kept) {
                     *w = weight;
                 }
@@ -279,6 +288,7 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
     world.truncate(kept);
     weights.truncate(kept);
     pixels.truncate(kept);
+    normalised.truncate(kept);
     if weights.iter().all(|&w| w == 1.0) {
         weights = Vec::new();
     }
@@ -349,6 +359,7 @@ pub(crate) fn rays(input: &RigInput<'_>) -> Result<Rays, PnpError> {
         weight_sum: wsum,
         world,
         pixels,
+        normalised,
         weights,
     };
     let working_centres = (0..n_cams)

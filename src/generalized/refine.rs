@@ -171,6 +171,7 @@ pub(crate) fn refine(
         let px = RigPixels {
             world: &obs.world,
             pixels: &obs.pixels,
+            normalised: &obs.normalised,
             weights: (!obs.weights.is_empty()).then_some(&obs.weights[..]),
             cameras: &obs.cameras,
             loss,

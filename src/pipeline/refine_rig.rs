@@ -23,7 +23,7 @@ use core::ops::Range;
 use nalgebra::{Matrix3, Point2, Point3, Vector3};
 
 use super::options::Loss;
-use super::refine::pass::{pass, Metric, PassInputs};
+use super::refine::pass::{pass, Metric, PassInputs, RowWeights};
 use super::refine::{
     levenberg_marquardt, Composed, Hessian, Normal, ReprojOptions, ReprojStop, Residuals,
 };
@@ -36,6 +36,11 @@ use crate::camera::{Project, ProjectionJob, Projector};
 pub(crate) struct RigCamera {
     /// The camera's projection.
     pub projector: Projector,
+    /// `(fx^2, fy^2)` for a camera without distortion: its pixel error is the normalised
+    /// error `m - (x / z, y / z)` with these row weights (`m` the undistorted pixel), the
+    /// central `refine`'s residual, cheaper per point than the camera's projection and its
+    /// Jacobian. With a robust loss every camera's error goes through its projection.
+    pub rows: Option<(f64, f64)>,
     /// `cam_from_rig`: `x_k = rotation x_rig + translation`.
     pub rotation: Matrix3<f64>,
     pub translation: Vector3<f64>,
@@ -49,6 +54,8 @@ pub(crate) struct RigCamera {
 pub(crate) struct RigPixels<'a> {
     pub world: &'a [Point3<f64>],
     pub pixels: &'a [Point2<f64>],
+    /// The pixels undistorted (normalised image points).
+    pub normalised: &'a [Point2<f64>],
     /// `None`: every weight 1.
     pub weights: Option<&'a [f64]>,
     pub cameras: &'a [RigCamera],
@@ -157,16 +164,31 @@ impl RigResiduals<'_> {
             let pose_k = at(pose, cam);
             let ref_k = reference.map(|rf| at(rf, cam));
             let k = PassInputs::new(&self.c, self.inv_weight, &pose_k, ref_k.as_ref());
-            let job = CameraPass {
-                world: &self.px.world[cam.range.clone()],
-                pixels: &self.px.pixels[cam.range.clone()],
-                weights: self.px.weights.map(|w| &w[cam.range.clone()]),
-                k: &k,
-                loss: self.px.loss,
-                check: reference.is_some(),
-                h: h.is_some().then_some(&mut hk),
-            };
-            let nk = cam.projector.with_projection(job)?;
+            let (world, weights) = (
+                &self.px.world[cam.range.clone()],
+                self.px.weights.map(|w| &w[cam.range.clone()]),
+            );
+            let nk = match cam.rows.filter(|_| self.px.loss == Loss::Squared) {
+                Some((wx, wy)) => CameraPass {
+                    world,
+                    pixels: &self.px.normalised[cam.range.clone()],
+                    weights,
+                    k: &k,
+                    loss: Loss::Squared,
+                    check: reference.is_some(),
+                    h: h.is_some().then_some(&mut hk),
+                }
+                .with(&RowWeights { wx, wy }),
+                None => cam.projector.with_projection(CameraPass {
+                    world,
+                    pixels: &self.px.pixels[cam.range.clone()],
+                    weights,
+                    k: &k,
+                    loss: self.px.loss,
+                    check: reference.is_some(),
+                    h: h.is_some().then_some(&mut hk),
+                }),
+            }?;
             let rk = &cam.rotation;
             // g += D^T g_k, H += D^T H_k D (3 x 3 blocks).
             for b in 0..2 {

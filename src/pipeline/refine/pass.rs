@@ -46,7 +46,7 @@ pub(in crate::pipeline) trait Metric {
 }
 
 /// `refine`'s metric: row weights `(wx, wy)` on the normalised residual.
-pub(super) struct RowWeights {
+pub(in crate::pipeline) struct RowWeights {
     pub wx: f64,
     pub wy: f64,
 }
