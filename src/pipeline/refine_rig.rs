@@ -4,8 +4,9 @@
 //! It is `refine_pixels` per camera: `refine`'s Levenberg-Marquardt iteration
 //! ([`super::refine::levenberg_marquardt`]: damping, depth-sign guard, reuse of `J^T W J`, final
 //! step) over the rig's pose, and each pass is `refine`'s vectorised pass ([`pass`]) over each
-//! camera's observations (contiguous) with that camera's metric ([`CameraMetric`]), composed into
-//! the rig's normal equations. With the rig's pose `(R, t)` (`x_rig = R X + t`) and camera `k`'s
+//! camera's observations (contiguous) with that camera's metric ([`CameraMetric`]; for a camera
+//! without distortion and the squared loss, `refine`'s row weights on the undistorted points,
+//! [`RigCamera::rows`]), composed into the rig's normal equations. With the rig's pose `(R, t)` (`x_rig = R X + t`) and camera `k`'s
 //! pose in the rig `(R_k, t_k)`, the camera sees `x_k = R_k R X + R_k t + t_k`, a central pose;
 //! the rig's update `R <- Exp(w) R`, `t <- t + tau` is that camera's update by
 //! `(R_k w, R_k tau)`, since `R_k Exp(w) = Exp(R_k w) R_k`. So with the camera's normal equations
@@ -164,30 +165,26 @@ impl RigResiduals<'_> {
             let pose_k = at(pose, cam);
             let ref_k = reference.map(|rf| at(rf, cam));
             let k = PassInputs::new(&self.c, self.inv_weight, &pose_k, ref_k.as_ref());
-            let (world, weights) = (
-                &self.px.world[cam.range.clone()],
-                self.px.weights.map(|w| &w[cam.range.clone()]),
-            );
-            let nk = match cam.rows.filter(|_| self.px.loss == Loss::Squared) {
-                Some((wx, wy)) => CameraPass {
-                    world,
-                    pixels: &self.px.normalised[cam.range.clone()],
-                    weights,
-                    k: &k,
-                    loss: Loss::Squared,
-                    check: reference.is_some(),
-                    h: h.is_some().then_some(&mut hk),
-                }
-                .with(&RowWeights { wx, wy }),
-                None => cam.projector.with_projection(CameraPass {
-                    world,
-                    pixels: &self.px.pixels[cam.range.clone()],
-                    weights,
-                    k: &k,
-                    loss: self.px.loss,
-                    check: reference.is_some(),
-                    h: h.is_some().then_some(&mut hk),
-                }),
+            // A camera without distortion, with the squared loss: `refine`'s residual on its
+            // undistorted points ([`RigCamera::rows`]); otherwise its projection's.
+            let rows = cam.rows.filter(|_| self.px.loss == Loss::Squared);
+            let r = cam.range.clone();
+            let job = CameraPass {
+                world: &self.px.world[r.clone()],
+                pixels: if rows.is_some() {
+                    &self.px.normalised[r.clone()]
+                } else {
+                    &self.px.pixels[r.clone()]
+                },
+                weights: self.px.weights.map(|w| &w[r]),
+                k: &k,
+                loss: self.px.loss,
+                check: reference.is_some(),
+                h: h.is_some().then_some(&mut hk),
+            };
+            let nk = match rows {
+                Some((wx, wy)) => job.with(&RowWeights { wx, wy }),
+                None => cam.projector.with_projection(job),
             }?;
             let rk = &cam.rotation;
             // g += D^T g_k, H += D^T H_k D (3 x 3 blocks).
