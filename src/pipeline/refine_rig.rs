@@ -6,18 +6,19 @@
 //! step) over the rig's pose, and each pass is `refine`'s vectorised pass ([`pass`]) over each
 //! camera's observations (contiguous) with that camera's metric ([`CameraMetric`]; for a camera
 //! without distortion and the squared loss, `refine`'s row weights on the undistorted points,
-//! [`RigCamera::rows`]), composed into the rig's normal equations. With the rig's pose `(R, t)` (`x_rig = R X + t`) and camera `k`'s
-//! pose in the rig `(R_k, t_k)`, the camera sees `x_k = R_k R X + R_k t + t_k`, a central pose;
-//! the rig's update `R <- Exp(w) R`, `t <- t + tau` is that camera's update by
-//! `(R_k w, R_k tau)`, since `R_k Exp(w) = Exp(R_k w) R_k`. So with the camera's normal equations
-//! `H_k`, `g_k` (in its own update), the rig's are `D_k^T H_k D_k` and `D_k^T g_k` summed over the
-//! cameras, `D_k = diag(R_k, R_k)`. Depth signs, the depth range, the lever arms `|q_i|`
+//! [`RigCamera::rows`]), composed into the rig's normal equations. With the rig's pose
+//! `(R, t)` (`x_rig = R X + t`) and camera `k`'s pose in the rig `(R_k, t_k)`, the camera sees
+//! `x_k = R_k R X + R_k t + t_k`, a central pose; the rig's update `R <- Exp(w) R`,
+//! `t <- t + tau` is that camera's update by `(R_k w, R_k tau)`, since
+//! `R_k Exp(w) = Exp(R_k w) R_k`. So with the camera's normal equations `H_k`, `g_k` (in its own
+//! update), the rig's are `D_k^T H_k D_k` and `D_k^T g_k` summed over the cameras,
+//! `D_k = diag(R_k, R_k)`. Depth signs, the depth range, the lever arms `|q_i|`
 //! (`|R_k q| = |q|`) and the points in front carry over, so the final-step rule of `refine`
 //! holds as it is: a depth `z = e_3^T x_k` moves by at most `|delta| (|q_i| + 1)`.
 //!
 //! The working frame: `P_i = (X_i - c) / d` (the caller's: the centroid of the world points and
-//! their RMS distance from it), the pose `x_rig / d = R P_i + t_w`, so every camera's translation enters
-//! as `t_k / d`. No allocation.
+//! their RMS distance from it), the pose `x_rig / d = R P_i + t_w`, so every camera's translation
+//! enters as `t_k / d`. No allocation.
 
 use core::ops::Range;
 
